@@ -1,0 +1,58 @@
+// GGX / Smith height-correlated metallic-roughness BRDF (glTF 2.0 appendix B).
+#ifndef BRDF_GLSL
+#define BRDF_GLSL
+
+#include "math.glsl"
+
+struct Surface {
+    vec3 position;
+    vec3 normal;      // shading normal, unit, facing the viewer's side
+    vec3 base_color;
+    float metallic;
+    float roughness;  // perceptual
+    float occlusion;
+    vec3 emissive;
+    float transmission;
+    float ior;
+};
+
+float d_ggx(float n_h, float a2) {
+    float d = n_h * n_h * (a2 - 1.0) + 1.0;
+    return a2 / max(PI * d * d, 1e-12);
+}
+
+float v_smith_ggx_correlated(float n_v, float n_l, float a2) {
+    float gv = n_l * sqrt(n_v * n_v * (1.0 - a2) + a2);
+    float gl = n_v * sqrt(n_l * n_l * (1.0 - a2) + a2);
+    return 0.5 / max(gv + gl, 1e-12);
+}
+
+vec3 f_schlick(vec3 f0, float v_h) {
+    float f = pow(clamp(1.0 - v_h, 0.0, 1.0), 5.0);
+    return f0 + (1.0 - f0) * f;
+}
+
+vec3 surface_f0(Surface s) {
+    float f = (s.ior - 1.0) / (s.ior + 1.0);
+    return mix(vec3(f * f), s.base_color, s.metallic);
+}
+
+// Outgoing radiance towards v for light arriving from l with irradiance
+// `e` measured perpendicular to l (so the cosine is applied here).
+vec3 brdf_eval(Surface s, vec3 v, vec3 l, vec3 e) {
+    vec3 n = s.normal;
+    float n_l = dot(n, l);
+    if (n_l <= 0.0) return vec3(0.0);
+    float n_v = max(dot(n, v), 1e-4);
+    vec3 h = normalize(l + v);
+    float n_h = max(dot(n, h), 0.0);
+    float v_h = max(dot(v, h), 0.0);
+    float a = max(s.roughness * s.roughness, 1e-3);
+    float a2 = a * a;
+    vec3 f = f_schlick(surface_f0(s), v_h);
+    vec3 spec = f * d_ggx(n_h, a2) * v_smith_ggx_correlated(n_v, n_l, a2);
+    vec3 diffuse = (1.0 - f) * (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color / PI;
+    return (diffuse + spec) * e * n_l;
+}
+
+#endif

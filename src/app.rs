@@ -1,0 +1,277 @@
+//! The program's commands (`info`, `render`, `bench`), callable from the CLI
+//! and from tests in-process.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _, Result};
+use ash::vk as avk;
+use glam::Vec3;
+
+use crate::render::{FrameOutput, RenderSettings, Renderer};
+use crate::scene::{Camera, Scene};
+use crate::vk::{Context, ContextOptions, DeviceSelector};
+
+/// The bundled default scene: `assets/default.toml` next to the working
+/// directory, else in the source tree the binary was built from.
+pub fn default_scene_path() -> PathBuf {
+    let local = PathBuf::from("assets/default.toml");
+    if local.exists() {
+        return local;
+    }
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/default.toml"))
+}
+
+/// Options shared by every command that touches the GPU.
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    pub validation: bool,
+    pub sync_validation: bool,
+    pub device: DeviceSelector,
+    pub disable_ray_tracing: bool,
+}
+
+impl GpuOptions {
+    pub fn context(&self) -> Result<Context> {
+        Context::new(&ContextOptions {
+            validation: self.validation,
+            sync_validation: self.sync_validation,
+            device: self.device.clone(),
+            disable_ray_tracing: self.disable_ray_tracing,
+            surface_extensions: Vec::new(),
+            swapchain: false,
+        })
+    }
+}
+
+/// Which camera a render uses.
+#[derive(Clone, Debug, Default)]
+pub enum CameraChoice {
+    /// The scene's first camera (or the framing default).
+    #[default]
+    First,
+    Index(usize),
+    LookAt { from: Vec3, to: Vec3, yfov_deg: f32 },
+}
+
+impl CameraChoice {
+    pub fn resolve(&self, scene: &Scene) -> Result<Camera> {
+        match self {
+            CameraChoice::First => Ok(scene.cameras[0].clone()),
+            CameraChoice::Index(i) => scene.cameras.get(*i).cloned().with_context(|| {
+                format!("camera {i} does not exist ({} has {} cameras)", scene.source.display(), scene.cameras.len())
+            }),
+            CameraChoice::LookAt { from, to, yfov_deg } => {
+                if (*from - *to).length_squared() == 0.0 || !from.is_finite() || !to.is_finite() {
+                    bail!("--look-from and --look-at must be finite and different");
+                }
+                let radius = scene.bounds.extent().length().max(1e-6);
+                let znear = (radius * 1e-4).max((from.distance(*to)) * 1e-4).max(1e-6);
+                Ok(Camera::look_at("command line", *from, *to, yfov_deg.to_radians(), znear))
+            }
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct RenderJob {
+    pub scene: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub camera: CameraChoice,
+    pub settings: RenderSettings,
+}
+
+impl RenderJob {
+    pub fn new(scene: impl Into<PathBuf>, width: u32, height: u32) -> RenderJob {
+        RenderJob {
+            scene: scene.into(),
+            width,
+            height,
+            camera: CameraChoice::First,
+            settings: RenderSettings::default(),
+        }
+    }
+
+    fn extent(&self) -> Result<avk::Extent2D> {
+        if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
+            bail!("resolution {}x{} out of range (1..=16384)", self.width, self.height);
+        }
+        Ok(avk::Extent2D { width: self.width, height: self.height })
+    }
+}
+
+/// Loads, uploads and renders one frame; returns it with the context's
+/// validation error count.
+pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
+    let extent = job.extent()?;
+    let scene = Scene::load(&job.scene)?;
+    let camera = job.camera.resolve(&scene)?;
+    let mut renderer = Renderer::new(ctx, &scene, extent)?;
+    let out = renderer.render(ctx, &scene, &camera, &job.settings);
+    renderer.destroy(ctx);
+    out
+}
+
+/// `render`: one frame to PNG (and optionally linear HDR).
+pub fn render_command(gpu: &GpuOptions, job: &RenderJob, out: &Path, hdr_out: Option<&Path>) -> Result<()> {
+    let ctx = gpu.context()?;
+    let frame = render_once(&ctx, job)?;
+    if !frame.all_finite() {
+        bail!("the rendered frame contains NaN or Inf radiance");
+    }
+    frame.save_png(out)?;
+    log::info!("wrote {} ({}x{})", out.display(), frame.width, frame.height);
+    if let Some(h) = hdr_out {
+        frame.save_hdr(h)?;
+        log::info!("wrote {}", h.display());
+    }
+    print_timings(&frame.timings);
+    check_validation(&ctx)
+}
+
+/// Fails when the validation layer reported an error during this run.
+pub fn check_validation(ctx: &Context) -> Result<()> {
+    let errors = ctx.validation_counters().errors();
+    if errors > 0 {
+        bail!("the Vulkan validation layer reported {errors} error(s); see the log above");
+    }
+    Ok(())
+}
+
+fn print_timings(t: &[(&'static str, f64)]) {
+    let parts: Vec<_> = t.iter().map(|(n, ms)| format!("{n} {ms:.3} ms")).collect();
+    log::info!("GPU: {}", parts.join(", "));
+}
+
+/// `info`: capability report of every device.
+pub fn info_command(gpu: &GpuOptions) -> Result<String> {
+    let instance = crate::vk::Instance::new(&crate::vk::InstanceOptions {
+        validation: gpu.validation,
+        ..Default::default()
+    })?;
+    let devices = crate::vk::device::enumerate(&instance.raw)?;
+    if devices.is_empty() {
+        bail!("no Vulkan device found");
+    }
+    let selected = crate::vk::device::select(&devices, &gpu.device).ok().map(|(_, c)| c.index);
+    let mut s = String::new();
+    for (_, c) in &devices {
+        s.push_str(&c.report());
+        if Some(c.index) == selected {
+            s.push_str("  (selected)\n");
+        }
+    }
+    Ok(s)
+}
+
+/// Per-pass statistics over a benchmark run.
+#[derive(Clone, Debug)]
+pub struct PassStats {
+    pub name: &'static str,
+    pub min: f64,
+    pub median: f64,
+    pub max: f64,
+}
+
+pub struct BenchReport {
+    pub scene: PathBuf,
+    pub device: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: usize,
+    pub passes: Vec<PassStats>,
+    pub frame_total: PassStats,
+}
+
+impl BenchReport {
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "scene {}  device {}  {}x{}  {} frames (GPU ms)\n{:<12} {:>9} {:>9} {:>9}\n",
+            self.scene.display(),
+            self.device,
+            self.width,
+            self.height,
+            self.frames,
+            "pass",
+            "min",
+            "median",
+            "max"
+        );
+        for p in self.passes.iter().chain(std::iter::once(&self.frame_total)) {
+            s.push_str(&format!("{:<12} {:>9.3} {:>9.3} {:>9.3}\n", p.name, p.min, p.median, p.max));
+        }
+        s
+    }
+}
+
+fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len().max(1);
+    PassStats {
+        name,
+        min: v.first().copied().unwrap_or(f64::NAN),
+        median: v.get(n / 2).copied().unwrap_or(f64::NAN),
+        max: v.last().copied().unwrap_or(f64::NAN),
+    }
+}
+
+/// `bench`: renders `frames` frames along the scene's camera path (or from
+/// its first camera) after `warmup` frames and reports per-pass GPU times.
+pub fn bench(ctx: &Context, job: &RenderJob, frames: usize, warmup: usize) -> Result<BenchReport> {
+    let extent = job.extent()?;
+    let scene = Scene::load(&job.scene)?;
+    let base_camera = job.camera.resolve(&scene)?;
+    let mut renderer = Renderer::new(ctx, &scene, extent)?;
+    let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    let mut totals = Vec::new();
+    let result: Result<()> = (|| {
+        for i in 0..warmup + frames {
+            let t = if frames > 1 { (i.saturating_sub(warmup)) as f32 / (frames - 1) as f32 } else { 0.0 };
+            let camera = crate::scene::camera::on_path(&scene.camera_path, t, &base_camera);
+            let out = renderer.render(ctx, &scene, &camera, &job.settings)?;
+            if i < warmup {
+                continue;
+            }
+            let mut total = 0.0;
+            for (name, ms) in out.timings.iter().filter(|(n, _)| *n != "readback") {
+                total += ms;
+                match per_pass.iter_mut().find(|(n, _)| n == name) {
+                    Some((_, v)) => v.push(*ms),
+                    None => per_pass.push((name, vec![*ms])),
+                }
+            }
+            totals.push(total);
+        }
+        Ok(())
+    })();
+    renderer.destroy(ctx);
+    result?;
+    Ok(BenchReport {
+        scene: job.scene.clone(),
+        device: ctx.caps.name.clone(),
+        width: job.width,
+        height: job.height,
+        frames,
+        passes: per_pass.into_iter().map(|(n, v)| stats(n, v)).collect(),
+        frame_total: stats("frame", totals),
+    })
+}
+
+pub fn bench_command(gpu: &GpuOptions, job: &RenderJob, frames: usize, warmup: usize) -> Result<()> {
+    let ctx = gpu.context()?;
+    let report = bench(&ctx, job, frames.max(1), warmup)?;
+    println!("{}", report.table());
+    check_validation(&ctx)
+}
+
+/// Parses "x,y,z".
+pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("'{p}': {e}")))
+        .collect::<Result<_, _>>()?;
+    if v.len() != 3 {
+        return Err(format!("expected x,y,z, got '{s}'"));
+    }
+    Ok(Vec3::new(v[0], v[1], v[2]))
+}

@@ -1,0 +1,156 @@
+//! Command line: `info`, `render`, `bench`. With no command it renders the
+//! bundled default scene to `out/default.png`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Result;
+use clap::{Args, Parser, Subcommand};
+use glam::Vec3;
+
+use hybrid_rt::app::{self, CameraChoice, GpuOptions, RenderJob};
+use hybrid_rt::render::{DebugView, RenderSettings};
+use hybrid_rt::vk::DeviceSelector;
+
+#[derive(Parser)]
+#[command(name = "hybrid-rt", version, about = "Hybrid rasterization + ray-tracing renderer (Vulkan)")]
+struct Cli {
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Args)]
+struct GpuArgs {
+    /// Enable VK_LAYER_KHRONOS_validation; any validation error makes the
+    /// command fail. Also on with HYBRID_RT_VALIDATION=1.
+    #[arg(long, global = true)]
+    validation: bool,
+    /// With --validation: also run synchronization validation.
+    #[arg(long, global = true)]
+    sync_validation: bool,
+    /// Device: index from `info`, a name substring, or "auto" (prefers a discrete GPU).
+    #[arg(long, global = true, default_value = "auto")]
+    device: String,
+    /// Do not enable any ray-tracing extension even if the device has them.
+    #[arg(long, global = true)]
+    no_rt: bool,
+    /// Log level (error, warn, info, debug, trace); RUST_LOG overrides.
+    #[arg(long, global = true, default_value = "info")]
+    log: String,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List Vulkan devices and what they support (ray query, RT pipeline, ...).
+    Info,
+    /// Render one frame offscreen to a PNG.
+    Render {
+        #[command(flatten)]
+        view: ViewArgs,
+        /// Output PNG (tone-mapped sRGB).
+        #[arg(long, default_value = "out/render.png")]
+        out: PathBuf,
+        /// Also write linear radiance as Radiance .hdr.
+        #[arg(long)]
+        hdr_out: Option<PathBuf>,
+    },
+    /// Render N frames along the scene's camera path; print per-pass GPU times.
+    Bench {
+        #[command(flatten)]
+        view: ViewArgs,
+        #[arg(long, default_value_t = 60)]
+        frames: usize,
+        /// Frames rendered first and not measured (shader JIT, caches).
+        #[arg(long, default_value_t = 3)]
+        warmup: usize,
+    },
+}
+
+#[derive(Args, Clone)]
+struct ViewArgs {
+    /// glTF/GLB, OBJ or TOML scene file (default: the bundled assets/default.toml).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    #[arg(long, default_value_t = 1280)]
+    width: u32,
+    #[arg(long, default_value_t = 720)]
+    height: u32,
+    /// Index of the scene camera to use.
+    #[arg(long, conflicts_with = "look_from")]
+    camera: Option<usize>,
+    /// Camera position "x,y,z" (with --look-at).
+    #[arg(long, value_parser = app::parse_vec3, requires = "look_at")]
+    look_from: Option<Vec3>,
+    /// Camera target "x,y,z" (with --look-from).
+    #[arg(long, value_parser = app::parse_vec3, requires = "look_from")]
+    look_at: Option<Vec3>,
+    /// Vertical field of view in degrees for --look-from/--look-at.
+    #[arg(long, default_value_t = 60.0)]
+    fov: f32,
+    /// Exposure multiplier before tone mapping.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// Show a G-buffer target instead of the lit image.
+    #[arg(long, value_enum, default_value_t = DebugView::None)]
+    debug_view: DebugView,
+}
+
+impl ViewArgs {
+    fn job(&self) -> RenderJob {
+        let camera = match (self.camera, self.look_from, self.look_at) {
+            (Some(i), _, _) => CameraChoice::Index(i),
+            (None, Some(from), Some(to)) => CameraChoice::LookAt { from, to, yfov_deg: self.fov },
+            _ => CameraChoice::First,
+        };
+        RenderJob {
+            scene: self.scene.clone().unwrap_or_else(app::default_scene_path),
+            width: self.width,
+            height: self.height,
+            camera,
+            settings: RenderSettings { exposure: self.exposure, debug_view: self.debug_view },
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    let env_validation = std::env::var("HYBRID_RT_VALIDATION").is_ok_and(|v| v != "0" && !v.is_empty());
+    let gpu = GpuOptions {
+        validation: cli.gpu.validation || cli.gpu.sync_validation || env_validation,
+        sync_validation: cli.gpu.sync_validation,
+        device: cli.gpu.device.parse::<DeviceSelector>().unwrap_or_default(),
+        disable_ray_tracing: cli.gpu.no_rt,
+    };
+    match cli.command {
+        Some(Command::Info) => {
+            print!("{}", app::info_command(&gpu)?);
+            Ok(())
+        }
+        Some(Command::Render { view, out, hdr_out }) => {
+            app::render_command(&gpu, &view.job(), &out, hdr_out.as_deref())
+        }
+        Some(Command::Bench { view, frames, warmup }) => app::bench_command(&gpu, &view.job(), frames, warmup),
+        None => {
+            // The interactive viewer is a later issue; without it (and on a
+            // machine without a display) the default is a headless render.
+            log::info!("rendering the default scene headless");
+            let job = RenderJob::new(app::default_scene_path(), 1280, 720);
+            app::render_command(&gpu, &job, &PathBuf::from("out/default.png"), None)
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(&cli.gpu.log))
+        .format_timestamp_millis()
+        .init();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

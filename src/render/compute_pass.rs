@@ -1,0 +1,100 @@
+//! A full-screen compute pass: scene set 0, its own set 1 of images, one
+//! pipeline, 8x8 workgroups. Lighting and tone mapping are two of these.
+
+use anyhow::Result;
+use ash::vk;
+
+use crate::vk::pipeline::{compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization};
+use crate::vk::Context;
+
+/// How one set-1 binding is fed.
+#[derive(Clone, Copy)]
+pub enum Input {
+    /// texelFetch from a sampled image in SHADER_READ_ONLY_OPTIMAL.
+    Sampled(vk::ImageView),
+    /// imageLoad / imageStore on an image in GENERAL.
+    Storage(vk::ImageView),
+}
+
+pub struct ComputePass {
+    pub name: &'static str,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+    set: DescriptorSet,
+    sampler: vk::Sampler,
+}
+
+impl ComputePass {
+    pub fn new(
+        ctx: &Context,
+        name: &'static str,
+        shader: &str,
+        scene_layout: vk::DescriptorSetLayout,
+        inputs: &[Input],
+        spec: &Specialization,
+    ) -> Result<ComputePass> {
+        let bindings: Vec<_> = inputs
+            .iter()
+            .map(|i| match i {
+                Input::Sampled(_) => Binding::one(vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+                Input::Storage(_) => Binding::one(vk::DescriptorType::STORAGE_IMAGE),
+            })
+            .collect();
+        let set = DescriptorSet::new(ctx, &format!("{name} set"), &bindings)?;
+        let layout = pipeline_layout(ctx, &format!("{name} layout"), &[scene_layout, set.layout], 0)?;
+        let pipeline = compute_pipeline(ctx, shader, layout, spec)?;
+        let sampler = unsafe {
+            ctx.device.create_sampler(
+                &vk::SamplerCreateInfo::default()
+                    .mag_filter(vk::Filter::NEAREST)
+                    .min_filter(vk::Filter::NEAREST)
+                    .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                    .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE),
+                None,
+            )?
+        };
+        ctx.name(sampler, &format!("{name} point sampler"));
+        let pass = ComputePass { name, layout, pipeline, set, sampler };
+        pass.bind(ctx, inputs);
+        Ok(pass)
+    }
+
+    /// Points set 1 at (new) images, e.g. after a resize.
+    pub fn bind(&self, ctx: &Context, inputs: &[Input]) {
+        for (i, input) in inputs.iter().enumerate() {
+            match input {
+                Input::Sampled(v) => {
+                    self.set.write_image(ctx, i as u32, 0, *v, self.sampler, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+                }
+                Input::Storage(v) => {
+                    self.set.write_image(ctx, i as u32, 0, *v, vk::Sampler::null(), vk::ImageLayout::GENERAL)
+                }
+            }
+        }
+    }
+
+    pub fn dispatch(&self, ctx: &Context, cmd: vk::CommandBuffer, scene_set: vk::DescriptorSet, extent: vk::Extent2D) {
+        let d = &ctx.device;
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[scene_set, self.set.set],
+                &[],
+            );
+            d.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1);
+        }
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        unsafe {
+            ctx.device.destroy_pipeline(self.pipeline, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+            ctx.device.destroy_sampler(self.sampler, None);
+        }
+        self.set.destroy(ctx);
+    }
+}

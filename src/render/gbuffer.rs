@@ -1,0 +1,210 @@
+//! G-buffer pass: rasterizes every instance into the MRT targets with a
+//! reversed-Z depth buffer (clear 0, GREATER). Alpha-masked materials use a
+//! pipeline variant with the alpha test specialised in; opaque ones keep
+//! early depth testing.
+
+use anyhow::{Context as _, Result};
+use ash::vk;
+
+use super::gpu_scene::GpuScene;
+use super::targets::{Targets, DEPTH_FORMAT, GBUFFER_FORMATS};
+use crate::scene::AlphaMode;
+use crate::vk::pipeline::{pipeline_layout, shader_module, Specialization};
+use crate::vk::{image_barrier, Context};
+
+pub struct GBufferPass {
+    layout: vk::PipelineLayout,
+    opaque: vk::Pipeline,
+    masked: vk::Pipeline,
+}
+
+impl GBufferPass {
+    pub fn new(ctx: &Context, scene_layout: vk::DescriptorSetLayout) -> Result<GBufferPass> {
+        let layout = pipeline_layout(ctx, "gbuffer layout", &[scene_layout], 0)?;
+        let opaque = create_pipeline(ctx, layout, false)?;
+        let masked = create_pipeline(ctx, layout, true)?;
+        ctx.name(opaque, "gbuffer opaque");
+        ctx.name(masked, "gbuffer alpha-masked");
+        Ok(GBufferPass { layout, opaque, masked })
+    }
+
+    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, scene: &GpuScene, t: &Targets) {
+        let d = &ctx.device;
+        let attach = (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
+        let prior_reads = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_SAMPLED_READ);
+        for img in &t.gbuffer {
+            image_barrier(
+                ctx,
+                cmd,
+                img.raw,
+                img.aspect,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                prior_reads,
+                attach,
+            );
+        }
+        image_barrier(
+            ctx,
+            cmd,
+            t.depth.raw,
+            t.depth.aspect,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+            prior_reads,
+            (
+                vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+            ),
+        );
+
+        let colors: Vec<_> = t
+            .gbuffer
+            .iter()
+            .map(|img| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(img.view)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } })
+            })
+            .collect();
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(t.depth.view)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } });
+        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: t.extent };
+        let info = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(1)
+            .color_attachments(&colors)
+            .depth_attachment(&depth);
+        unsafe {
+            d.cmd_begin_rendering(cmd, &info);
+            d.cmd_set_viewport(
+                cmd,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: 0.0,
+                    width: t.extent.width as f32,
+                    height: t.extent.height as f32,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
+            d.cmd_set_scissor(cmd, 0, &[area]);
+            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[scene.set.set], &[]);
+            d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
+            // Opaque first so masked geometry is depth-tested against it.
+            for (pipeline, masked) in [(self.opaque, false), (self.masked, true)] {
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+                for draw in scene.draws.iter().filter(|dr| (dr.alpha_mode != AlphaMode::Opaque) == masked) {
+                    let cull = if draw.double_sided { vk::CullModeFlags::NONE } else { vk::CullModeFlags::BACK };
+                    d.cmd_set_cull_mode(cmd, cull);
+                    d.cmd_draw_indexed(
+                        cmd,
+                        draw.range.index_count,
+                        1,
+                        draw.range.first_index,
+                        draw.range.vertex_offset as i32,
+                        draw.instance,
+                    );
+                }
+            }
+            d.cmd_end_rendering(cmd);
+        }
+
+        let sampled = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_SAMPLED_READ);
+        for img in &t.gbuffer {
+            image_barrier(
+                ctx,
+                cmd,
+                img.raw,
+                img.aspect,
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                attach,
+                sampled,
+            );
+        }
+        image_barrier(
+            ctx,
+            cmd,
+            t.depth.raw,
+            t.depth.aspect,
+            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            (vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS, vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE),
+            sampled,
+        );
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        unsafe {
+            ctx.device.destroy_pipeline(self.opaque, None);
+            ctx.device.destroy_pipeline(self.masked, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}
+
+fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) -> Result<vk::Pipeline> {
+    let vs = shader_module(ctx, "gbuffer.vert")?;
+    let fs = shader_module(ctx, "gbuffer.frag")?;
+    let spec = Specialization::new(&[(0, alpha_test as u32)]);
+    let spec_info = spec.info();
+    let stages = [
+        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(fs)
+            .name(c"main")
+            .specialization_info(&spec_info),
+    ];
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default(); // vertex pulling
+    let ia = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let vp = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+    let rs = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::BACK)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .line_width(1.0);
+    let ms = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let ds = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(true)
+        .depth_write_enable(true)
+        .depth_compare_op(vk::CompareOp::GREATER);
+    let blend: Vec<_> = GBUFFER_FORMATS
+        .iter()
+        .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+        .collect();
+    let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
+    let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR, vk::DynamicState::CULL_MODE];
+    let dyn_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
+    let formats: Vec<_> = GBUFFER_FORMATS.iter().map(|(f, _)| *f).collect();
+    let mut rendering = vk::PipelineRenderingCreateInfo::default()
+        .color_attachment_formats(&formats)
+        .depth_attachment_format(DEPTH_FORMAT);
+    let info = [vk::GraphicsPipelineCreateInfo::default()
+        .stages(&stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&ia)
+        .viewport_state(&vp)
+        .rasterization_state(&rs)
+        .multisample_state(&ms)
+        .depth_stencil_state(&ds)
+        .color_blend_state(&cb)
+        .dynamic_state(&dyn_state)
+        .layout(layout)
+        .push_next(&mut rendering)];
+    let r = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
+    unsafe {
+        ctx.device.destroy_shader_module(vs, None);
+        ctx.device.destroy_shader_module(fs, None);
+    }
+    Ok(r.map_err(|(_, e)| e).context("create gbuffer pipeline")?[0])
+}

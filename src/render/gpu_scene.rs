@@ -1,0 +1,473 @@
+//! The scene on the GPU: ONE copy of vertex/index data (read by the
+//! rasterizer, the acceleration-structure builds and the compute tracer),
+//! materials, instances, lights, textures and the environment map, all bound
+//! as descriptor set 0.
+
+use anyhow::{Context as _, Result};
+use ash::vk;
+use glam::{Mat4, Vec3};
+use gpu_allocator::MemoryLocation;
+
+use super::gpu_types::*;
+use crate::scene::{AlphaMode, Filter, LightKind, SamplerDesc, Scene, TextureRef, Wrap};
+use crate::vk::pipeline::{Binding, DescriptorSet};
+use crate::vk::{Buffer, Context, Image};
+
+/// Where one mesh primitive lives in the shared buffers.
+#[derive(Clone, Copy, Debug)]
+pub struct PrimitiveRange {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub vertex_offset: u32,
+    pub vertex_count: u32,
+}
+
+/// One draw of the G-buffer pass.
+#[derive(Clone, Copy, Debug)]
+pub struct Draw {
+    pub instance: u32,
+    pub range: PrimitiveRange,
+    pub alpha_mode: AlphaMode,
+    pub double_sided: bool,
+}
+
+pub struct GpuScene {
+    pub vertices: Buffer,
+    pub indices: Buffer,
+    pub materials: Buffer,
+    pub instances: Buffer,
+    pub lights: Buffer,
+    pub frame: Buffer,
+    pub textures: Vec<Image>,
+    samplers: Vec<(SamplerDesc, vk::Sampler)>,
+    pub env_map: Image,
+    env_sampler: vk::Sampler,
+    pub set: DescriptorSet,
+    /// Indexed by mesh, then primitive.
+    pub ranges: Vec<Vec<PrimitiveRange>>,
+    pub draws: Vec<Draw>,
+    pub light_count: u32,
+    /// Mean environment radiance (solid-angle weighted), for the ambient term.
+    pub env_mean: Vec3,
+}
+
+pub const SCENE_BINDINGS: usize = 8;
+
+impl GpuScene {
+    pub fn upload(ctx: &Context, scene: &Scene) -> Result<GpuScene> {
+        let t0 = std::time::Instant::now();
+        let (vertices, indices, ranges) = upload_geometry(ctx, scene)?;
+
+        let mut samplers = Vec::new();
+        let mut textures = Vec::with_capacity(scene.textures.len());
+        for (i, t) in scene.textures.iter().enumerate() {
+            let format = if t.srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
+            let name = format!("texture {i} '{}'", t.name);
+            textures.push(
+                Image::texture(
+                    ctx,
+                    &name,
+                    format,
+                    vk::Extent2D { width: t.width, height: t.height },
+                    &t.rgba8,
+                    t.sampler.mipmaps,
+                )
+                .with_context(|| format!("uploading {name}"))?,
+            );
+            if !samplers.iter().any(|(d, _)| *d == t.sampler) {
+                samplers.push((t.sampler, create_sampler(ctx, &t.sampler)?));
+            }
+        }
+
+        let materials: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
+        let materials = Buffer::with_data(
+            ctx,
+            "materials",
+            bytemuck::cast_slice(&materials),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+
+        let mut instances = Buffer::new(
+            ctx,
+            "instances",
+            (scene.instances.len().max(1) * std::mem::size_of::<GpuInstance>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let mut lights = Buffer::new(
+            ctx,
+            "lights",
+            (scene.lights.len().max(1) * std::mem::size_of::<GpuLight>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let frame = Buffer::new(
+            ctx,
+            "frame uniforms",
+            std::mem::size_of::<GpuFrame>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+
+        let (env_map, env_mean) = upload_environment(ctx, scene)?;
+        let env_sampler = create_sampler(
+            ctx,
+            &SamplerDesc {
+                mag_filter: Filter::Linear,
+                min_filter: Filter::Linear,
+                mipmaps: false,
+                wrap_u: Wrap::Repeat,
+                wrap_v: Wrap::ClampToEdge,
+            },
+        )?;
+
+        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let set = DescriptorSet::new(
+            ctx,
+            "scene set",
+            &[
+                Binding::one(vk::DescriptorType::UNIFORM_BUFFER),
+                Binding::one(storage),
+                Binding::one(storage),
+                Binding::one(storage),
+                Binding::one(storage),
+                Binding::one(storage),
+                Binding::one(sampled),
+                Binding { ty: sampled, count: textures.len().max(1) as u32, bindless: true },
+            ],
+        )?;
+        set.write_buffer(ctx, 0, frame.raw);
+        set.write_buffer(ctx, 1, vertices.raw);
+        set.write_buffer(ctx, 2, indices.raw);
+        set.write_buffer(ctx, 3, materials.raw);
+        set.write_buffer(ctx, 4, instances.raw);
+        set.write_buffer(ctx, 5, lights.raw);
+        let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        set.write_image(ctx, 6, 0, env_map.view, env_sampler, read);
+        for (i, (img, tex)) in textures.iter().zip(&scene.textures).enumerate() {
+            let s = samplers.iter().find(|(d, _)| *d == tex.sampler).map(|(_, s)| *s).unwrap();
+            set.write_image(ctx, 7, i as u32, img.view, s, read);
+        }
+
+        let draws = build_draws(scene, &ranges);
+        write_instances(scene, &ranges, &mut instances)?;
+        write_lights(scene, &mut lights)?;
+        let gs = GpuScene {
+            vertices,
+            indices,
+            materials,
+            instances,
+            lights,
+            frame,
+            textures,
+            samplers,
+            env_map,
+            env_sampler,
+            set,
+            ranges,
+            draws,
+            light_count: scene.lights.len() as u32,
+            env_mean,
+        };
+        log::info!(
+            "uploaded scene: {} triangles, {} instances, {} materials, {} textures, {:.1} MiB GPU memory, {:.0} ms",
+            scene.triangle_count(),
+            scene.instances.len(),
+            scene.materials.len(),
+            scene.textures.len(),
+            ctx.allocated_bytes() as f64 / (1024.0 * 1024.0),
+            t0.elapsed().as_secs_f64() * 1e3
+        );
+        Ok(gs)
+    }
+
+    /// Re-writes instance transforms and lights (animation, later issues).
+    pub fn update_dynamic(&mut self, scene: &Scene) -> Result<()> {
+        write_instances(scene, &self.ranges, &mut self.instances)?;
+        write_lights(scene, &mut self.lights)
+    }
+
+    pub fn write_frame(&mut self, frame: &GpuFrame) -> Result<()> {
+        self.frame.write(0, bytemuck::bytes_of(frame))
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        for b in [
+            &mut self.vertices,
+            &mut self.indices,
+            &mut self.materials,
+            &mut self.instances,
+            &mut self.lights,
+            &mut self.frame,
+        ] {
+            b.destroy(ctx);
+        }
+        for t in &mut self.textures {
+            t.destroy(ctx);
+        }
+        self.env_map.destroy(ctx);
+        unsafe {
+            for (_, s) in &self.samplers {
+                ctx.device.destroy_sampler(*s, None);
+            }
+            ctx.device.destroy_sampler(self.env_sampler, None);
+        }
+        self.set.destroy(ctx);
+    }
+}
+
+/// Concatenates every primitive into one vertex and one index buffer.
+fn upload_geometry(ctx: &Context, scene: &Scene) -> Result<(Buffer, Buffer, Vec<Vec<PrimitiveRange>>)> {
+    let mut vertex_data = Vec::new();
+    let mut index_data: Vec<u32> = Vec::new();
+    let mut ranges = Vec::with_capacity(scene.meshes.len());
+    for mesh in &scene.meshes {
+        let mut r = Vec::with_capacity(mesh.primitives.len());
+        for p in &mesh.primitives {
+            r.push(PrimitiveRange {
+                first_index: index_data.len() as u32,
+                index_count: p.indices.len() as u32,
+                vertex_offset: vertex_data.len() as u32,
+                vertex_count: p.vertices.len() as u32,
+            });
+            vertex_data.extend_from_slice(&p.vertices);
+            index_data.extend_from_slice(&p.indices);
+        }
+        ranges.push(r);
+    }
+    // The usage flags every consumer needs, so no second copy is ever made.
+    let mut usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+    if ctx.rt.acceleration_structure {
+        usage |= vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR;
+    }
+    let vertices = Buffer::with_data(ctx, "scene vertices", bytemuck::cast_slice(&vertex_data), usage)?;
+    let indices = Buffer::with_data(
+        ctx,
+        "scene indices",
+        bytemuck::cast_slice(&index_data),
+        usage | vk::BufferUsageFlags::INDEX_BUFFER,
+    )?;
+    Ok((vertices, indices, ranges))
+}
+
+fn build_draws(scene: &Scene, ranges: &[Vec<PrimitiveRange>]) -> Vec<Draw> {
+    scene
+        .instances
+        .iter()
+        .enumerate()
+        .map(|(i, inst)| {
+            let m = &scene.materials[scene.instance_material(inst)];
+            Draw {
+                instance: i as u32,
+                range: ranges[inst.mesh][inst.primitive],
+                alpha_mode: m.alpha_mode,
+                double_sided: m.double_sided,
+            }
+        })
+        .collect()
+}
+
+fn tex_index(t: &Option<TextureRef>) -> i32 {
+    t.map(|t| t.texture as i32).unwrap_or(-1)
+}
+
+fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
+    GpuMaterial {
+        base_color: m.base_color,
+        emissive: m.emissive,
+        metallic: m.metallic,
+        roughness: m.roughness,
+        normal_scale: m.normal_scale,
+        occlusion_strength: m.occlusion_strength,
+        alpha_cutoff: m.alpha_cutoff,
+        transmission: m.transmission,
+        ior: m.ior,
+        alpha_mode: match m.alpha_mode {
+            AlphaMode::Opaque => ALPHA_OPAQUE,
+            AlphaMode::Mask => ALPHA_MASK,
+            AlphaMode::Blend => ALPHA_BLEND,
+        },
+        flags: if m.double_sided { MAT_DOUBLE_SIDED } else { 0 }
+            | if m.casts_shadows { MAT_CASTS_SHADOWS } else { 0 },
+        tex_base_color: tex_index(&m.base_color_texture),
+        tex_metallic_roughness: tex_index(&m.metallic_roughness_texture),
+        tex_normal: tex_index(&m.normal_texture),
+        tex_occlusion: tex_index(&m.occlusion_texture),
+        tex_emissive: tex_index(&m.emissive_texture),
+        tex_transmission: tex_index(&m.transmission_texture),
+        pad: [0; 2],
+    }
+}
+
+fn write_instances(scene: &Scene, ranges: &[Vec<PrimitiveRange>], buf: &mut Buffer) -> Result<()> {
+    let data: Vec<GpuInstance> = scene
+        .instances
+        .iter()
+        .map(|inst| {
+            let r = ranges[inst.mesh][inst.primitive];
+            let props = &scene.objects.get(inst.object).map(|o| o.props.clone()).unwrap_or_default();
+            let normal = normal_matrix(&inst.world);
+            GpuInstance {
+                world: inst.world.to_cols_array(),
+                normal_matrix: normal.to_cols_array(),
+                material: scene.instance_material(inst) as u32,
+                first_index: r.first_index,
+                vertex_offset: r.vertex_offset,
+                object_id: inst.object as u32,
+                index_count: r.index_count,
+                flags: if props.casts_shadows { INST_CASTS_SHADOWS } else { 0 },
+                pad: [0; 2],
+            }
+        })
+        .collect();
+    buf.write(0, bytemuck::cast_slice(&data))
+}
+
+/// Inverse transpose of the upper 3x3; a singular matrix (zero scale) keeps
+/// its own 3x3 rather than producing NaNs.
+fn normal_matrix(world: &Mat4) -> Mat4 {
+    let m3 = glam::Mat3::from_mat4(*world);
+    let det = m3.determinant();
+    let n = if det.abs() > f32::MIN_POSITIVE && det.is_finite() { m3.inverse().transpose() } else { m3 };
+    Mat4::from_mat3(n)
+}
+
+fn write_lights(scene: &Scene, buf: &mut Buffer) -> Result<()> {
+    let data: Vec<GpuLight> = scene.lights.iter().map(gpu_light).collect();
+    buf.write(0, bytemuck::cast_slice(&data))
+}
+
+fn gpu_light(l: &crate::scene::Light) -> GpuLight {
+    let (kind, spot_scale, spot_offset) = match l.kind {
+        LightKind::Directional => (LIGHT_DIRECTIONAL, 0.0, 0.0),
+        LightKind::Point => (LIGHT_POINT, 0.0, 0.0),
+        LightKind::Spot { inner_cone, outer_cone } => {
+            // KHR_lights_punctual's recommended smooth cone falloff.
+            let cos_outer = outer_cone.cos();
+            let cos_inner = inner_cone.cos();
+            let scale = 1.0 / (cos_inner - cos_outer).max(1e-4);
+            (LIGHT_SPOT, scale, -cos_outer * scale)
+        }
+    };
+    GpuLight {
+        position: l.position.to_array(),
+        kind,
+        direction: l.direction.normalize_or(Vec3::NEG_Y).to_array(),
+        range: l.range.unwrap_or(0.0),
+        radiance: (l.color * l.intensity).to_array(),
+        spot_scale,
+        spot_offset,
+        flags: if l.casts_shadows { LIGHT_CASTS_SHADOWS } else { 0 },
+        pad: [0.0; 2],
+    }
+}
+
+fn create_sampler(ctx: &Context, d: &SamplerDesc) -> Result<vk::Sampler> {
+    let filter = |f: Filter| match f {
+        Filter::Nearest => vk::Filter::NEAREST,
+        Filter::Linear => vk::Filter::LINEAR,
+    };
+    let wrap = |w: Wrap| match w {
+        Wrap::Repeat => vk::SamplerAddressMode::REPEAT,
+        Wrap::MirroredRepeat => vk::SamplerAddressMode::MIRRORED_REPEAT,
+        Wrap::ClampToEdge => vk::SamplerAddressMode::CLAMP_TO_EDGE,
+    };
+    let info = vk::SamplerCreateInfo::default()
+        .mag_filter(filter(d.mag_filter))
+        .min_filter(filter(d.min_filter))
+        .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+        .address_mode_u(wrap(d.wrap_u))
+        .address_mode_v(wrap(d.wrap_v))
+        .address_mode_w(vk::SamplerAddressMode::REPEAT)
+        .max_lod(if d.mipmaps { vk::LOD_CLAMP_NONE } else { 0.0 });
+    let s = unsafe { ctx.device.create_sampler(&info, None)? };
+    ctx.name(s, &format!("sampler {d:?}"));
+    Ok(s)
+}
+
+/// Uploads the equirectangular map as RGBA16F (filterable everywhere; values
+/// above half's range are clamped) and returns its mean radiance. Without a
+/// map a 1x1 black texture keeps the descriptor valid.
+fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3)> {
+    let env = &scene.environment;
+    let Some(map) = &env.map else {
+        let img = Image::texture(
+            ctx,
+            "environment (none)",
+            vk::Format::R16G16B16A16_SFLOAT,
+            vk::Extent2D { width: 1, height: 1 },
+            &[0u8; 8],
+            false,
+        )?;
+        return Ok((img, env.color * env.intensity));
+    };
+    let mut texels = Vec::with_capacity(map.rgb.len() / 3 * 8);
+    let mut sum = Vec3::ZERO;
+    let mut weight = 0.0f64;
+    for y in 0..map.height {
+        // Solid angle of a row is proportional to sin(theta).
+        let w = (std::f32::consts::PI * (y as f32 + 0.5) / map.height as f32).sin();
+        for x in 0..map.width {
+            let i = ((y * map.width + x) * 3) as usize;
+            let c = Vec3::new(map.rgb[i], map.rgb[i + 1], map.rgb[i + 2]);
+            let c = if c.is_finite() { c.max(Vec3::ZERO) } else { Vec3::ZERO };
+            sum += c * w;
+            weight += w as f64;
+            for v in [c.x, c.y, c.z, 1.0] {
+                texels.extend_from_slice(&f32_to_f16(v).to_le_bytes());
+            }
+        }
+    }
+    let mean = sum / weight.max(1e-12) as f32 * env.intensity;
+    let img = Image::texture(
+        ctx,
+        "environment map",
+        vk::Format::R16G16B16A16_SFLOAT,
+        vk::Extent2D { width: map.width, height: map.height },
+        &texels,
+        false,
+    )?;
+    Ok((img, mean))
+}
+
+/// IEEE half from f32: round to nearest, overflow clamps to the largest
+/// finite half (a very bright texel must not become Inf), NaN becomes 0.
+pub fn f32_to_f16(v: f32) -> u16 {
+    if v.is_nan() {
+        return 0;
+    }
+    let v = v.clamp(-65504.0, 65504.0);
+    let bits = v.to_bits();
+    let sign = ((bits >> 16) & 0x8000) as u16;
+    let exp = ((bits >> 23) & 0xff) as i32 - 127 + 15;
+    let mant = bits & 0x7f_ffff;
+    if exp <= 0 {
+        if exp < -10 {
+            return sign;
+        }
+        let m = (mant | 0x80_0000) >> (1 - exp);
+        return sign | ((m + 0x1000) >> 13) as u16;
+    }
+    let h = ((exp as u32) << 10) | (mant >> 13);
+    let round = (mant >> 12) & 1;
+    sign | (h + round).min(0x7bff) as u16
+}
+
+#[cfg(test)]
+mod tests {
+    use super::f32_to_f16;
+
+    #[test]
+    fn half_conversion() {
+        assert_eq!(f32_to_f16(0.0), 0);
+        assert_eq!(f32_to_f16(1.0), 0x3c00);
+        assert_eq!(f32_to_f16(-2.0), 0xc000);
+        assert_eq!(f32_to_f16(65504.0), 0x7bff);
+        assert_eq!(f32_to_f16(1e9), 0x7bff);
+        assert_eq!(f32_to_f16(f32::NAN), 0);
+        assert_eq!(f32_to_f16(0.5), 0x3800);
+        // Smallest normal half.
+        assert_eq!(f32_to_f16(6.103_515_6e-5), 0x0400);
+    }
+}

@@ -1,0 +1,302 @@
+//! Frame orchestration. One frame reads top to bottom like the data flow in
+//! DESIGN.md: G-buffer -> deferred lighting -> tone map (-> readback or present).
+
+pub mod compute_pass;
+pub mod gbuffer;
+pub mod gpu_scene;
+pub mod gpu_types;
+pub mod output;
+pub mod targets;
+
+use anyhow::Result;
+use ash::vk;
+use glam::Mat4;
+use gpu_allocator::MemoryLocation;
+
+use crate::scene::{Camera, Scene};
+use crate::vk::pipeline::Specialization;
+use crate::vk::timer::{pass, GpuTimer};
+use crate::vk::{image_barrier, Buffer, Context};
+use compute_pass::{ComputePass, Input};
+use gbuffer::GBufferPass;
+use gpu_scene::GpuScene;
+use gpu_types::GpuFrame;
+use targets::Targets;
+
+/// G-buffer debug views (also selectable in the viewer).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum DebugView {
+    #[default]
+    None,
+    Albedo,
+    Normal,
+    Depth,
+    Material,
+    Object,
+}
+
+impl DebugView {
+    fn code(self) -> u32 {
+        self as u32
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct RenderSettings {
+    pub exposure: f32,
+    pub debug_view: DebugView,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self { exposure: 1.0, debug_view: DebugView::None }
+    }
+}
+
+/// What a headless frame gives back.
+pub struct FrameOutput {
+    pub width: u32,
+    pub height: u32,
+    /// Tone-mapped sRGB, RGBA8, row-major, top row first.
+    pub ldr: Vec<u8>,
+    /// Linear radiance, RGBA32F.
+    pub hdr: Vec<f32>,
+    /// GPU milliseconds per pass.
+    pub timings: Vec<(&'static str, f64)>,
+}
+
+pub struct Renderer {
+    pub gpu: GpuScene,
+    pub targets: Targets,
+    gbuffer: GBufferPass,
+    lighting: ComputePass,
+    tonemap: ComputePass,
+    pub timer: GpuTimer,
+    cmd: vk::CommandBuffer,
+    readback_ldr: Buffer,
+    readback_hdr: Buffer,
+    frame_index: u32,
+}
+
+fn lighting_inputs(t: &Targets) -> Vec<Input> {
+    let mut v: Vec<Input> = t.gbuffer.iter().map(|i| Input::Sampled(i.view)).collect();
+    v.push(Input::Sampled(t.depth.view));
+    v.push(Input::Storage(t.hdr.view));
+    v
+}
+
+fn tonemap_inputs(t: &Targets) -> Vec<Input> {
+    vec![Input::Storage(t.hdr.view), Input::Storage(t.ldr.view)]
+}
+
+fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
+    let px = extent.width as u64 * extent.height as u64;
+    let ldr = Buffer::new(ctx, "readback ldr", px * 4, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+    let hdr = Buffer::new(ctx, "readback hdr", px * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+    Ok((ldr, hdr))
+}
+
+impl Renderer {
+    pub fn new(ctx: &Context, scene: &Scene, extent: vk::Extent2D) -> Result<Renderer> {
+        let gpu = GpuScene::upload(ctx, scene)?;
+        let targets = Targets::new(ctx, extent)?;
+        let gbuffer = GBufferPass::new(ctx, gpu.set.layout)?;
+        let no_spec = Specialization::new(&[]);
+        let lighting =
+            ComputePass::new(ctx, "lighting", "lighting.comp", gpu.set.layout, &lighting_inputs(&targets), &no_spec)?;
+        let tonemap =
+            ComputePass::new(ctx, "tonemap", "tonemap.comp", gpu.set.layout, &tonemap_inputs(&targets), &no_spec)?;
+        let timer = GpuTimer::new(ctx, 16)?;
+        let cmd = ctx.allocate_command_buffer("frame")?;
+        let (readback_ldr, readback_hdr) = readback_buffers(ctx, extent)?;
+        Ok(Renderer {
+            gpu,
+            targets,
+            gbuffer,
+            lighting,
+            tonemap,
+            timer,
+            cmd,
+            readback_ldr,
+            readback_hdr,
+            frame_index: 0,
+        })
+    }
+
+    pub fn extent(&self) -> vk::Extent2D {
+        self.targets.extent
+    }
+
+    /// Recreates the per-resolution targets (the caller has waited for idle).
+    pub fn resize(&mut self, ctx: &Context, extent: vk::Extent2D) -> Result<()> {
+        self.targets.destroy(ctx);
+        self.readback_ldr.destroy(ctx);
+        self.readback_hdr.destroy(ctx);
+        self.targets = Targets::new(ctx, extent)?;
+        (self.readback_ldr, self.readback_hdr) = readback_buffers(ctx, extent)?;
+        self.lighting.bind(ctx, &lighting_inputs(&self.targets));
+        self.tonemap.bind(ctx, &tonemap_inputs(&self.targets));
+        Ok(())
+    }
+
+    /// Fills the frame uniforms for `camera`.
+    pub fn prepare(&mut self, scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<()> {
+        let e = self.targets.extent;
+        let aspect = e.width as f32 / e.height.max(1) as f32;
+        let view = camera.view();
+        let proj = camera.projection(aspect);
+        let view_proj = proj * view;
+        let env = &scene.environment;
+        let frame = GpuFrame {
+            view: view.to_cols_array(),
+            proj: proj.to_cols_array(),
+            view_proj: view_proj.to_cols_array(),
+            inv_view_proj: view_proj.inverse().to_cols_array(),
+            camera_pos: camera.position().to_array(),
+            light_count: self.gpu.light_count,
+            env_color: env.color.to_array(),
+            env_intensity: env.intensity,
+            env_ambient: self.gpu.env_mean.to_array(),
+            env_rotation: env.rotation,
+            resolution: [e.width, e.height],
+            has_env_map: env.map.is_some() as u32,
+            debug_view: settings.debug_view.code(),
+            exposure: settings.exposure,
+            frame_index: self.frame_index,
+            flags: 0,
+            znear: camera.znear,
+        };
+        debug_assert!(Mat4::from_cols_array(&frame.view).is_finite());
+        self.gpu.write_frame(&frame)
+    }
+
+    /// Records every pass of one frame; the tone-mapped result is left in
+    /// `targets.ldr` in GENERAL layout for the caller (readback or present).
+    pub fn record(&mut self, ctx: &Context, cmd: vk::CommandBuffer) -> Result<()> {
+        self.timer.begin_frame(ctx, cmd);
+        let (gpu, t) = (&self.gpu, &self.targets);
+        pass(ctx, &mut self.timer, cmd, "gbuffer", |cmd| {
+            self.gbuffer.record(ctx, cmd, gpu, t);
+            Ok(())
+        })?;
+        pass(ctx, &mut self.timer, cmd, "lighting", |cmd| {
+            image_barrier(
+                ctx,
+                cmd,
+                t.hdr.raw,
+                t.hdr.aspect,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::GENERAL,
+                (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ),
+                (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
+            );
+            self.lighting.dispatch(ctx, cmd, gpu.set.set, t.extent);
+            Ok(())
+        })?;
+        pass(ctx, &mut self.timer, cmd, "tonemap", |cmd| {
+            let compute_write = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE);
+            let compute_read = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ);
+            image_barrier(
+                ctx,
+                cmd,
+                t.hdr.raw,
+                t.hdr.aspect,
+                vk::ImageLayout::GENERAL,
+                vk::ImageLayout::GENERAL,
+                compute_write,
+                compute_read,
+            );
+            image_barrier(
+                ctx,
+                cmd,
+                t.ldr.raw,
+                t.ldr.aspect,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::GENERAL,
+                (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ),
+                compute_write,
+            );
+            self.tonemap.dispatch(ctx, cmd, gpu.set.set, t.extent);
+            Ok(())
+        })?;
+        self.frame_index = self.frame_index.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Renders one frame offscreen and reads back both outputs.
+    pub fn render(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<FrameOutput> {
+        self.prepare(scene, camera, settings)?;
+        let cmd = self.cmd;
+        unsafe {
+            ctx.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
+            ctx.device.begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )?;
+        }
+        self.record(ctx, cmd)?;
+        let t = &self.targets;
+        pass(ctx, &mut self.timer, cmd, "readback", |cmd| {
+            let from = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE);
+            let to = (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_READ);
+            for (img, buf) in [(&t.ldr, &self.readback_ldr), (&t.hdr, &self.readback_hdr)] {
+                image_barrier(
+                    ctx,
+                    cmd,
+                    img.raw,
+                    img.aspect,
+                    vk::ImageLayout::GENERAL,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    from,
+                    to,
+                );
+                let region = [vk::BufferImageCopy::default()
+                    .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(img.aspect).layer_count(1))
+                    .image_extent(vk::Extent3D { width: t.extent.width, height: t.extent.height, depth: 1 })];
+                unsafe {
+                    ctx.device.cmd_copy_image_to_buffer(
+                        cmd,
+                        img.raw,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        buf.raw,
+                        &region,
+                    )
+                };
+            }
+            crate::vk::memory_barrier(
+                ctx,
+                cmd,
+                (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+                (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+            );
+            Ok(())
+        })?;
+        unsafe { ctx.device.end_command_buffer(cmd)? };
+        ctx.submit_and_wait(cmd)?;
+        let timings = self.timer.results(ctx)?;
+        let ldr = self.readback_ldr.read()?.to_vec();
+        let hdr = bytemuck::pod_collect_to_vec::<u8, f32>(self.readback_hdr.read()?);
+        Ok(FrameOutput { width: t.extent.width, height: t.extent.height, ldr, hdr, timings })
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        unsafe {
+            let _ = ctx.device.device_wait_idle();
+            ctx.device.free_command_buffers(ctx.command_pool, &[self.cmd]);
+        }
+        self.readback_ldr.destroy(ctx);
+        self.readback_hdr.destroy(ctx);
+        self.timer.destroy(ctx);
+        self.tonemap.destroy(ctx);
+        self.lighting.destroy(ctx);
+        self.gbuffer.destroy(ctx);
+        self.targets.destroy(ctx);
+        self.gpu.destroy(ctx);
+    }
+}

@@ -1,0 +1,49 @@
+//! Writing frames to disk: tone-mapped PNG, linear Radiance HDR.
+
+use std::path::Path;
+
+use anyhow::{Context as _, Result};
+
+use super::FrameOutput;
+
+impl FrameOutput {
+    /// The tone-mapped image without alpha.
+    pub fn rgb8(&self) -> image::RgbImage {
+        let rgb: Vec<u8> = self.ldr.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+        image::RgbImage::from_raw(self.width, self.height, rgb).expect("frame size matches its pixels")
+    }
+
+    /// Linear radiance of pixel (x, y).
+    pub fn radiance(&self, x: u32, y: u32) -> [f32; 3] {
+        let i = ((y * self.width + x) * 4) as usize;
+        [self.hdr[i], self.hdr[i + 1], self.hdr[i + 2]]
+    }
+
+    /// True when every radiance value is finite (no NaN/Inf reached the frame).
+    pub fn all_finite(&self) -> bool {
+        self.hdr.iter().all(|v| v.is_finite())
+    }
+
+    pub fn save_png(&self, path: &Path) -> Result<()> {
+        create_parent(path)?;
+        self.rgb8().save(path).with_context(|| format!("writing {}", path.display()))
+    }
+
+    /// Linear HDR output (Radiance RGBE .hdr).
+    pub fn save_hdr(&self, path: &Path) -> Result<()> {
+        create_parent(path)?;
+        let file = std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+        let pixels: Vec<image::Rgb<f32>> =
+            self.hdr.chunks_exact(4).map(|p| image::Rgb([p[0].max(0.0), p[1].max(0.0), p[2].max(0.0)])).collect();
+        image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
+            .encode(&pixels, self.width as usize, self.height as usize)
+            .with_context(|| format!("writing {}", path.display()))
+    }
+}
+
+fn create_parent(path: &Path) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating directory {}", dir.display()))?;
+    }
+    Ok(())
+}

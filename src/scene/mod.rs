@@ -1,0 +1,454 @@
+//! CPU-side scene: what every loader (glTF, OBJ, scene file, procedural
+//! primitives) produces and what the GPU upload consumes.
+//!
+//! Geometry is kept per mesh primitive (one future BLAS each). Node transforms
+//! stay hierarchical so animation can re-evaluate them; `instances` is the
+//! flattened draw/trace list derived from the nodes.
+
+pub mod camera;
+pub mod gltf_import;
+pub mod obj;
+pub mod primitives;
+pub mod scene_file;
+pub mod tangents;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use glam::{Mat4, Quat, Vec3};
+
+pub use camera::Camera;
+
+/// One vertex of the single shared vertex buffer. Position first so the
+/// acceleration-structure builds can read it in place (stride 48).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+    /// xyz: tangent, w: bitangent sign (glTF convention: B = cross(N, T) * w).
+    pub tangent: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<Vertex>() == 48);
+
+/// A triangle list with one material: the unit of drawing and of BLAS building.
+#[derive(Clone, Debug, Default)]
+pub struct Primitive {
+    pub vertices: Vec<Vertex>,
+    /// Always u32 on the CPU side (u8/u16 glTF indices are widened on import).
+    pub indices: Vec<u32>,
+    pub material: usize,
+    /// Object-space bounds of `vertices`.
+    pub bounds: Aabb,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub name: String,
+    pub primitives: Vec<Primitive>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum AlphaMode {
+    #[default]
+    Opaque,
+    Mask,
+    Blend,
+}
+
+/// Index into `Scene::textures` plus the UV set it reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TextureRef {
+    pub texture: usize,
+    pub tex_coord: u32,
+}
+
+/// glTF metallic-roughness material with the extensions the renderer reads.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub base_color: [f32; 4],
+    pub base_color_texture: Option<TextureRef>,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Metal in B, roughness in G (glTF packing).
+    pub metallic_roughness_texture: Option<TextureRef>,
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
+    pub occlusion_texture: Option<TextureRef>,
+    pub occlusion_strength: f32,
+    /// Linear emissive colour already multiplied by KHR_materials_emissive_strength.
+    pub emissive: [f32; 3],
+    pub emissive_texture: Option<TextureRef>,
+    pub alpha_mode: AlphaMode,
+    pub alpha_cutoff: f32,
+    pub double_sided: bool,
+    /// KHR_materials_transmission factor (0 = opaque dielectric/metal).
+    pub transmission: f32,
+    pub transmission_texture: Option<TextureRef>,
+    /// KHR_materials_ior (glTF default 1.5).
+    pub ior: f32,
+    /// Whether geometry with this material occludes light (scene-file flag).
+    pub casts_shadows: bool,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color: [1.0; 4],
+            base_color_texture: None,
+            metallic: 1.0,
+            roughness: 1.0,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
+            emissive: [0.0; 3],
+            emissive_texture: None,
+            alpha_mode: AlphaMode::Opaque,
+            alpha_cutoff: 0.5,
+            double_sided: false,
+            transmission: 0.0,
+            transmission_texture: None,
+            ior: 1.5,
+            casts_shadows: true,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    Nearest,
+    Linear,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    MirroredRepeat,
+    ClampToEdge,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SamplerDesc {
+    pub mag_filter: Filter,
+    pub min_filter: Filter,
+    pub mipmaps: bool,
+    pub wrap_u: Wrap,
+    pub wrap_v: Wrap,
+}
+
+impl Default for SamplerDesc {
+    fn default() -> Self {
+        Self {
+            mag_filter: Filter::Linear,
+            min_filter: Filter::Linear,
+            mipmaps: true,
+            wrap_u: Wrap::Repeat,
+            wrap_v: Wrap::Repeat,
+        }
+    }
+}
+
+/// A decoded texture, RGBA8. `srgb` follows the glTF spec for the slot that
+/// uses it (base colour and emissive are sRGB, the rest linear); an image used
+/// both ways appears twice.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+    pub srgb: bool,
+    pub sampler: SamplerDesc,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Illuminance in lux along `direction`.
+    Directional,
+    /// Luminous intensity in candela.
+    Point,
+    /// Candela, with cone angles in radians (glTF KHR_lights_punctual).
+    Spot { inner_cone: f32, outer_cone: f32 },
+}
+
+/// A punctual light in world space.
+#[derive(Clone, Debug)]
+pub struct Light {
+    pub name: String,
+    pub kind: LightKind,
+    /// Linear RGB colour (not multiplied by intensity).
+    pub color: Vec3,
+    pub intensity: f32,
+    pub position: Vec3,
+    /// Direction the light travels (unit length), for directional and spot.
+    pub direction: Vec3,
+    /// KHR_lights_punctual range; None = infinite.
+    pub range: Option<f32>,
+    pub casts_shadows: bool,
+    /// glTF node the light hangs on (animation moves it), if any.
+    pub node: Option<usize>,
+}
+
+/// Local TRS of a node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    pub translation: Vec3,
+    pub rotation: Quat,
+    pub scale: Vec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Self { translation: Vec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE }
+    }
+}
+
+impl Transform {
+    pub fn matrix(&self) -> Mat4 {
+        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    }
+}
+
+/// Per-object settings a scene file can set; defaults for glTF content.
+#[derive(Clone, Debug)]
+pub struct ObjectProps {
+    /// Heuristic relevance weight K (later issue).
+    pub relevance: f32,
+    /// Heuristic cost factor E (later issue).
+    pub cost: f32,
+    pub casts_shadows: bool,
+    /// Replaces every primitive's material for this object.
+    pub material_override: Option<usize>,
+}
+
+impl Default for ObjectProps {
+    fn default() -> Self {
+        Self { relevance: 1.0, cost: 1.0, casts_shadows: true, material_override: None }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Node {
+    pub name: String,
+    pub parent: Option<usize>,
+    pub children: Vec<usize>,
+    pub local: Transform,
+    pub mesh: Option<usize>,
+    pub camera: Option<usize>,
+    /// Object id (index into `Scene::objects`) this node's mesh belongs to.
+    pub object: Option<usize>,
+}
+
+/// A user-visible object: one loaded model or primitive of a scene file, or
+/// one glTF mesh node. Heuristic choices are per object.
+#[derive(Clone, Debug, Default)]
+pub struct Object {
+    pub name: String,
+    pub props: ObjectProps,
+}
+
+/// One mesh primitive placed in the world: one draw, one TLAS instance.
+#[derive(Clone, Copy, Debug)]
+pub struct Instance {
+    pub node: usize,
+    pub mesh: usize,
+    pub primitive: usize,
+    pub object: usize,
+    pub world: Mat4,
+}
+
+/// Linear RGB float image (equirectangular environment).
+#[derive(Clone, Debug)]
+pub struct HdrImage {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<f32>,
+}
+
+#[derive(Clone, Debug)]
+pub struct Environment {
+    /// Constant radiance when there is no map.
+    pub color: Vec3,
+    pub map: Option<HdrImage>,
+    pub map_path: Option<PathBuf>,
+    pub intensity: f32,
+    /// Rotation about +Y, radians.
+    pub rotation: f32,
+}
+
+impl Default for Environment {
+    fn default() -> Self {
+        Self {
+            color: Vec3::splat(0.05),
+            map: None,
+            map_path: None,
+            intensity: 1.0,
+            rotation: 0.0,
+        }
+    }
+}
+
+/// Camera-path keyframe for benchmarks (linear interpolation in time).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraKey {
+    pub time: f32,
+    pub position: Vec3,
+    pub target: Vec3,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Default for Aabb {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
+    }
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+    pub fn extent(&self) -> Vec3 {
+        if self.is_empty() {
+            Vec3::ZERO
+        } else {
+            self.max - self.min
+        }
+    }
+    /// Bounds of the eight corners after an affine transform.
+    pub fn transformed(&self, m: &Mat4) -> Aabb {
+        let mut out = Aabb::EMPTY;
+        if self.is_empty() {
+            return out;
+        }
+        for i in 0..8 {
+            let c = Vec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            );
+            out.grow(m.transform_point3(c));
+        }
+        out
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// File the scene came from (for messages).
+    pub source: PathBuf,
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub nodes: Vec<Node>,
+    pub roots: Vec<usize>,
+    pub objects: Vec<Object>,
+    pub lights: Vec<Light>,
+    pub cameras: Vec<Camera>,
+    pub environment: Environment,
+    pub camera_path: Vec<CameraKey>,
+    /// Flattened instances, rebuilt by `update_world`.
+    pub instances: Vec<Instance>,
+    /// World-space bounds of all instances, rebuilt by `update_world`.
+    pub bounds: Aabb,
+}
+
+impl Scene {
+    /// Loads a glTF/GLB, an OBJ or a TOML scene file, chosen by extension.
+    /// Fills in a default light and camera when the content has none.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        let mut scene = match ext.as_str() {
+            "gltf" | "glb" => gltf_import::load(path)?,
+            "obj" => obj::load_scene(path)?,
+            "toml" => scene_file::load(path)?,
+            _ => anyhow::bail!(
+                "{}: unsupported scene format '{}' (expected .gltf, .glb, .obj or .toml)",
+                path.display(),
+                ext
+            ),
+        };
+        scene.source = path.to_path_buf();
+        scene.finish();
+        Ok(scene)
+    }
+
+    /// Recomputes world transforms, instances and bounds, then adds the
+    /// defaults a scene without lights or cameras needs.
+    pub fn finish(&mut self) {
+        self.update_world();
+        camera::add_defaults(self);
+    }
+
+    /// World matrices for every node (parents before children not assumed).
+    pub fn world_matrices(&self) -> Vec<Mat4> {
+        let mut world = vec![None; self.nodes.len()];
+        fn resolve(scene: &Scene, i: usize, world: &mut Vec<Option<Mat4>>) -> Mat4 {
+            if let Some(m) = world[i] {
+                return m;
+            }
+            let local = scene.nodes[i].local.matrix();
+            let m = match scene.nodes[i].parent {
+                Some(p) => resolve(scene, p, world) * local,
+                None => local,
+            };
+            world[i] = Some(m);
+            m
+        }
+        (0..self.nodes.len()).map(|i| resolve(self, i, &mut world)).collect()
+    }
+
+    /// Rebuilds `instances` and `bounds` from the node hierarchy.
+    pub fn update_world(&mut self) {
+        let world = self.world_matrices();
+        self.instances.clear();
+        self.bounds = Aabb::EMPTY;
+        for (n, node) in self.nodes.iter().enumerate() {
+            let Some(mesh) = node.mesh else { continue };
+            let object = node.object.unwrap_or(0);
+            for (p, prim) in self.meshes[mesh].primitives.iter().enumerate() {
+                if prim.indices.is_empty() {
+                    continue;
+                }
+                self.instances.push(Instance { node: n, mesh, primitive: p, object, world: world[n] });
+                self.bounds = self.bounds.union(&prim.bounds.transformed(&world[n]));
+            }
+        }
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.instances
+            .iter()
+            .map(|i| self.meshes[i.mesh].primitives[i.primitive].indices.len() / 3)
+            .sum()
+    }
+
+    /// Effective material of an instance (object override wins).
+    pub fn instance_material(&self, inst: &Instance) -> usize {
+        self.objects
+            .get(inst.object)
+            .and_then(|o| o.props.material_override)
+            .unwrap_or(self.meshes[inst.mesh].primitives[inst.primitive].material)
+    }
+}

@@ -1,0 +1,312 @@
+//! Buffers and images on gpu-allocator, each created with a debug name.
+//! Resources are destroyed explicitly (`destroy(ctx)`): they need the device,
+//! and a frame owns them in a known order.
+
+use anyhow::{Context as _, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::{image_barrier, Context};
+
+pub struct Buffer {
+    pub raw: vk::Buffer,
+    pub allocation: Option<Allocation>,
+    pub size: u64,
+    /// Device address when created with SHADER_DEVICE_ADDRESS, else 0.
+    pub address: vk::DeviceAddress,
+}
+
+impl Buffer {
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Buffer> {
+        let size = size.max(4);
+        let raw = unsafe {
+            ctx.device.create_buffer(&vk::BufferCreateInfo::default().size(size).usage(usage), None)
+        }
+        .with_context(|| format!("create buffer '{name}'"))?;
+        let req = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
+        let allocation = ctx
+            .allocator
+            .lock()
+            .unwrap()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements: req,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .with_context(|| format!("allocate {size} bytes for buffer '{name}'"))?;
+        unsafe { ctx.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset())? };
+        ctx.name(raw, name);
+        let address = if usage.contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS) {
+            unsafe { ctx.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw)) }
+        } else {
+            0
+        };
+        Ok(Buffer { raw, allocation: Some(allocation), size, address })
+    }
+
+    /// A device-local buffer filled from `data` through a staging copy.
+    pub fn with_data(ctx: &Context, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Buffer> {
+        let buf = Buffer::new(
+            ctx,
+            name,
+            data.len() as u64,
+            usage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+        if !data.is_empty() {
+            let mut staging = Buffer::new(
+                ctx,
+                &format!("{name} (staging)"),
+                data.len() as u64,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?;
+            staging.write(0, data)?;
+            ctx.one_shot(&format!("upload {name}"), |cmd| {
+                let region = [vk::BufferCopy::default().size(data.len() as u64)];
+                unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buf.raw, &region) };
+                Ok(())
+            })?;
+            staging.destroy(ctx);
+        }
+        Ok(buf)
+    }
+
+    /// Writes into a host-visible buffer.
+    pub fn write(&mut self, offset: usize, data: &[u8]) -> Result<()> {
+        let slice = self
+            .allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .context("buffer is not host visible")?;
+        slice
+            .get_mut(offset..offset + data.len())
+            .context("write past the end of a buffer")?
+            .copy_from_slice(data);
+        Ok(())
+    }
+
+    pub fn read(&self) -> Result<&[u8]> {
+        self.allocation.as_ref().and_then(|a| a.mapped_slice()).context("buffer is not host visible")
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        if let Some(a) = self.allocation.take() {
+            unsafe { ctx.device.destroy_buffer(self.raw, None) };
+            let _ = ctx.allocator.lock().unwrap().free(a);
+        }
+    }
+}
+
+pub struct Image {
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub allocation: Option<Allocation>,
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+    pub mip_levels: u32,
+    pub aspect: vk::ImageAspectFlags,
+}
+
+impl Image {
+    pub fn new_2d(
+        ctx: &Context,
+        name: &str,
+        format: vk::Format,
+        extent: vk::Extent2D,
+        mip_levels: u32,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Image> {
+        let aspect = match format {
+            vk::Format::D32_SFLOAT | vk::Format::D16_UNORM => vk::ImageAspectFlags::DEPTH,
+            _ => vk::ImageAspectFlags::COLOR,
+        };
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D { width: extent.width.max(1), height: extent.height.max(1), depth: 1 })
+            .mip_levels(mip_levels)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let raw = unsafe { ctx.device.create_image(&info, None) }
+            .with_context(|| format!("create image '{name}' ({format:?} {}x{})", extent.width, extent.height))?;
+        let req = unsafe { ctx.device.get_image_memory_requirements(raw) };
+        let allocation = ctx
+            .allocator
+            .lock()
+            .unwrap()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements: req,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .with_context(|| format!("allocate image '{name}'"))?;
+        unsafe { ctx.device.bind_image_memory(raw, allocation.memory(), allocation.offset())? };
+        let view = unsafe {
+            ctx.device.create_image_view(
+                &vk::ImageViewCreateInfo::default()
+                    .image(raw)
+                    .view_type(vk::ImageViewType::TYPE_2D)
+                    .format(format)
+                    .subresource_range(
+                        vk::ImageSubresourceRange::default()
+                            .aspect_mask(aspect)
+                            .level_count(mip_levels)
+                            .layer_count(1),
+                    ),
+                None,
+            )?
+        };
+        ctx.name(raw, name);
+        ctx.name(view, &format!("{name} view"));
+        Ok(Image { raw, view, allocation: Some(allocation), format, extent, mip_levels, aspect })
+    }
+
+    /// A sampled texture from tightly packed texels, with a full mip chain
+    /// generated by linear blits when `mipmaps` is set. Ends in
+    /// SHADER_READ_ONLY_OPTIMAL.
+    pub fn texture(
+        ctx: &Context,
+        name: &str,
+        format: vk::Format,
+        extent: vk::Extent2D,
+        texels: &[u8],
+        mipmaps: bool,
+    ) -> Result<Image> {
+        let levels = if mipmaps { 32 - extent.width.max(extent.height).max(1).leading_zeros() } else { 1 };
+        let img = Image::new_2d(
+            ctx,
+            name,
+            format,
+            extent,
+            levels,
+            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC,
+        )?;
+        let mut staging = Buffer::new(
+            ctx,
+            &format!("{name} (staging)"),
+            texels.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.write(0, texels)?;
+        ctx.one_shot(&format!("upload {name}"), |cmd| {
+            img.record_upload(ctx, cmd, staging.raw);
+            Ok(())
+        })?;
+        staging.destroy(ctx);
+        Ok(img)
+    }
+
+    /// Copies level 0 from `src`, blits the mip chain, leaves it shader-readable.
+    pub fn record_upload(&self, ctx: &Context, cmd: vk::CommandBuffer, src: vk::Buffer) {
+        let d = &ctx.device;
+        let transfer = (vk::PipelineStageFlags2::TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
+        image_barrier(
+            ctx,
+            cmd,
+            self.raw,
+            self.aspect,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
+            transfer,
+        );
+        let copy = [vk::BufferImageCopy::default()
+            .image_subresource(
+                vk::ImageSubresourceLayers::default().aspect_mask(self.aspect).mip_level(0).layer_count(1),
+            )
+            .image_extent(vk::Extent3D { width: self.extent.width, height: self.extent.height, depth: 1 })];
+        unsafe { d.cmd_copy_buffer_to_image(cmd, src, self.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &copy) };
+        let (mut w, mut h) = (self.extent.width as i32, self.extent.height as i32);
+        for level in 1..self.mip_levels {
+            let sub = |l: u32| {
+                vk::ImageSubresourceRange::default().aspect_mask(self.aspect).base_mip_level(l).level_count(1).layer_count(1)
+            };
+            // Previous level: transfer dst -> transfer src.
+            let b = [vk::ImageMemoryBarrier2::default()
+                .image(self.raw)
+                .subresource_range(sub(level - 1))
+                .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+                .src_stage_mask(vk::PipelineStageFlags2::TRANSFER)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::TRANSFER)
+                .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)];
+            unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b)) };
+            let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+            let layers = |l: u32| vk::ImageSubresourceLayers::default().aspect_mask(self.aspect).mip_level(l).layer_count(1);
+            let blit = [vk::ImageBlit::default()
+                .src_subresource(layers(level - 1))
+                .src_offsets([vk::Offset3D::default(), vk::Offset3D { x: w, y: h, z: 1 }])
+                .dst_subresource(layers(level))
+                .dst_offsets([vk::Offset3D::default(), vk::Offset3D { x: nw, y: nh, z: 1 }])];
+            unsafe {
+                d.cmd_blit_image(
+                    cmd,
+                    self.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    self.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &blit,
+                    vk::Filter::LINEAR,
+                )
+            };
+            w = nw;
+            h = nh;
+        }
+        // All levels but the last are TRANSFER_SRC now; the last is TRANSFER_DST.
+        let to_read = |base: u32, count: u32, old: vk::ImageLayout, src_access: vk::AccessFlags2| {
+            vk::ImageMemoryBarrier2::default()
+                .image(self.raw)
+                .subresource_range(
+                    vk::ImageSubresourceRange::default()
+                        .aspect_mask(self.aspect)
+                        .base_mip_level(base)
+                        .level_count(count)
+                        .layer_count(1),
+                )
+                .old_layout(old)
+                .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+                .src_stage_mask(vk::PipelineStageFlags2::TRANSFER)
+                .src_access_mask(src_access)
+                .dst_stage_mask(vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COMPUTE_SHADER)
+                .dst_access_mask(vk::AccessFlags2::SHADER_SAMPLED_READ)
+        };
+        let last = self.mip_levels - 1;
+        let mut barriers = vec![to_read(
+            last,
+            1,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        )];
+        if last > 0 {
+            barriers.push(to_read(0, last, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::AccessFlags2::TRANSFER_READ));
+        }
+        unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        if let Some(a) = self.allocation.take() {
+            unsafe {
+                ctx.device.destroy_image_view(self.view, None);
+                ctx.device.destroy_image(self.raw, None);
+            }
+            let _ = ctx.allocator.lock().unwrap().free(a);
+        }
+    }
+}

@@ -1,0 +1,263 @@
+//! Vulkan core: instance, device, memory, commands, debug names and labels,
+//! timestamp queries, shader modules.
+
+pub mod device;
+pub mod instance;
+pub mod memory;
+pub mod pipeline;
+pub mod timer;
+
+use std::ffi::CString;
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+use anyhow::{Context as _, Result};
+use ash::{ext, khr, vk};
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+pub use device::{Capabilities, DeviceSelector, RtEnables};
+pub use instance::{Instance, InstanceOptions, ValidationCounters};
+pub use memory::{Buffer, Image};
+
+/// How to create the Vulkan context.
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    pub validation: bool,
+    pub sync_validation: bool,
+    pub device: DeviceSelector,
+    /// Enable no ray-tracing extension even where the device has them
+    /// (tests the compute-only path on RT-capable drivers).
+    pub disable_ray_tracing: bool,
+    pub surface_extensions: Vec<*const std::ffi::c_char>,
+    pub swapchain: bool,
+}
+
+/// Everything a pass needs to talk to the GPU.
+pub struct Context {
+    pub instance: Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub caps: Capabilities,
+    pub device: ash::Device,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub command_pool: vk::CommandPool,
+    pub debug_utils: Option<ext::debug_utils::Device>,
+    pub rt: RtEnables,
+    pub accel: Option<khr::acceleration_structure::Device>,
+}
+
+impl Context {
+    pub fn new(opts: &ContextOptions) -> Result<Context> {
+        let instance = Instance::new(&InstanceOptions {
+            validation: opts.validation,
+            sync_validation: opts.sync_validation,
+            surface_extensions: opts.surface_extensions.clone(),
+        })?;
+        let devices = device::enumerate(&instance.raw)?;
+        for (_, c) in &devices {
+            log::debug!("found {}", c.report().trim_end());
+        }
+        let (pd, caps) = device::select(&devices, &opts.device)?;
+        let rt = if opts.disable_ray_tracing {
+            RtEnables::default()
+        } else {
+            RtEnables {
+                acceleration_structure: caps.acceleration_structure,
+                ray_query: caps.ray_query,
+                ray_tracing_pipeline: caps.ray_tracing_pipeline,
+            }
+        };
+        log::info!(
+            "using {} ({}, {} {}), Vulkan {}; ray-tracing extensions enabled: AS {} / query {} / pipeline {}",
+            caps.name,
+            match caps.device_type {
+                vk::PhysicalDeviceType::CPU => "software",
+                vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+                vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+                _ => "other",
+            },
+            caps.driver_name,
+            caps.driver_info,
+            caps.api_string(),
+            rt.acceleration_structure,
+            rt.ray_query,
+            rt.ray_tracing_pipeline
+        );
+        let device = device::create_device(&instance.raw, pd, &caps, rt, opts.swapchain)?;
+        let queue = unsafe { device.get_device_queue(caps.graphics_queue_family, 0) };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.raw.clone(),
+            device: device.clone(),
+            physical_device: pd,
+            debug_settings: Default::default(),
+            buffer_device_address: true,
+            allocation_sizes: Default::default(),
+        })
+        .context("creating the GPU memory allocator")?;
+        let command_pool = unsafe {
+            device.create_command_pool(
+                &vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(caps.graphics_queue_family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                None,
+            )?
+        };
+        let debug_utils =
+            instance.debug_utils.as_ref().map(|_| ext::debug_utils::Device::new(&instance.raw, &device));
+        let accel = rt
+            .acceleration_structure
+            .then(|| khr::acceleration_structure::Device::new(&instance.raw, &device));
+        let ctx = Context {
+            queue_family: caps.graphics_queue_family,
+            instance,
+            physical_device: pd,
+            caps,
+            device,
+            queue,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            command_pool,
+            debug_utils,
+            rt,
+            accel,
+        };
+        ctx.name(ctx.queue, "main queue");
+        ctx.name(ctx.command_pool, "main command pool");
+        Ok(ctx)
+    }
+
+    pub fn validation_counters(&self) -> Arc<ValidationCounters> {
+        self.instance.counters.clone()
+    }
+
+    /// Gives a Vulkan object a debug name (shown by validation, RenderDoc, Nsight).
+    pub fn name<H: vk::Handle>(&self, handle: H, name: &str) {
+        let Some(du) = &self.debug_utils else { return };
+        let Ok(c) = CString::new(name) else { return };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&c);
+        unsafe {
+            let _ = du.set_debug_utils_object_name(&info);
+        }
+    }
+
+    /// Opens a named region in a command buffer (a pass label).
+    pub fn begin_label(&self, cmd: vk::CommandBuffer, name: &str, color: [f32; 4]) {
+        let Some(du) = &self.debug_utils else { return };
+        let Ok(c) = CString::new(name) else { return };
+        let label = vk::DebugUtilsLabelEXT::default().label_name(&c).color(color);
+        unsafe { du.cmd_begin_debug_utils_label(cmd, &label) };
+    }
+
+    pub fn end_label(&self, cmd: vk::CommandBuffer) {
+        if let Some(du) = &self.debug_utils {
+            unsafe { du.cmd_end_debug_utils_label(cmd) };
+        }
+    }
+
+    pub fn allocate_command_buffer(&self, name: &str) -> Result<vk::CommandBuffer> {
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        let cmd = unsafe { self.device.allocate_command_buffers(&info)? }[0];
+        self.name(cmd, name);
+        Ok(cmd)
+    }
+
+    /// Records `f` into a fresh command buffer, submits it and waits.
+    pub fn one_shot<R>(&self, name: &str, f: impl FnOnce(vk::CommandBuffer) -> Result<R>) -> Result<R> {
+        let cmd = self.allocate_command_buffer(name)?;
+        let result = (|| {
+            unsafe {
+                self.device.begin_command_buffer(
+                    cmd,
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )?
+            };
+            self.begin_label(cmd, name, [0.6, 0.6, 0.6, 1.0]);
+            let r = f(cmd)?;
+            self.end_label(cmd);
+            unsafe { self.device.end_command_buffer(cmd)? };
+            self.submit_and_wait(cmd)?;
+            Ok(r)
+        })();
+        unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
+        result
+    }
+
+    pub fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<()> {
+        let fence = unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None)? };
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+        let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmds);
+        let r = unsafe {
+            self.device
+                .queue_submit2(self.queue, &[submit], fence)
+                .and_then(|_| self.device.wait_for_fences(&[fence], true, u64::MAX))
+        };
+        unsafe { self.device.destroy_fence(fence, None) };
+        r.context("queue submit / wait (device lost?)")
+    }
+
+    /// Bytes of device memory currently allocated through gpu-allocator.
+    pub fn allocated_bytes(&self) -> u64 {
+        let a = self.allocator.lock().unwrap();
+        a.generate_report().total_allocated_bytes
+    }
+}
+
+impl Drop for Context {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_command_pool(self.command_pool, None);
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_device(None);
+        }
+    }
+}
+
+/// A full pipeline barrier for one image layout transition (sync2).
+#[allow(clippy::too_many_arguments)]
+pub fn image_barrier(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    aspect: vk::ImageAspectFlags,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let b = [vk::ImageMemoryBarrier2::default()
+        .image(image)
+        .old_layout(old)
+        .new_layout(new)
+        .src_stage_mask(src.0)
+        .src_access_mask(src.1)
+        .dst_stage_mask(dst.0)
+        .dst_access_mask(dst.1)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .subresource_range(
+            vk::ImageSubresourceRange::default()
+                .aspect_mask(aspect)
+                .level_count(vk::REMAINING_MIP_LEVELS)
+                .layer_count(vk::REMAINING_ARRAY_LAYERS),
+        )];
+    unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b)) };
+}
+
+/// A global memory barrier (buffers, and images that keep their layout).
+pub fn memory_barrier(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let b = [vk::MemoryBarrier2::default()
+        .src_stage_mask(src.0)
+        .src_access_mask(src.1)
+        .dst_stage_mask(dst.0)
+        .dst_access_mask(dst.1)];
+    unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&b)) };
+}

@@ -1,0 +1,112 @@
+//! Per-pass GPU timing with timestamp queries, and the `Pass` scope that
+//! labels and times every pass automatically.
+
+use anyhow::Result;
+use ash::vk;
+
+use super::Context;
+
+/// Timestamps for up to `capacity` passes per frame.
+pub struct GpuTimer {
+    pool: vk::QueryPool,
+    capacity: u32,
+    names: Vec<&'static str>,
+    period_ns: f64,
+    enabled: bool,
+}
+
+impl GpuTimer {
+    pub fn new(ctx: &Context, capacity: u32) -> Result<GpuTimer> {
+        let enabled = ctx.caps.timestamps;
+        let pool = if enabled {
+            let p = unsafe {
+                ctx.device.create_query_pool(
+                    &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity * 2),
+                    None,
+                )?
+            };
+            ctx.name(p, "pass timestamps");
+            p
+        } else {
+            log::warn!("device has no timestamp queries: pass times unavailable");
+            vk::QueryPool::null()
+        };
+        Ok(GpuTimer { pool, capacity, names: Vec::new(), period_ns: ctx.caps.timestamp_period_ns as f64, enabled })
+    }
+
+    /// Resets the queries; call at the start of a frame's command buffer.
+    pub fn begin_frame(&mut self, ctx: &Context, cmd: vk::CommandBuffer) {
+        self.names.clear();
+        if self.enabled {
+            unsafe { ctx.device.cmd_reset_query_pool(cmd, self.pool, 0, self.capacity * 2) };
+        }
+    }
+
+    fn write(&self, ctx: &Context, cmd: vk::CommandBuffer, query: u32, stage: vk::PipelineStageFlags2) {
+        if self.enabled {
+            unsafe { ctx.device.cmd_write_timestamp2(cmd, stage, self.pool, query) };
+        }
+    }
+
+    /// Milliseconds per pass of the last completed frame (after its fence).
+    pub fn results(&self, ctx: &Context) -> Result<Vec<(&'static str, f64)>> {
+        if !self.enabled || self.names.is_empty() {
+            return Ok(self.names.iter().map(|n| (*n, f64::NAN)).collect());
+        }
+        let mut ticks = vec![0u64; self.names.len() * 2];
+        unsafe {
+            ctx.device.get_query_pool_results(
+                self.pool,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )?
+        };
+        Ok(self
+            .names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                let dt = ticks[2 * i + 1].wrapping_sub(ticks[2 * i]);
+                (*n, dt as f64 * self.period_ns * 1e-6)
+            })
+            .collect())
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        if self.pool != vk::QueryPool::null() {
+            unsafe { ctx.device.destroy_query_pool(self.pool, None) };
+            self.pool = vk::QueryPool::null();
+        }
+    }
+}
+
+/// Records one pass: debug label + timestamps around `f`. Every pass of a
+/// frame goes through here, so captures and timings never miss one.
+pub fn pass<R>(
+    ctx: &Context,
+    timer: &mut GpuTimer,
+    cmd: vk::CommandBuffer,
+    name: &'static str,
+    f: impl FnOnce(vk::CommandBuffer) -> Result<R>,
+) -> Result<R> {
+    let slot = timer.names.len() as u32;
+    let timed = slot < timer.capacity;
+    ctx.begin_label(cmd, name, label_color(name));
+    if timed {
+        timer.names.push(name);
+        timer.write(ctx, cmd, 2 * slot, vk::PipelineStageFlags2::TOP_OF_PIPE);
+    }
+    let r = f(cmd);
+    if timed {
+        timer.write(ctx, cmd, 2 * slot + 1, vk::PipelineStageFlags2::BOTTOM_OF_PIPE);
+    }
+    ctx.end_label(cmd);
+    r
+}
+
+/// A stable colour per pass name so captures are easy to scan.
+fn label_color(name: &str) -> [f32; 4] {
+    let h = name.bytes().fold(2166136261u32, |h, b| (h ^ b as u32).wrapping_mul(16777619));
+    [(h & 0xff) as f32 / 255.0, ((h >> 8) & 0xff) as f32 / 255.0, ((h >> 16) & 0xff) as f32 / 255.0, 1.0]
+}
