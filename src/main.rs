@@ -1,5 +1,6 @@
-//! Command line: `info`, `render`, `bench`. With no command it renders the
-//! bundled default scene to `out/default.png`.
+//! Command line: `info`, `render`, `bench`, `view`. With no command it opens
+//! the viewer on the bundled default scene when a display is available, else
+//! renders it headless to `out/default.png`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -9,7 +10,9 @@ use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
 
 use hybrid_rt::app::{self, CameraChoice, GpuOptions, RenderJob};
+use hybrid_rt::render::shading::{Backend, Effects, Mode};
 use hybrid_rt::render::{DebugView, RenderSettings};
+use hybrid_rt::viewer::{self, PresentMode, ViewerOptions};
 use hybrid_rt::vk::DeviceSelector;
 
 #[derive(Parser)]
@@ -66,6 +69,23 @@ enum Command {
         #[arg(long, default_value_t = 3)]
         warmup: usize,
     },
+    /// Open an interactive window (fly/orbit camera, debug views, screenshots).
+    View {
+        #[command(flatten)]
+        view: ViewArgs,
+        /// Swapchain present mode (falls back to fifo when unsupported).
+        #[arg(long, value_enum, default_value_t = PresentMode::Fifo)]
+        present_mode: PresentMode,
+        /// Exit after presenting N frames.
+        #[arg(long)]
+        frames: Option<u64>,
+        /// With --frames: write the last frame to this PNG. Without: where P / F12 write.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        /// Test automation: resize the window twice, minimize and restore it.
+        #[arg(long, hide = true)]
+        test_resize: bool,
+    },
 }
 
 #[derive(Args, Clone)]
@@ -95,6 +115,24 @@ struct ViewArgs {
     /// Show a G-buffer target instead of the lit image.
     #[arg(long, value_enum, default_value_t = DebugView::None)]
     debug_view: DebugView,
+    /// hybrid: G-buffer primary hits + traced secondary rays; rt: trace camera rays too.
+    #[arg(long, value_enum, default_value_t = Mode::Hybrid)]
+    mode: Mode,
+    /// Ray traversal backend.
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    backend: Backend,
+    #[arg(long)]
+    no_shadows: bool,
+    #[arg(long)]
+    no_reflections: bool,
+    #[arg(long)]
+    no_refractions: bool,
+    /// Maximum reflection/refraction recursion depth.
+    #[arg(long, default_value_t = 8)]
+    max_depth: u32,
+    /// Importance cutoff: branches with a smaller weight are not traced.
+    #[arg(long, default_value_t = 0.01)]
+    min_weight: f32,
 }
 
 impl ViewArgs {
@@ -109,7 +147,19 @@ impl ViewArgs {
             width: self.width,
             height: self.height,
             camera,
-            settings: RenderSettings { exposure: self.exposure, debug_view: self.debug_view },
+            settings: RenderSettings {
+                exposure: self.exposure,
+                debug_view: self.debug_view,
+                mode: self.mode,
+                backend: self.backend,
+                effects: Effects {
+                    shadows: !self.no_shadows,
+                    reflections: !self.no_reflections,
+                    refractions: !self.no_refractions,
+                    max_depth: self.max_depth.min(64),
+                    min_weight: self.min_weight.max(0.0),
+                },
+            },
         }
     }
 }
@@ -131,13 +181,46 @@ fn run(cli: Cli) -> Result<()> {
             app::render_command(&gpu, &view.job(), &out, hdr_out.as_deref())
         }
         Some(Command::Bench { view, frames, warmup }) => app::bench_command(&gpu, &view.job(), frames, warmup),
-        None => {
-            // The interactive viewer is a later issue; without it (and on a
-            // machine without a display) the default is a headless render.
-            log::info!("rendering the default scene headless");
-            let job = RenderJob::new(app::default_scene_path(), 1280, 720);
-            app::render_command(&gpu, &job, &PathBuf::from("out/default.png"), None)
+        Some(Command::View { view, present_mode, frames, screenshot, test_resize }) => {
+            let event_loop = viewer::open_display()?;
+            let opts = ViewerOptions { gpu, job: view.job(), present_mode, frames, screenshot, test_resize };
+            viewer::run(event_loop, opts)
         }
+        None => default_command(gpu),
+    }
+}
+
+/// No command: the viewer on the default scene when a window can be opened,
+/// else (or with HYBRID_RT_HEADLESS=1) the headless render to out/default.png.
+fn default_command(gpu: GpuOptions) -> Result<()> {
+    let job = RenderJob::new(app::default_scene_path(), 1280, 720);
+    let headless = |gpu: &GpuOptions| app::render_command(gpu, &job, &PathBuf::from("out/default.png"), None);
+    if std::env::var("HYBRID_RT_HEADLESS").is_ok_and(|v| v != "0" && !v.is_empty()) {
+        log::info!("HYBRID_RT_HEADLESS is set: rendering the default scene headless");
+        return headless(&gpu);
+    }
+    let event_loop = match viewer::open_display() {
+        Ok(el) => el,
+        Err(why) => {
+            log::info!("no viewer ({why}): rendering the default scene headless");
+            return headless(&gpu);
+        }
+    };
+    log::info!("display available: opening the viewer (`hybrid-rt render` or HYBRID_RT_HEADLESS=1 for a file)");
+    let opts = ViewerOptions {
+        gpu: gpu.clone(),
+        job: job.clone(),
+        present_mode: PresentMode::Fifo,
+        frames: None,
+        screenshot: None,
+        test_resize: false,
+    };
+    match viewer::run(event_loop, opts) {
+        Err(e) if e.downcast_ref::<viewer::NoDisplay>().is_some() => {
+            log::warn!("{e}: rendering the default scene headless instead");
+            headless(&gpu)
+        }
+        r => r,
     }
 }
 

@@ -3,8 +3,8 @@
 //! falloff. Radiance is read back linear (before tone mapping).
 mod common;
 
-use glam::{Mat4, Vec3, Vec4};
-use hybrid_rt::render::{RenderSettings, Renderer};
+use glam::Vec3;
+use hybrid_rt::render::RenderSettings;
 use hybrid_rt::scene::*;
 
 const ALBEDO: f32 = 0.5;
@@ -54,24 +54,12 @@ fn quad_scene(light: Light) -> Scene {
 
 /// World point on y = 0 seen through pixel (x, y), using the same camera model.
 fn pixel_to_ground(cam: &Camera, x: u32, y: u32) -> Vec3 {
-    let proj = cam.projection(W as f32 / H as f32);
-    let ndc_x = (x as f32 + 0.5) / W as f32 * 2.0 - 1.0;
-    let ndc_y = (y as f32 + 0.5) / H as f32 * 2.0 - 1.0;
-    let dv = Vec3::new(ndc_x / proj.x_axis.x, ndc_y / proj.y_axis.y, -1.0);
-    let rot = Mat4::from_mat3(glam::Mat3::from_mat4(cam.view()).transpose());
-    let dir = (rot * Vec4::from((dv, 0.0))).truncate().normalize();
-    let o = cam.position();
+    let (o, dir) = common::pixel_ray(cam, W, H, x, y);
     o + dir * (-o.y / dir.y)
 }
 
 fn render(scene: &Scene) -> hybrid_rt::render::FrameOutput {
-    let ctx = common::validated_context();
-    let mut r = Renderer::new(&ctx, scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
-    let out = r.render(&ctx, scene, &scene.cameras[0], &RenderSettings::default()).unwrap();
-    r.destroy(&ctx);
-    common::assert_validation_clean(&ctx);
-    assert!(out.all_finite());
-    out
+    common::render_scene(scene, W, H, &RenderSettings::default())
 }
 
 fn assert_close(actual: f32, expected: f32, what: &str) {

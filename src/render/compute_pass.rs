@@ -31,6 +31,7 @@ impl ComputePass {
         shader: &str,
         scene_layout: vk::DescriptorSetLayout,
         inputs: &[Input],
+        extra_sets: &[vk::DescriptorSetLayout],
         spec: &Specialization,
     ) -> Result<ComputePass> {
         let bindings: Vec<_> = inputs
@@ -41,7 +42,9 @@ impl ComputePass {
             })
             .collect();
         let set = DescriptorSet::new(ctx, &format!("{name} set"), &bindings)?;
-        let layout = pipeline_layout(ctx, &format!("{name} layout"), &[scene_layout, set.layout], 0)?;
+        let mut sets = vec![scene_layout, set.layout];
+        sets.extend_from_slice(extra_sets);
+        let layout = pipeline_layout(ctx, &format!("{name} layout"), &sets, 0)?;
         let pipeline = compute_pipeline(ctx, shader, layout, spec)?;
         let sampler = unsafe {
             ctx.device.create_sampler(
@@ -73,8 +76,19 @@ impl ComputePass {
         }
     }
 
-    pub fn dispatch(&self, ctx: &Context, cmd: vk::CommandBuffer, scene_set: vk::DescriptorSet, extent: vk::Extent2D) {
+    /// Binds set 0 (scene), set 1 (this pass's images), then `extra` sets
+    /// from set 2 on, and dispatches one thread per pixel.
+    pub fn dispatch(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        scene_set: vk::DescriptorSet,
+        extra: &[vk::DescriptorSet],
+        extent: vk::Extent2D,
+    ) {
         let d = &ctx.device;
+        let mut sets = vec![scene_set, self.set.set];
+        sets.extend_from_slice(extra);
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
             d.cmd_bind_descriptor_sets(
@@ -82,7 +96,7 @@ impl ComputePass {
                 vk::PipelineBindPoint::COMPUTE,
                 self.layout,
                 0,
-                &[scene_set, self.set.set],
+                &sets,
                 &[],
             );
             d.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1);

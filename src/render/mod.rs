@@ -6,21 +6,24 @@ pub mod gbuffer;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod output;
+pub mod shading;
 pub mod targets;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use ash::vk;
 use glam::Mat4;
 use gpu_allocator::MemoryLocation;
 
+use crate::accel::SceneAccel;
 use crate::scene::{Camera, Scene};
-use crate::vk::pipeline::Specialization;
+use crate::vk::pipeline::{Binding, DescriptorSet, Specialization};
 use crate::vk::timer::{pass, GpuTimer};
 use crate::vk::{image_barrier, Buffer, Context};
 use compute_pass::{ComputePass, Input};
 use gbuffer::GBufferPass;
 use gpu_scene::GpuScene;
 use gpu_types::GpuFrame;
+use shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
 use targets::Targets;
 
 /// G-buffer debug views (also selectable in the viewer).
@@ -45,11 +48,20 @@ impl DebugView {
 pub struct RenderSettings {
     pub exposure: f32,
     pub debug_view: DebugView,
+    pub mode: Mode,
+    pub effects: Effects,
+    pub backend: Backend,
 }
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        Self { exposure: 1.0, debug_view: DebugView::None }
+        Self {
+            exposure: 1.0,
+            debug_view: DebugView::None,
+            mode: Mode::Hybrid,
+            effects: Effects::default(),
+            backend: Backend::Auto,
+        }
     }
 }
 
@@ -69,8 +81,12 @@ pub struct Renderer {
     pub gpu: GpuScene,
     pub targets: Targets,
     gbuffer: GBufferPass,
-    lighting: ComputePass,
+    /// The shading/integrator pass and the variant it was built for.
+    shading: Option<(ShadingConfig, ComputePass)>,
     tonemap: ComputePass,
+    needs: SceneNeeds,
+    /// Built on first use by a tracing variant.
+    accel: Option<(SceneAccel, DescriptorSet)>,
     pub timer: GpuTimer,
     cmd: vk::CommandBuffer,
     readback_ldr: Buffer,
@@ -102,10 +118,8 @@ impl Renderer {
         let targets = Targets::new(ctx, extent)?;
         let gbuffer = GBufferPass::new(ctx, gpu.set.layout)?;
         let no_spec = Specialization::new(&[]);
-        let lighting =
-            ComputePass::new(ctx, "lighting", "lighting.comp", gpu.set.layout, &lighting_inputs(&targets), &no_spec)?;
         let tonemap =
-            ComputePass::new(ctx, "tonemap", "tonemap.comp", gpu.set.layout, &tonemap_inputs(&targets), &no_spec)?;
+            ComputePass::new(ctx, "tonemap", "tonemap.comp", gpu.set.layout, &tonemap_inputs(&targets), &[], &no_spec)?;
         let timer = GpuTimer::new(ctx, 16)?;
         let cmd = ctx.allocate_command_buffer("frame")?;
         let (readback_ldr, readback_hdr) = readback_buffers(ctx, extent)?;
@@ -113,8 +127,10 @@ impl Renderer {
             gpu,
             targets,
             gbuffer,
-            lighting,
+            shading: None,
             tonemap,
+            needs: SceneNeeds::of(scene),
+            accel: None,
             timer,
             cmd,
             readback_ldr,
@@ -134,13 +150,69 @@ impl Renderer {
         self.readback_hdr.destroy(ctx);
         self.targets = Targets::new(ctx, extent)?;
         (self.readback_ldr, self.readback_hdr) = readback_buffers(ctx, extent)?;
-        self.lighting.bind(ctx, &lighting_inputs(&self.targets));
+        if let Some((_, pass)) = &self.shading {
+            pass.bind(ctx, &lighting_inputs(&self.targets));
+        }
         self.tonemap.bind(ctx, &tonemap_inputs(&self.targets));
         Ok(())
     }
 
-    /// Fills the frame uniforms for `camera`.
-    pub fn prepare(&mut self, scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<()> {
+    /// The shading variant in use (after `prepare`).
+    pub fn shading_config(&self) -> Option<ShadingConfig> {
+        self.shading.as_ref().map(|(c, _)| *c)
+    }
+
+    /// Makes the shading pass match `settings` (rebuilding it, and building
+    /// the acceleration structures on first need). Waits for the GPU when it
+    /// has to rebuild.
+    fn ensure_shading(&mut self, ctx: &Context, scene: &Scene, settings: &RenderSettings) -> Result<()> {
+        let config = ShadingConfig::resolve(ctx, self.needs, settings.mode, settings.effects, settings.backend)?;
+        if self.shading.as_ref().is_some_and(|(c, _)| *c == config) {
+            return Ok(());
+        }
+        unsafe { ctx.device.device_wait_idle()? };
+        if let Some((_, mut old)) = self.shading.take() {
+            old.destroy(ctx);
+        }
+        if config.backend.is_some() && self.accel.is_none() {
+            let accel = SceneAccel::build(ctx, scene, &self.gpu)?;
+            let set = DescriptorSet::new(
+                ctx,
+                "trace set (TLAS)",
+                &[Binding::one(ash::vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)],
+            )?;
+            set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
+            self.accel = Some((accel, set));
+        }
+        let extra: Vec<_> = match (&config.backend, &self.accel) {
+            (Some(_), Some((_, set))) => vec![set.layout],
+            _ => Vec::new(),
+        };
+        let name = if config.backend.is_none() {
+            "lighting"
+        } else if config.mode == Mode::Rt {
+            "rt"
+        } else {
+            "shade+trace"
+        };
+        let spec = Specialization::new(&config.specialization());
+        let pass = ComputePass::new(
+            ctx,
+            name,
+            config.shader(),
+            self.gpu.set.layout,
+            &lighting_inputs(&self.targets),
+            &extra,
+            &spec,
+        )?;
+        log::info!("shading: {}", config.describe());
+        self.shading = Some((config, pass));
+        Ok(())
+    }
+
+    /// Fills the frame uniforms for `camera` and selects the shading variant.
+    pub fn prepare(&mut self, ctx: &Context, scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<()> {
+        self.ensure_shading(ctx, scene, settings)?;
         let e = self.targets.extent;
         let aspect = e.width as f32 / e.height.max(1) as f32;
         let view = camera.view();
@@ -175,11 +247,18 @@ impl Renderer {
     pub fn record(&mut self, ctx: &Context, cmd: vk::CommandBuffer) -> Result<()> {
         self.timer.begin_frame(ctx, cmd);
         let (gpu, t) = (&self.gpu, &self.targets);
-        pass(ctx, &mut self.timer, cmd, "gbuffer", |cmd| {
-            self.gbuffer.record(ctx, cmd, gpu, t);
-            Ok(())
-        })?;
-        pass(ctx, &mut self.timer, cmd, "lighting", |cmd| {
+        let (config, shading) = self.shading.as_ref().context("prepare() must run before record()")?;
+        if config.mode == Mode::Hybrid {
+            pass(ctx, &mut self.timer, cmd, "gbuffer", |cmd| {
+                self.gbuffer.record(ctx, cmd, gpu, t);
+                Ok(())
+            })?;
+        }
+        let trace_sets: Vec<_> = match (&config.backend, &self.accel) {
+            (Some(_), Some((_, set))) => vec![set.set],
+            _ => Vec::new(),
+        };
+        pass(ctx, &mut self.timer, cmd, shading.name, |cmd| {
             image_barrier(
                 ctx,
                 cmd,
@@ -190,7 +269,7 @@ impl Renderer {
                 (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ),
                 (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
             );
-            self.lighting.dispatch(ctx, cmd, gpu.set.set, t.extent);
+            shading.dispatch(ctx, cmd, gpu.set.set, &trace_sets, t.extent);
             Ok(())
         })?;
         pass(ctx, &mut self.timer, cmd, "tonemap", |cmd| {
@@ -216,7 +295,7 @@ impl Renderer {
                 (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ),
                 compute_write,
             );
-            self.tonemap.dispatch(ctx, cmd, gpu.set.set, t.extent);
+            self.tonemap.dispatch(ctx, cmd, gpu.set.set, &[], t.extent);
             Ok(())
         })?;
         self.frame_index = self.frame_index.wrapping_add(1);
@@ -231,7 +310,7 @@ impl Renderer {
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<FrameOutput> {
-        self.prepare(scene, camera, settings)?;
+        self.prepare(ctx, scene, camera, settings)?;
         let cmd = self.cmd;
         unsafe {
             ctx.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
@@ -294,7 +373,13 @@ impl Renderer {
         self.readback_hdr.destroy(ctx);
         self.timer.destroy(ctx);
         self.tonemap.destroy(ctx);
-        self.lighting.destroy(ctx);
+        if let Some((_, mut p)) = self.shading.take() {
+            p.destroy(ctx);
+        }
+        if let Some((mut a, mut set)) = self.accel.take() {
+            set.destroy(ctx);
+            a.destroy(ctx);
+        }
         self.gbuffer.destroy(ctx);
         self.targets.destroy(ctx);
         self.gpu.destroy(ctx);

@@ -35,6 +35,7 @@ pub struct Specialization {
 }
 
 impl Specialization {
+    /// `values`: (constant id, 32-bit value; use `f32::to_bits` for floats).
     pub fn new(values: &[(u32, u32)]) -> Specialization {
         let entries = values
             .iter()
@@ -189,6 +190,18 @@ impl DescriptorSet {
             .dst_array_element(element)
             .descriptor_type(self.bindings[binding as usize].ty)
             .image_info(&info);
+        unsafe { ctx.device.update_descriptor_sets(&[w], &[]) };
+    }
+
+    pub fn write_acceleration_structure(&self, ctx: &Context, binding: u32, accel: vk::AccelerationStructureKHR) {
+        let structures = [accel];
+        let mut info = vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(&structures);
+        let mut w = vk::WriteDescriptorSet::default()
+            .dst_set(self.set)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+            .push_next(&mut info);
+        w.descriptor_count = 1;
         unsafe { ctx.device.update_descriptor_sets(&[w], &[]) };
     }
 

@@ -57,3 +57,40 @@ pub fn check_golden(frame: &FrameOutput, name: &str, min_psnr_db: f64) -> f64 {
     assert!(psnr >= min_psnr_db, "golden {name}: PSNR {psnr:.2} dB below {min_psnr_db} dB");
     psnr
 }
+
+/// Writes `toml` to a fresh temp file and loads it as a scene.
+pub fn scene_from_toml(name: &str, toml: &str) -> hybrid_rt::scene::Scene {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, toml).unwrap();
+    hybrid_rt::scene::Scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e:#}"))
+}
+
+/// Renders `scene` from its first camera with a validated context and checks
+/// the frame is finite and validation stayed clean.
+pub fn render_scene(
+    scene: &hybrid_rt::scene::Scene,
+    w: u32,
+    h: u32,
+    settings: &hybrid_rt::render::RenderSettings,
+) -> FrameOutput {
+    let ctx = validated_context();
+    let mut r = hybrid_rt::render::Renderer::new(&ctx, scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
+    let out = r.render(&ctx, scene, &scene.cameras[0], settings).unwrap();
+    r.destroy(&ctx);
+    assert_validation_clean(&ctx);
+    assert!(out.all_finite(), "NaN or Inf reached the frame");
+    out
+}
+
+/// World-space direction of the camera ray through the centre of pixel
+/// (x, y), with the renderer's camera model.
+pub fn pixel_ray(cam: &hybrid_rt::scene::Camera, w: u32, h: u32, x: u32, y: u32) -> (glam::Vec3, glam::Vec3) {
+    let proj = cam.projection(w as f32 / h as f32);
+    let ndc_x = (x as f32 + 0.5) / w as f32 * 2.0 - 1.0;
+    let ndc_y = (y as f32 + 0.5) / h as f32 * 2.0 - 1.0;
+    let dv = glam::Vec3::new(ndc_x / proj.x_axis.x, ndc_y / proj.y_axis.y, -1.0);
+    let rot = glam::Mat3::from_mat4(cam.view()).transpose();
+    (cam.position(), (rot * dv).normalize())
+}

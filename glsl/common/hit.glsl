@@ -1,0 +1,100 @@
+// Geometry and material at a ray hit (instance, primitive, barycentrics),
+// read from the one shared vertex/index copy. Used by every traversal.
+#ifndef HIT_GLSL
+#define HIT_GLSL
+#include "scene.glsl"
+#ifndef MAT_SAMPLE
+// Secondary hits have no derivatives; sample the finest level.
+#define MAT_SAMPLE(index, uv, fallback) sample_tex_lod(index, uv, 0.0, fallback)
+#endif
+#include "material.glsl"
+
+struct RayHit {
+    uint instance;
+    uint primitive;
+    vec2 bary;  // weights of vertices 1 and 2
+    float t;
+};
+
+struct HitVertices {
+    Vertex v0, v1, v2;
+};
+
+HitVertices hit_vertices(Instance inst, uint primitive) {
+    uint base = inst.first_index + 3u * primitive;
+    HitVertices hv;
+    hv.v0 = vertices[inst.vertex_offset + indices[base]];
+    hv.v1 = vertices[inst.vertex_offset + indices[base + 1u]];
+    hv.v2 = vertices[inst.vertex_offset + indices[base + 2u]];
+    return hv;
+}
+
+vec3 bary3(vec2 b) {
+    return vec3(1.0 - b.x - b.y, b.x, b.y);
+}
+
+vec2 hit_uv(HitVertices hv, vec2 b) {
+    vec3 w = bary3(b);
+    return hv.v0.uv * w.x + hv.v1.uv * w.y + hv.v2.uv * w.z;
+}
+
+// Base-colour alpha at a hit (for alpha-masked any-hit decisions).
+float hit_alpha(uint instance, uint primitive, vec2 b) {
+    Instance inst = instances[instance];
+    Material m = materials[inst.material];
+    vec2 uv = hit_uv(hit_vertices(inst, primitive), b);
+    return m.base_color.a * MAT_SAMPLE(m.tex_base_color, uv, vec4(1.0)).a;
+}
+
+// Whether a candidate hit counts for visibility (alpha MASK / BLEND cut-outs).
+bool hit_alpha_passes(uint instance, uint primitive, vec2 b) {
+    Material m = materials[instances[instance].material];
+    if (m.alpha_mode == ALPHA_OPAQUE) return true;
+    return hit_alpha(instance, primitive, b) >= m.alpha_cutoff;
+}
+
+// Light transmitted through one occluder crossing: 0 for opaque, the
+// transmission-weighted base colour for transmissive materials, 1 where an
+// alpha mask cuts the surface away.
+vec3 occluder_transmittance(uint instance, uint primitive, vec2 b) {
+    Instance inst = instances[instance];
+    Material m = materials[inst.material];
+    vec2 uv = hit_uv(hit_vertices(inst, primitive), b);
+    vec4 base = m.base_color * MAT_SAMPLE(m.tex_base_color, uv, vec4(1.0));
+    if (m.alpha_mode != ALPHA_OPAQUE && base.a < m.alpha_cutoff) return vec3(1.0);
+    float tr = clamp(m.transmission * MAT_SAMPLE(m.tex_transmission, uv, vec4(1.0)).r, 0.0, 1.0);
+    return base.rgb * tr;
+}
+
+// Full surface at a hit. `geo_normal` is the world-space geometric normal
+// (unit, on the side the ray came from); the shading normal is flipped to
+// the same side.
+Surface hit_surface(RayHit h, vec3 ray_o, vec3 ray_d, out vec3 geo_normal, out bool back_face) {
+    Instance inst = instances[h.instance];
+    Material m = materials[inst.material];
+    HitVertices hv = hit_vertices(inst, h.primitive);
+    vec3 w = bary3(h.bary);
+    vec3 p0 = (inst.world * vec4(hv.v0.position, 1.0)).xyz;
+    vec3 p1 = (inst.world * vec4(hv.v1.position, 1.0)).xyz;
+    vec3 p2 = (inst.world * vec4(hv.v2.position, 1.0)).xyz;
+    Surface s;
+    // From the triangle, not from o + t*d: the point lies on the surface.
+    s.position = p0 * w.x + p1 * w.y + p2 * w.z;
+    vec3 gn = cross(p1 - p0, p2 - p0);
+    gn = dot(gn, gn) > 0.0 ? normalize(gn) : vec3(0.0, 1.0, 0.0);
+    back_face = dot(gn, ray_d) > 0.0;
+    geo_normal = back_face ? -gn : gn;
+    vec3 n = hv.v0.normal * w.x + hv.v1.normal * w.y + hv.v2.normal * w.z;
+    n = mat3(inst.normal_matrix) * n;
+    n = dot(n, n) > 1e-20 ? normalize(n) : geo_normal;
+    if (dot(n, geo_normal) < 0.0) n = -n;
+    vec2 uv = hv.v0.uv * w.x + hv.v1.uv * w.y + hv.v2.uv * w.z;
+    vec4 t4 = hv.v0.tangent * w.x + hv.v1.tangent * w.y + hv.v2.tangent * w.z;
+    vec4 tangent = vec4(mat3(inst.world) * t4.xyz, hv.v0.tangent.w);
+    float alpha;
+    material_eval(m, uv, s, alpha);
+    s.normal = apply_normal_map(m, uv, n, tangent);
+    return s;
+}
+
+#endif

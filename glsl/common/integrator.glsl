@@ -1,0 +1,149 @@
+// The one shading path. What is computed at a surface (direct light with
+// shadow rays, emission, ambient, mirror reflection, refraction) lives
+// here; how a ray finds its hit is the traversal include chosen by the
+// variant (trace/query.glsl, ...). Without one (TRACE_NONE) this is the plain
+// deferred shading of the foundation: no ray is traced.
+#ifndef INTEGRATOR_GLSL
+#define INTEGRATOR_GLSL
+#include "scene.glsl"
+#include "env.glsl"
+#include "brdf.glsl"
+#include "lights.glsl"
+#include "offset.glsl"
+
+// Specialization constants: effects the scene does not need are compiled out.
+layout(constant_id = 1) const bool SHADOWS = false;
+layout(constant_id = 2) const bool REFLECTIONS = false;
+layout(constant_id = 3) const bool REFRACTIONS = false;
+layout(constant_id = 4) const uint MAX_DEPTH = 8u;
+layout(constant_id = 5) const float MIN_WEIGHT = 0.01;
+
+// Surfaces at most this rough are traced as mirrors (glossy-as-mirror).
+const float MIRROR_ROUGHNESS = 0.35;
+const float RAY_TMAX = 1e30;
+
+#ifdef TRACE_NONE
+bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) { return false; }
+vec3 trace_shadow(vec3 o, vec3 d, float tmax) { return vec3(1.0); }
+#endif
+
+float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
+
+// Exact unpolarized Fresnel reflectance of a dielectric interface; eta =
+// n_incident / n_transmitted; 1 under total internal reflection.
+float fresnel_dielectric(float cos_i, float eta) {
+    cos_i = clamp(cos_i, 0.0, 1.0);
+    float sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if (sin2_t >= 1.0) return 1.0;
+    float cos_t = sqrt(1.0 - sin2_t);
+    float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return clamp(0.5 * (rs * rs + rp * rp), 0.0, 1.0);
+}
+
+// Direct light from every punctual light; with SHADOWS, each light that
+// casts shadows is tested with a transmittance ray. `gn` is the unit
+// geometric normal on the viewer's side.
+vec3 direct_light(Surface s, vec3 v, vec3 gn) {
+    vec3 c = vec3(0.0);
+    for (uint i = 0u; i < frame.light_count; ++i) {
+        Light light = lights[i];
+        LightSample ls = sample_light(light, s.position);
+        vec3 contrib = brdf_eval(s, v, ls.l, ls.irradiance);
+        if (SHADOWS && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && max3(contrib) > 0.0) {
+            bool light_side = dot(gn, ls.l) > 0.0;
+            if (!light_side && s.transmission <= 0.0) {
+                // A normal map tilted the shading normal towards a light
+                // behind the geometry: the surface itself occludes it.
+                contrib = vec3(0.0);
+            } else {
+                vec3 o = offset_ray(s.position, light_side ? gn : -gn);
+                float tmax = light.type == LIGHT_DIRECTIONAL ? RAY_TMAX : ls.distance * (1.0 - 1e-4);
+                contrib *= trace_shadow(o, ls.l, tmax);
+            }
+        }
+        c += contrib;
+    }
+    return c;
+}
+
+struct Branch {
+    vec3 origin;
+    vec3 dir;
+    vec3 weight;
+    uint depth;
+};
+
+#define STACK_SIZE 16
+Branch g_stack[STACK_SIZE];
+int g_sp = 0;
+
+void push_branch(vec3 o, vec3 d, vec3 w, uint depth) {
+    // Importance cutoff: branches that can change the pixel by less than
+    // MIN_WEIGHT of their radiance are not traced.
+    if (g_sp < STACK_SIZE && max3(w) >= MIN_WEIGHT && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
+        g_stack[g_sp] = Branch(o, normalize(d), w, depth);
+        g_sp++;
+    }
+}
+
+// Radiance leaving `s` towards v, times `w`; pushes the reflection and
+// refraction branches it spawns.
+vec3 shade(Surface s, vec3 v, vec3 gn, bool back_face, vec3 w, uint depth) {
+    // Keep the shading normal on the viewer's side (normal maps at grazing angles).
+    float nv = dot(s.normal, v);
+    if (nv < 1e-4) {
+        s.normal = normalize(s.normal + v * (1e-4 - nv));
+        nv = dot(s.normal, v);
+    }
+    bool can_branch = depth < MAX_DEPTH;
+    float tm = s.transmission * (1.0 - s.metallic);
+    bool mirror = REFLECTIONS && can_branch && s.roughness <= MIRROR_ROUGHNESS;
+    bool refract_on = REFRACTIONS && can_branch && tm > 0.0;
+
+    vec3 f0 = surface_f0(s);
+    vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
+    vec3 ambient = frame.env_ambient * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
+    vec3 c = s.emissive + direct_light(s, v, gn) + ambient;
+
+    if (mirror || refract_on) {
+        // Dielectric interface for the transmissive part; Schlick for the rest.
+        float eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
+        float fr = fresnel_dielectric(nv, eta);
+        vec3 kr = f_schlick(f0, nv);
+        if (mirror || fr >= 1.0) {
+            vec3 rw = kr * (1.0 - tm) + vec3(fr * tm);
+            if (!mirror) rw = vec3(fr * tm);  // total internal reflection only
+            vec3 rd = reflect(-v, s.normal);
+            if (dot(rd, gn) <= 0.0) rd = reflect(-v, gn);  // stay above the surface
+            push_branch(offset_ray(s.position, gn), rd, w * rw, depth + 1u);
+        }
+        if (refract_on && fr < 1.0) {
+            vec3 td = refract(-v, s.normal, eta);
+            if (dot(td, gn) >= 0.0) td = refract(-v, gn, eta);
+            push_branch(offset_ray(s.position, -gn), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u);
+        }
+    }
+    return w * c;
+}
+
+// Traces every pending branch to completion.
+vec3 trace_branches() {
+    vec3 radiance = vec3(0.0);
+    while (g_sp > 0) {
+        g_sp--;
+        Branch b = g_stack[g_sp];
+        RayHit h;
+        if (trace_closest(b.origin, b.dir, RAY_TMAX, h)) {
+            vec3 gn;
+            bool back_face;
+            Surface s = hit_surface(h, b.origin, b.dir, gn, back_face);
+            radiance += shade(s, -b.dir, gn, back_face, b.weight, b.depth);
+        } else {
+            radiance += b.weight * environment(b.dir);
+        }
+    }
+    return radiance;
+}
+
+#endif

@@ -1,0 +1,38 @@
+// Material evaluation shared by the G-buffer pass (implicit derivatives)
+// and ray hits (explicit LOD). The includer defines
+//   MAT_SAMPLE(index, uv, fallback)
+// before including this file.
+#ifndef MATERIAL_GLSL
+#define MATERIAL_GLSL
+#include "scene.glsl"
+#include "brdf.glsl"
+
+// Fills the material part of `s` (not position/normal) from material `m` at `uv`.
+void material_eval(Material m, vec2 uv, inout Surface s, out float alpha) {
+    vec4 base = m.base_color * MAT_SAMPLE(m.tex_base_color, uv, vec4(1.0));
+    vec4 mr = MAT_SAMPLE(m.tex_metallic_roughness, uv, vec4(1.0));
+    s.base_color = base.rgb;
+    alpha = base.a;
+    s.roughness = clamp(m.roughness * mr.g, 0.0, 1.0);
+    s.metallic = clamp(m.metallic * mr.b, 0.0, 1.0);
+    s.occlusion = 1.0 + m.occlusion_strength * (MAT_SAMPLE(m.tex_occlusion, uv, vec4(1.0)).r - 1.0);
+    s.emissive = m.emissive * MAT_SAMPLE(m.tex_emissive, uv, vec4(1.0)).rgb;
+    s.transmission = clamp(m.transmission * MAT_SAMPLE(m.tex_transmission, uv, vec4(1.0)).r, 0.0, 1.0);
+    s.ior = m.ior;
+}
+
+// Perturbs the unit normal `n` by the material's normal map. Degenerate
+// tangents leave `n` unchanged rather than producing NaN.
+vec3 apply_normal_map(Material m, vec2 uv, vec3 n, vec4 tangent) {
+    if (m.tex_normal < 0) return n;
+    vec3 t = tangent.xyz - n * dot(n, tangent.xyz);
+    if (dot(t, t) <= 1e-20) return n;
+    t = normalize(t);
+    vec3 b = cross(n, t) * (tangent.w < 0.0 ? -1.0 : 1.0);
+    vec3 tn = MAT_SAMPLE(m.tex_normal, uv, vec4(0.5, 0.5, 1.0, 1.0)).xyz * 2.0 - 1.0;
+    tn.xy *= m.normal_scale;
+    vec3 mapped = t * tn.x + b * tn.y + n * tn.z;
+    return dot(mapped, mapped) > 1e-20 ? normalize(mapped) : n;
+}
+
+#endif

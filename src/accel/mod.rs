@@ -1,0 +1,379 @@
+//! Vulkan acceleration structures: one BLAS per mesh primitive, built from
+//! the single shared vertex/index copy (PREFER_FAST_TRACE, compacted), and
+//! one TLAS over all instances. Sizes come from the driver's queries.
+
+use anyhow::{Context as _, Result};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
+use crate::scene::{AlphaMode, Scene};
+use crate::vk::{memory_barrier, Buffer, Context};
+
+/// TLAS instance mask bits: what kind of ray may hit an instance.
+pub const MASK_VISIBLE: u8 = 0x01;
+pub const MASK_SHADOW: u8 = 0x02;
+
+pub struct AccelStruct {
+    pub raw: vk::AccelerationStructureKHR,
+    pub buffer: Buffer,
+    pub address: vk::DeviceAddress,
+}
+
+impl AccelStruct {
+    fn new(ctx: &Context, name: &str, ty: vk::AccelerationStructureTypeKHR, size: u64) -> Result<AccelStruct> {
+        let loader = ctx.accel.as_ref().context("acceleration structures are not enabled")?;
+        let buffer = Buffer::new(
+            ctx,
+            &format!("{name} storage"),
+            size,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            MemoryLocation::GpuOnly,
+        )?;
+        let raw = unsafe {
+            loader.create_acceleration_structure(
+                &vk::AccelerationStructureCreateInfoKHR::default().buffer(buffer.raw).size(size).ty(ty),
+                None,
+            )?
+        };
+        ctx.name(raw, name);
+        let address = unsafe {
+            loader.get_acceleration_structure_device_address(
+                &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw),
+            )
+        };
+        Ok(AccelStruct { raw, buffer, address })
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        if let Some(loader) = &ctx.accel {
+            unsafe { loader.destroy_acceleration_structure(self.raw, None) };
+        }
+        self.buffer.destroy(ctx);
+    }
+}
+
+fn scratch_alignment(ctx: &Context) -> u64 {
+    let mut asp = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut asp);
+    unsafe { ctx.instance.raw.get_physical_device_properties2(ctx.physical_device, &mut p2) };
+    (asp.min_acceleration_structure_scratch_offset_alignment as u64).max(1)
+}
+
+/// A scratch buffer reused by every build; grows when a build needs more.
+struct Scratch {
+    buffer: Option<Buffer>,
+    align: u64,
+}
+
+impl Scratch {
+    fn address(&mut self, ctx: &Context, size: u64) -> Result<vk::DeviceAddress> {
+        let need = size + self.align;
+        if self.buffer.as_ref().is_none_or(|b| b.size < need) {
+            if let Some(mut b) = self.buffer.take() {
+                b.destroy(ctx);
+            }
+            self.buffer = Some(Buffer::new(
+                ctx,
+                "acceleration structure scratch",
+                need,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+                MemoryLocation::GpuOnly,
+            )?);
+        }
+        let a = self.buffer.as_ref().unwrap().address;
+        Ok(a.div_ceil(self.align) * self.align)
+    }
+
+    fn destroy(&mut self, ctx: &Context) {
+        if let Some(mut b) = self.buffer.take() {
+            b.destroy(ctx);
+        }
+    }
+}
+
+fn triangles<'a>(gpu: &GpuScene, r: &PrimitiveRange) -> vk::AccelerationStructureGeometryKHR<'a> {
+    let tri = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
+        .vertex_format(vk::Format::R32G32B32_SFLOAT)
+        .vertex_data(vk::DeviceOrHostAddressConstKHR {
+            device_address: gpu.vertices.address + r.vertex_offset as u64 * 48,
+        })
+        .vertex_stride(48)
+        .max_vertex(r.vertex_count.saturating_sub(1))
+        .index_type(vk::IndexType::UINT32)
+        .index_data(vk::DeviceOrHostAddressConstKHR { device_address: gpu.indices.address + r.first_index as u64 * 4 });
+    // Opacity is decided per instance (FORCE_OPAQUE / FORCE_NO_OPAQUE) since
+    // objects can override the material of a shared primitive.
+    vk::AccelerationStructureGeometryKHR::default()
+        .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+        .geometry(vk::AccelerationStructureGeometryDataKHR { triangles: tri })
+}
+
+/// All acceleration structures of a scene.
+pub struct SceneAccel {
+    /// Indexed by mesh, then primitive; None for empty primitives.
+    pub blases: Vec<Vec<Option<AccelStruct>>>,
+    pub tlas: AccelStruct,
+    instances: Buffer,
+    scratch: Scratch,
+    pub build_ms: f64,
+}
+
+impl SceneAccel {
+    pub fn build(ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<SceneAccel> {
+        let t0 = std::time::Instant::now();
+        let loader = ctx.accel.as_ref().context("acceleration structures are not enabled")?;
+        let mut scratch = Scratch { buffer: None, align: scratch_alignment(ctx) };
+
+        // 1. Size and create every BLAS.
+        let flags = vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
+            | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION;
+        let mut blases: Vec<Vec<Option<AccelStruct>>> = Vec::new();
+        let mut jobs = Vec::new(); // (mesh, prim, scratch size)
+        for (m, prims) in gpu.ranges.iter().enumerate() {
+            let mut row = Vec::new();
+            for (p, r) in prims.iter().enumerate() {
+                if r.index_count < 3 {
+                    row.push(None);
+                    continue;
+                }
+                let geoms = [triangles(gpu, r)];
+                let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+                    .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+                    .flags(flags)
+                    .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+                    .geometries(&geoms);
+                let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+                unsafe {
+                    loader.get_acceleration_structure_build_sizes(
+                        vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                        &info,
+                        &[r.index_count / 3],
+                        &mut sizes,
+                    )
+                };
+                let name = format!("BLAS '{}' #{p}", scene.meshes[m].name);
+                row.push(Some(AccelStruct::new(
+                    ctx,
+                    &name,
+                    vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                    sizes.acceleration_structure_size,
+                )?));
+                jobs.push((m, p, sizes.build_scratch_size));
+            }
+            blases.push(row);
+        }
+
+        // 2. Build them one after another through one scratch buffer, then
+        //    query compacted sizes.
+        let max_scratch = jobs.iter().map(|j| j.2).max().unwrap_or(0);
+        let scratch_addr = scratch.address(ctx, max_scratch)?;
+        let query_pool = unsafe {
+            ctx.device.create_query_pool(
+                &vk::QueryPoolCreateInfo::default()
+                    .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
+                    .query_count(jobs.len().max(1) as u32),
+                None,
+            )?
+        };
+        let build_barrier = (
+            vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
+            vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
+        );
+        ctx.one_shot("build BLASes", |cmd| {
+            unsafe { ctx.device.cmd_reset_query_pool(cmd, query_pool, 0, jobs.len().max(1) as u32) };
+            for (m, p, _) in &jobs {
+                let r = &gpu.ranges[*m][*p];
+                let geoms = [triangles(gpu, r)];
+                let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+                    .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+                    .flags(flags)
+                    .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+                    .dst_acceleration_structure(blases[*m][*p].as_ref().unwrap().raw)
+                    .geometries(&geoms)
+                    .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch_addr });
+                let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(r.index_count / 3)];
+                unsafe { loader.cmd_build_acceleration_structures(cmd, &[info], &[&range]) };
+                memory_barrier(ctx, cmd, build_barrier, build_barrier);
+            }
+            let all: Vec<_> = jobs.iter().map(|(m, p, _)| blases[*m][*p].as_ref().unwrap().raw).collect();
+            if !all.is_empty() {
+                unsafe {
+                    loader.cmd_write_acceleration_structures_properties(
+                        cmd,
+                        &all,
+                        vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR,
+                        query_pool,
+                        0,
+                    )
+                };
+            }
+            Ok(())
+        })?;
+
+        // 3. Compact: copy each BLAS into a buffer of its compacted size.
+        let mut compacted = vec![0u64; jobs.len()];
+        if !jobs.is_empty() {
+            unsafe {
+                ctx.device.get_query_pool_results(
+                    query_pool,
+                    0,
+                    &mut compacted,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )?
+            };
+        }
+        unsafe { ctx.device.destroy_query_pool(query_pool, None) };
+        let (mut before, mut after) = (0u64, 0u64);
+        let mut olds = Vec::new();
+        for ((m, p, _), size) in jobs.iter().zip(&compacted) {
+            let old = blases[*m][*p].take().unwrap();
+            let name = format!("BLAS '{}' #{p} (compacted)", scene.meshes[*m].name);
+            let new = AccelStruct::new(ctx, &name, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, (*size).max(256))?;
+            before += old.buffer.size;
+            after += new.buffer.size;
+            blases[*m][*p] = Some(new);
+            olds.push((old, (*m, *p)));
+        }
+        if !olds.is_empty() {
+            ctx.one_shot("compact BLASes", |cmd| {
+                for (old, (m, p)) in &olds {
+                    let info = vk::CopyAccelerationStructureInfoKHR::default()
+                        .src(old.raw)
+                        .dst(blases[*m][*p].as_ref().unwrap().raw)
+                        .mode(vk::CopyAccelerationStructureModeKHR::COMPACT);
+                    unsafe { loader.cmd_copy_acceleration_structure(cmd, &info) };
+                }
+                Ok(())
+            })?;
+        }
+        for (mut old, _) in olds {
+            old.destroy(ctx);
+        }
+
+        // 4. TLAS over all instances.
+        let instances = Buffer::new(
+            ctx,
+            "TLAS instances",
+            (scene.instances.len().max(1) * std::mem::size_of::<vk::AccelerationStructureInstanceKHR>()) as u64,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
+                | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let mut accel = SceneAccel {
+            tlas: AccelStruct {
+                raw: vk::AccelerationStructureKHR::null(),
+                buffer: Buffer { raw: vk::Buffer::null(), allocation: None, size: 0, address: 0 },
+                address: 0,
+            },
+            blases,
+            instances,
+            scratch,
+            build_ms: 0.0,
+        };
+        accel.build_tlas(ctx, scene)?;
+        accel.build_ms = t0.elapsed().as_secs_f64() * 1e3;
+        log::info!(
+            "acceleration structures: {} BLASes ({:.1} MiB -> {:.1} MiB compacted), TLAS over {} instances, {:.0} ms",
+            jobs.len(),
+            before as f64 / 1048576.0,
+            after as f64 / 1048576.0,
+            scene.instances.len(),
+            accel.build_ms
+        );
+        Ok(accel)
+    }
+
+    /// Writes the instance records and (re)builds the TLAS.
+    pub fn build_tlas(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        let loader = ctx.accel.as_ref().context("acceleration structures are not enabled")?;
+        let records: Vec<vk::AccelerationStructureInstanceKHR> = scene
+            .instances
+            .iter()
+            .enumerate()
+            .map(|(i, inst)| {
+                let blas = self.blases[inst.mesh][inst.primitive].as_ref();
+                let m = &scene.materials[scene.instance_material(inst)];
+                let props = scene.objects.get(inst.object).map(|o| o.props.clone()).unwrap_or_default();
+                let opaque = m.alpha_mode == AlphaMode::Opaque && m.transmission <= 0.0;
+                let mut flags = vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE;
+                flags |= if opaque {
+                    vk::GeometryInstanceFlagsKHR::FORCE_OPAQUE
+                } else {
+                    vk::GeometryInstanceFlagsKHR::FORCE_NO_OPAQUE
+                };
+                let mut mask = if blas.is_some() { MASK_VISIBLE } else { 0 };
+                if blas.is_some() && props.casts_shadows && m.casts_shadows {
+                    mask |= MASK_SHADOW;
+                }
+                let t = inst.world.transpose().to_cols_array();
+                vk::AccelerationStructureInstanceKHR {
+                    transform: vk::TransformMatrixKHR { matrix: t[..12].try_into().unwrap() },
+                    instance_custom_index_and_mask: vk::Packed24_8::new(i as u32, mask),
+                    instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(0, flags.as_raw() as u8),
+                    acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
+                        device_handle: blas.map(|b| b.address).unwrap_or(0),
+                    },
+                }
+            })
+            .collect();
+        // SAFETY: AccelerationStructureInstanceKHR is plain old data (repr(C), 64 bytes).
+        let bytes = unsafe {
+            std::slice::from_raw_parts(records.as_ptr() as *const u8, std::mem::size_of_val(records.as_slice()))
+        };
+        self.instances.write(0, bytes)?;
+
+        let geoms = [vk::AccelerationStructureGeometryKHR::default()
+            .geometry_type(vk::GeometryTypeKHR::INSTANCES)
+            .geometry(vk::AccelerationStructureGeometryDataKHR {
+                instances: vk::AccelerationStructureGeometryInstancesDataKHR::default()
+                    .data(vk::DeviceOrHostAddressConstKHR { device_address: self.instances.address }),
+            })];
+        let mut info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
+            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
+            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+            .geometries(&geoms);
+        let count = records.len() as u32;
+        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+        unsafe {
+            loader.get_acceleration_structure_build_sizes(
+                vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                &info,
+                &[count],
+                &mut sizes,
+            )
+        };
+        if self.tlas.buffer.size < sizes.acceleration_structure_size {
+            self.tlas.destroy(ctx);
+            self.tlas =
+                AccelStruct::new(ctx, "TLAS", vk::AccelerationStructureTypeKHR::TOP_LEVEL, sizes.acceleration_structure_size)?;
+        }
+        let scratch = self.scratch.address(ctx, sizes.build_scratch_size)?;
+        info = info
+            .dst_acceleration_structure(self.tlas.raw)
+            .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch });
+        let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
+        ctx.one_shot("build TLAS", |cmd| {
+            memory_barrier(
+                ctx,
+                cmd,
+                (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_WRITE),
+                (vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR, vk::AccessFlags2::SHADER_READ),
+            );
+            unsafe { loader.cmd_build_acceleration_structures(cmd, &[info], &[&range]) };
+            Ok(())
+        })
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        for row in &mut self.blases {
+            for b in row.iter_mut().flatten() {
+                b.destroy(ctx);
+            }
+        }
+        self.tlas.destroy(ctx);
+        self.instances.destroy(ctx);
+        self.scratch.destroy(ctx);
+    }
+}

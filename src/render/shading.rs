@@ -1,0 +1,160 @@
+//! Which shading variant a frame runs: the render mode, the secondary
+//! effects the scene actually needs (and the user did not switch off), and
+//! the ray backend. Effects nobody needs are compiled out through
+//! specialization constants; with none at all, no ray is traced and no
+//! acceleration structure is built.
+
+use anyhow::{bail, Result};
+
+use crate::scene::{LightKind, Scene};
+use crate::vk::Context;
+
+/// Surfaces at most this rough get mirror reflections (glsl/common/integrator.glsl).
+pub const MIRROR_ROUGHNESS: f32 = 0.35;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Mode {
+    /// G-buffer primary hits + traced secondary rays.
+    #[default]
+    Hybrid,
+    /// Camera rays traced too (reference for the hybrid image).
+    Rt,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Backend {
+    /// Ray query where supported.
+    #[default]
+    Auto,
+    /// VK_KHR_ray_query.
+    Query,
+}
+
+/// User-facing switches (all on by default; the scene may still not need them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Effects {
+    pub shadows: bool,
+    pub reflections: bool,
+    pub refractions: bool,
+    /// Maximum recursion depth of reflection/refraction branches.
+    pub max_depth: u32,
+    /// Branches whose weight falls below this are not traced.
+    pub min_weight: f32,
+}
+
+impl Default for Effects {
+    fn default() -> Self {
+        Self { shadows: true, reflections: true, refractions: true, max_depth: 8, min_weight: 0.01 }
+    }
+}
+
+impl Effects {
+    pub const NONE: Effects =
+        Effects { shadows: false, reflections: false, refractions: false, max_depth: 8, min_weight: 0.01 };
+}
+
+/// What the scene contains that each effect needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SceneNeeds {
+    pub shadows: bool,
+    pub reflections: bool,
+    pub refractions: bool,
+}
+
+impl SceneNeeds {
+    pub fn of(scene: &Scene) -> SceneNeeds {
+        let used: Vec<usize> = scene.instances.iter().map(|i| scene.instance_material(i)).collect();
+        let any_occluder = scene.instances.iter().any(|i| {
+            scene.objects.get(i.object).is_none_or(|o| o.props.casts_shadows)
+                && scene.materials[scene.instance_material(i)].casts_shadows
+        });
+        SceneNeeds {
+            shadows: any_occluder && scene.lights.iter().any(|l| l.casts_shadows && light_is_on(l)),
+            reflections: used.iter().any(|&m| scene.materials[m].roughness <= MIRROR_ROUGHNESS),
+            refractions: used.iter().any(|&m| {
+                let mat = &scene.materials[m];
+                mat.transmission > 0.0 && mat.metallic < 1.0
+            }),
+        }
+    }
+}
+
+fn light_is_on(l: &crate::scene::Light) -> bool {
+    let cone_open = match l.kind {
+        LightKind::Spot { outer_cone, .. } => outer_cone > 0.0,
+        _ => true,
+    };
+    l.intensity > 0.0 && l.color.max_element() > 0.0 && cone_open
+}
+
+/// The resolved variant of the shading pass.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingConfig {
+    pub mode: Mode,
+    pub effects: Effects,
+    /// None: no ray is traced (deferred shading only).
+    pub backend: Option<Backend>,
+}
+
+impl ShadingConfig {
+    pub fn resolve(ctx: &Context, needs: SceneNeeds, mode: Mode, wanted: Effects, backend: Backend) -> Result<Self> {
+        let effects = Effects {
+            shadows: wanted.shadows && needs.shadows,
+            reflections: wanted.reflections && needs.reflections,
+            refractions: wanted.refractions && needs.refractions,
+            ..wanted
+        };
+        let traces = mode == Mode::Rt || effects.shadows || effects.reflections || effects.refractions;
+        let backend = if !traces {
+            None
+        } else if ctx.rt.ray_query {
+            Some(Backend::Query)
+        } else {
+            match (backend, mode) {
+                (Backend::Query, _) => bail!("--backend query: the device has no usable VK_KHR_ray_query"),
+                (Backend::Auto, Mode::Rt) => bail!("--mode rt needs a ray backend; this device has no ray query"),
+                (Backend::Auto, Mode::Hybrid) => {
+                    log::warn!("no ray backend on this device: secondary effects off (raster + deferred only)");
+                    return Ok(ShadingConfig { mode, effects: Effects { ..Effects::NONE }, backend: None });
+                }
+            }
+        };
+        Ok(ShadingConfig { mode, effects, backend })
+    }
+
+    pub fn shader(&self) -> &'static str {
+        match (self.backend, self.mode) {
+            (None, _) => "lighting.comp",
+            (Some(_), Mode::Hybrid) => "lighting_query",
+            (Some(_), Mode::Rt) => "rt_query",
+        }
+    }
+
+    /// Specialization constants of glsl/common/integrator.glsl.
+    pub fn specialization(&self) -> Vec<(u32, u32)> {
+        let e = &self.effects;
+        let on = self.backend.is_some();
+        vec![
+            (1, (on && e.shadows) as u32),
+            (2, (on && e.reflections) as u32),
+            (3, (on && e.refractions) as u32),
+            (4, e.max_depth),
+            (5, e.min_weight.to_bits()),
+        ]
+    }
+
+    pub fn describe(&self) -> String {
+        let e = &self.effects;
+        let on: Vec<&str> = [(e.shadows, "shadows"), (e.reflections, "reflections"), (e.refractions, "refractions")]
+            .iter()
+            .filter(|(b, _)| *b && self.backend.is_some())
+            .map(|(_, n)| *n)
+            .collect();
+        format!(
+            "mode {:?}, backend {}, secondary effects: {}",
+            self.mode,
+            self.backend.map(|b| format!("{b:?}").to_lowercase()).unwrap_or_else(|| "none".into()),
+            if on.is_empty() { "none".to_string() } else { on.join(", ") }
+        )
+    }
+}

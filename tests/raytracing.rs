@@ -1,0 +1,571 @@
+//! Secondary rays from the G-buffer (ray-query backend), checked against
+//! closed-form answers on lavapipe with validation on.
+mod common;
+
+use glam::Vec3;
+use hybrid_rt::render::shading::{Effects, Mode};
+use hybrid_rt::render::{DebugView, FrameOutput, RenderSettings};
+
+const W: u32 = 160;
+const H: u32 = 90;
+
+fn settings() -> RenderSettings {
+    RenderSettings::default()
+}
+
+/// A similarity transform applied to a whole scene: x -> x * scale + offset.
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    scale: f32,
+    offset: Vec3,
+}
+
+impl Frame {
+    const IDENTITY: Frame = Frame { scale: 1.0, offset: Vec3::ZERO };
+    fn p(&self, v: [f32; 3]) -> String {
+        let v = Vec3::from(v) * self.scale + self.offset;
+        format!("[{:.9e}, {:.9e}, {:.9e}]", v.x, v.y, v.z)
+    }
+    fn s(&self, v: f32) -> String {
+        format!("{:.9e}", v * self.scale)
+    }
+}
+
+/// Ground plane, a point light at (0, 4, 0) and a 1 x 1 horizontal square
+/// at height 2 with material `occluder`: the shadow is the square
+/// [-1, 1] x [-1, 1] on the ground.
+fn shadow_scene(f: Frame, occluder: &str) -> String {
+    format!(
+        r#"
+[environment]
+color = [0.0, 0.0, 0.0]
+
+[[camera]]
+position = {cam}
+target = {target}
+yfov_deg = 60
+znear = {znear}
+
+[[light]]
+type = "point"
+position = {light}
+intensity = {intensity:.9e}
+
+[[material]]
+name = "ground"
+base_color = [0.8, 0.8, 0.8]
+metallic = 0.0
+roughness = 1.0
+ior = 1.0
+
+{occluder}
+
+[[object]]
+name = "ground"
+primitive = "plane"
+size = [{g}, {g}]
+translation = {origin}
+material = "ground"
+
+[[object]]
+name = "occluder"
+primitive = "plane"
+size = [{one}, {one}]
+translation = {occ}
+material = "occluder"
+"#,
+        cam = f.p([2.5, 7.0, 2.5]),
+        target = f.p([0.0, 0.0, 0.0]),
+        znear = f.s(0.05),
+        light = f.p([0.0, 4.0, 0.0]),
+        intensity = 50.0 * f.scale * f.scale,
+        g = f.s(40.0),
+        origin = f.p([0.0, 0.0, 0.0]),
+        one = f.s(1.0),
+        occ = f.p([0.0, 2.0, 0.0]),
+    )
+}
+
+const OPAQUE_OCCLUDER: &str = r#"
+[[material]]
+name = "occluder"
+base_color = [0.1, 0.1, 0.1]
+roughness = 1.0
+double_sided = true
+"#;
+
+/// Per pixel of the unscaled shadow scene: None where the camera sees the
+/// occluder (or close to it), else (ground point, inside the shadow square).
+fn shadow_prediction(scene: &hybrid_rt::scene::Scene) -> Vec<Option<(Vec3, bool)>> {
+    let cam = &scene.cameras[0];
+    let mut out = Vec::new();
+    for y in 0..H {
+        for x in 0..W {
+            let (o, d) = common::pixel_ray(cam, W, H, x, y);
+            let occ = o + d * ((2.0 - o.y) / d.y);
+            if occ.x.abs() <= 0.6 && occ.z.abs() <= 0.6 {
+                out.push(None);
+                continue;
+            }
+            let g = o + d * (-o.y / d.y);
+            out.push(Some((g, g.x.abs() <= 1.0 && g.z.abs() <= 1.0)));
+        }
+    }
+    out
+}
+
+/// Unshadowed ground radiance at `g` (Lambert, albedo 0.8, 50 cd at (0,4,0)).
+fn lit_radiance(g: Vec3) -> f32 {
+    let d = Vec3::new(0.0, 4.0, 0.0) - g;
+    0.8 / std::f32::consts::PI * 50.0 * (d.y / d.length()) / d.length_squared()
+}
+
+/// True when a pixel's predicted class differs from a neighbour's: the
+/// shadow border, where one pixel of disagreement is allowed.
+fn on_border(pred: &[Option<(Vec3, bool)>], x: u32, y: u32) -> bool {
+    let me = pred[(y * W + x) as usize].map(|p| p.1);
+    for dy in -1i32..=1 {
+        for dx in -1i32..=1 {
+            let (nx, ny) = (x as i32 + dx, y as i32 + dy);
+            if nx < 0 || ny < 0 || nx >= W as i32 || ny >= H as i32 {
+                continue;
+            }
+            if pred[(ny as u32 * W + nx as u32) as usize].map(|p| p.1) != me {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// Compares the rendered shadow with the projected square; returns the
+/// number of shadowed pixels checked.
+fn check_square_shadow(frame: &FrameOutput, pred: &[Option<(Vec3, bool)>], what: &str) -> usize {
+    let (mut shadowed, mut wrong) = (0, Vec::new());
+    for y in 0..H {
+        for x in 0..W {
+            let Some((g, inside)) = pred[(y * W + x) as usize] else { continue };
+            if on_border(pred, x, y) {
+                continue;
+            }
+            let expected = lit_radiance(g);
+            let got = frame.radiance(x, y)[1];
+            if inside {
+                shadowed += 1;
+                // No light leaking into the umbra.
+                if got > 0.01 * expected {
+                    wrong.push((x, y, got, 0.0));
+                }
+            } else if (got - expected).abs() > 0.02 * expected {
+                // No acne: lit ground within 2% of the closed form.
+                wrong.push((x, y, got, expected));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{what}: {} wrong pixels, first {:?}", wrong.len(), &wrong[..wrong.len().min(5)]);
+    assert!(shadowed > 100, "{what}: only {shadowed} shadowed pixels checked");
+    shadowed
+}
+
+#[test]
+fn square_occluder_casts_its_projected_shadow() {
+    let scene = common::scene_from_toml("shadow", &shadow_scene(Frame::IDENTITY, OPAQUE_OCCLUDER));
+    let pred = shadow_prediction(&scene);
+    let frame = common::render_scene(&scene, W, H, &settings());
+    let n = check_square_shadow(&frame, &pred, "origin");
+    eprintln!("shadow matches the projected square: {n} umbra pixels checked");
+
+    // The same test fails when shadows are off: it can tell.
+    let unshadowed = common::render_scene(&scene, W, H, &RenderSettings { effects: Effects::NONE, ..settings() });
+    let leaked = pred
+        .iter()
+        .enumerate()
+        .filter(|(i, p)| p.is_some_and(|(_, inside)| inside) && unshadowed.hdr[i * 4 + 1] > 0.1)
+        .count();
+    assert!(leaked > 100);
+}
+
+#[test]
+fn shadow_is_robust_far_from_origin_and_at_extreme_scales() {
+    let base = common::scene_from_toml("shadow_base", &shadow_scene(Frame::IDENTITY, OPAQUE_OCCLUDER));
+    let pred = shadow_prediction(&base);
+    for f in [
+        Frame { scale: 1.0, offset: Vec3::new(1e4, 1e4, -1e4) },
+        Frame { scale: 1.0, offset: Vec3::new(1e5, 0.0, 1e5) },
+        Frame { scale: 1e-3, offset: Vec3::ZERO },
+        Frame { scale: 1e3, offset: Vec3::ZERO },
+    ] {
+        let scene = common::scene_from_toml("shadow_far", &shadow_scene(f, OPAQUE_OCCLUDER));
+        let frame = common::render_scene(&scene, W, H, &settings());
+        check_square_shadow(&frame, &pred, &format!("{f:?}"));
+    }
+}
+
+#[test]
+fn colored_glass_pane_casts_a_colored_shadow() {
+    let tint = [1.0f32, 0.3, 0.1];
+    let glass = format!(
+        r#"
+[[material]]
+name = "occluder"
+base_color = [{}, {}, {}]
+transmission = 1.0
+ior = 1.5
+roughness = 0.0
+double_sided = true
+"#,
+        tint[0], tint[1], tint[2]
+    );
+    let scene = common::scene_from_toml("glass_shadow", &shadow_scene(Frame::IDENTITY, &glass));
+    let pred = shadow_prediction(&scene);
+    let frame = common::render_scene(&scene, W, H, &settings());
+    let mut checked = 0;
+    for y in 0..H {
+        for x in 0..W {
+            let Some((g, true)) = pred[(y * W + x) as usize] else { continue };
+            if on_border(&pred, x, y) {
+                continue;
+            }
+            let l = frame.radiance(x, y);
+            let e = lit_radiance(g);
+            for c in 0..3 {
+                let ratio = l[c] / e;
+                assert!((ratio - tint[c]).abs() < 0.02, "pixel ({x},{y}) channel {c}: transmittance {ratio}, expected {}", tint[c]);
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "only {checked} pixels in the coloured shadow");
+}
+
+/// A metal mirror at z = 0 facing +z, an emissive wall at z = 6 facing it,
+/// the camera in between looking at the mirror.
+fn mirror_scene(f0: [f32; 3], wall: [f32; 3]) -> String {
+    format!(
+        r#"
+[environment]
+color = [0.0, 0.0, 0.0]
+
+[[camera]]
+position = [0.0, 0.0, 3.0]
+target = [0.0, 0.0, 0.0]
+yfov_deg = 40
+
+[[light]]
+type = "directional"
+direction = [0.0, -1.0, 0.0]
+intensity = 0.0
+
+[[material]]
+name = "mirror"
+base_color = [{}, {}, {}]
+metallic = 1.0
+roughness = 0.0
+
+[[material]]
+name = "wall"
+base_color = [0.0, 0.0, 0.0]
+emissive = [{}, {}, {}]
+roughness = 1.0
+
+[[object]]
+name = "mirror"
+primitive = "plane"
+size = [4.0, 4.0]
+rotation_deg = [90.0, 0.0, 0.0]
+material = "mirror"
+
+[[object]]
+name = "wall"
+primitive = "plane"
+size = [40.0, 40.0]
+translation = [0.0, 0.0, 6.0]
+rotation_deg = [-90.0, 0.0, 0.0]
+material = "wall"
+"#,
+        f0[0], f0[1], f0[2], wall[0], wall[1], wall[2]
+    )
+}
+
+#[test]
+fn mirror_shows_the_wall_times_f0() {
+    let f0 = [0.9f32, 0.6, 0.3];
+    let wall = [0.8f32, 0.5, 0.25];
+    let scene = common::scene_from_toml("mirror", &mirror_scene(f0, wall));
+    let frame = common::render_scene(&scene, W, H, &settings());
+    for (x, y) in [(W / 2, H / 2), (10, 10), (W - 10, H - 10), (30, 60)] {
+        let l = frame.radiance(x, y);
+        for c in 0..3 {
+            let expected = f0[c] * wall[c];
+            assert!((l[c] - expected).abs() <= 0.01 * expected, "pixel ({x},{y}) c{c}: {} vs {expected}", l[c]);
+        }
+    }
+    // Without reflections the mirror shows no wall at all.
+    let off = common::render_scene(
+        &scene,
+        W,
+        H,
+        &RenderSettings { effects: Effects { reflections: false, ..Effects::default() }, ..settings() },
+    );
+    assert!(off.radiance(W / 2, H / 2)[0] < 0.01);
+}
+
+/// Glass with IOR 1 bends nothing and reflects nothing: the image behind a
+/// slab of it is unchanged. A glass sphere of IOR 1.5 exercises total
+/// internal reflection at grazing angles; nothing may become NaN.
+#[test]
+fn ior_one_slab_is_invisible_and_glass_sphere_stays_finite() {
+    let backdrop = r#"
+[environment]
+color = [0.2, 0.3, 0.5]
+
+[[camera]]
+position = [0.0, 1.0, 5.0]
+target = [0.0, 1.0, 0.0]
+yfov_deg = 50
+
+[[light]]
+type = "directional"
+direction = [0.0, -1.0, 0.0]
+intensity = 0.0
+
+[[material]]
+name = "red"
+emissive = [1.0, 0.1, 0.1]
+base_color = [0.0, 0.0, 0.0]
+
+[[material]]
+name = "green"
+emissive = [0.1, 1.0, 0.2]
+base_color = [0.0, 0.0, 0.0]
+
+[[material]]
+name = "glass"
+base_color = [1.0, 1.0, 1.0]
+transmission = 1.0
+roughness = 0.0
+ior = IOR
+
+[[object]]
+name = "a"
+primitive = "cube"
+size = 1.0
+translation = [-1.0, 1.0, -2.0]
+rotation_deg = [20.0, 30.0, 0.0]
+material = "red"
+
+[[object]]
+name = "b"
+primitive = "sphere"
+radius = 0.7
+translation = [1.0, 1.3, -2.5]
+material = "green"
+"#;
+    let without = common::scene_from_toml("backdrop", &backdrop.replace("IOR", "1.0"));
+    let slab = r#"
+[[object]]
+name = "slab"
+primitive = "cube"
+size = 1.0
+scale = [3.0, 2.0, 0.2]
+translation = [0.0, 1.0, 1.0]
+material = "glass"
+"#;
+    let with = common::scene_from_toml("slab", &(backdrop.replace("IOR", "1.0") + slab));
+    let a = common::render_scene(&without, W, H, &settings());
+    let b = common::render_scene(&with, W, H, &settings());
+    let psnr = hybrid_rt::metrics::psnr_rgb8(&a.ldr, &b.ldr, 4, None);
+    eprintln!("IOR-1 slab: PSNR {psnr:.1} dB against the scene without it");
+    assert!(psnr >= 40.0, "IOR-1 slab changed the image: PSNR {psnr:.1} dB");
+
+    let sphere = r#"
+[[object]]
+name = "ball"
+primitive = "sphere"
+radius = 1.0
+slices = 48
+stacks = 24
+translation = [0.0, 1.0, 1.0]
+material = "glass"
+"#;
+    let glass = common::scene_from_toml("glass_ball", &(backdrop.replace("IOR", "1.5") + sphere));
+    let g = common::render_scene(&glass, W, H, &settings());
+    let (max, changed) = hybrid_rt::metrics::diff_stats(&a.ldr, &g.ldr, 4, 8);
+    assert!(max > 30 && changed > 0.01, "the glass ball refracts nothing ({max}, {changed})");
+}
+
+#[test]
+fn facing_mirrors_terminate_at_max_depth() {
+    let scene = common::scene_from_toml(
+        "mirrors",
+        r#"
+[environment]
+color = [0.3, 0.3, 0.3]
+
+[[camera]]
+position = [0.3, 0.2, 1.5]
+target = [0.0, 0.0, -2.0]
+yfov_deg = 60
+
+[[light]]
+type = "point"
+position = [0.0, 1.5, 0.0]
+intensity = 10.0
+
+[[material]]
+name = "mirror"
+base_color = [0.98, 0.98, 0.98]
+metallic = 1.0
+roughness = 0.0
+
+[[material]]
+name = "orange"
+base_color = [1.0, 0.4, 0.0]
+
+[[object]]
+name = "front"
+primitive = "plane"
+size = [10.0, 10.0]
+translation = [0.0, 0.0, -2.0]
+rotation_deg = [90.0, 0.0, 0.0]
+material = "mirror"
+
+[[object]]
+name = "back"
+primitive = "plane"
+size = [10.0, 10.0]
+translation = [0.0, 0.0, 2.0]
+rotation_deg = [-90.0, 0.0, 0.0]
+material = "mirror"
+
+[[object]]
+name = "ball"
+primitive = "sphere"
+radius = 0.3
+translation = [0.0, -0.3, 0.0]
+material = "orange"
+"#,
+    );
+    let mut images = Vec::new();
+    for depth in [2u32, 8, 64] {
+        let t = std::time::Instant::now();
+        let s = RenderSettings { effects: Effects { max_depth: depth, min_weight: 0.0, ..Effects::default() }, ..settings() };
+        images.push(common::render_scene(&scene, W, H, &s));
+        eprintln!("facing mirrors, max depth {depth}: {:.2} s", t.elapsed().as_secs_f64());
+    }
+    // Deeper recursion shows more inter-reflections.
+    let (_, changed) = hybrid_rt::metrics::diff_stats(&images[0].ldr, &images[1].ldr, 4, 2);
+    assert!(changed > 0.01, "depth 2 and 8 look the same ({changed})");
+}
+
+/// Pixels whose 3x3 neighbourhood sees more than one object (or background):
+/// silhouettes, where hybrid and pure ray tracing may legitimately differ.
+fn edge_mask(ids: &FrameOutput) -> Vec<bool> {
+    let id = |x: i32, y: i32| {
+        let i = ((y.clamp(0, H as i32 - 1) as u32 * W + x.clamp(0, W as i32 - 1) as u32) * 4) as usize;
+        [ids.ldr[i], ids.ldr[i + 1], ids.ldr[i + 2]]
+    };
+    let mut keep = Vec::new();
+    for y in 0..H as i32 {
+        for x in 0..W as i32 {
+            let me = id(x, y);
+            let edge = (-1..=1).any(|dy| (-1..=1).any(|dx| id(x + dx, y + dy) != me));
+            keep.push(!edge);
+        }
+    }
+    keep
+}
+
+#[test]
+fn hybrid_matches_pure_ray_tracing() {
+    let scene = common::scene_from_toml(
+        "agreement",
+        r#"
+[environment]
+color = [0.3, 0.4, 0.6]
+
+[[camera]]
+position = [0.0, 2.5, 6.0]
+target = [0.0, 0.5, 0.0]
+yfov_deg = 50
+
+[[light]]
+type = "point"
+position = [2.0, 5.0, 2.0]
+intensity = 60.0
+
+[[light]]
+type = "spot"
+position = [-3.0, 4.0, 1.0]
+direction = [0.6, -0.8, -0.2]
+intensity = 80.0
+outer_cone_deg = 35
+inner_cone_deg = 20
+
+[[light]]
+type = "directional"
+direction = [-0.3, -1.0, -0.5]
+intensity = 2.0
+
+[[material]]
+name = "mirror"
+base_color = [0.9, 0.9, 0.9]
+metallic = 1.0
+roughness = 0.0
+
+[[material]]
+name = "glass"
+base_color = [1.0, 1.0, 1.0]
+transmission = 1.0
+ior = 1.5
+roughness = 0.0
+
+[[material]]
+name = "red"
+base_color = [0.8, 0.1, 0.1]
+roughness = 0.7
+
+[[material]]
+name = "ground"
+base_color = [0.7, 0.7, 0.7]
+roughness = 0.8
+
+[[object]]
+name = "ground"
+primitive = "plane"
+size = [20.0, 20.0]
+material = "ground"
+
+[[object]]
+name = "mirror ball"
+primitive = "sphere"
+radius = 0.8
+translation = [-1.2, 0.8, 0.0]
+material = "mirror"
+
+[[object]]
+name = "glass ball"
+primitive = "sphere"
+radius = 0.8
+translation = [1.2, 0.8, 0.5]
+material = "glass"
+
+[[object]]
+name = "box"
+primitive = "cube"
+size = 1.0
+translation = [0.3, 0.5, -2.0]
+rotation_deg = [0.0, 30.0, 0.0]
+material = "red"
+"#,
+    );
+    let hybrid = common::render_scene(&scene, W, H, &settings());
+    let rt = common::render_scene(&scene, W, H, &RenderSettings { mode: Mode::Rt, ..settings() });
+    let ids = common::render_scene(&scene, W, H, &RenderSettings { debug_view: DebugView::Object, ..settings() });
+    let mask = edge_mask(&ids);
+    let psnr = hybrid_rt::metrics::psnr_rgb8(&hybrid.ldr, &rt.ldr, 4, Some(&mask));
+    let excluded = mask.iter().filter(|k| !**k).count() as f64 / mask.len() as f64;
+    eprintln!("hybrid vs pure RT: PSNR {psnr:.1} dB over non-edge pixels ({:.1}% edge pixels excluded)", excluded * 100.0);
+    assert!(psnr >= 40.0, "hybrid and pure RT disagree: PSNR {psnr:.1} dB");
+    common::check_golden(&hybrid, "spheres_hybrid_160x90", 35.0);
+}
