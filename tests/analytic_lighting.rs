@@ -1,6 +1,7 @@
 //! Closed-form checks of the deferred lighting: a Lambertian quad lit by a
 //! directional light at a known angle, and a point light's inverse-square
 //! falloff. Radiance is read back linear (before tone mapping).
+#![allow(clippy::needless_range_loop)] // per-channel loops read clearer with indices
 mod common;
 
 use glam::Vec3;

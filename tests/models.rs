@@ -7,24 +7,20 @@
 //! 10 dB on these views).
 mod common;
 
-use hybrid_rt::render::{FrameOutput, RenderSettings, Renderer};
+use hybrid_rt::render::{FrameOutput, RenderSettings};
 use hybrid_rt::scene::{AlphaMode, Scene};
 
 const MIN_PSNR: f64 = 35.0;
 
 fn render(scene: &Scene, w: u32, h: u32) -> FrameOutput {
-    let ctx = common::validated_context();
-    let mut r = Renderer::new(&ctx, scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
-    let out = r.render(&ctx, scene, &scene.cameras[0], &RenderSettings::default()).unwrap();
-    r.destroy(&ctx);
-    common::assert_validation_clean(&ctx);
-    out
+    common::render_scene(scene, w, h, &RenderSettings::default())
 }
 
 fn assert_lit(frame: &FrameOutput, min_mean: f64) {
     assert!(frame.all_finite(), "NaN/Inf in the frame");
-    let mean = frame.ldr.chunks_exact(4).map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0).sum::<f64>()
-        / (frame.width * frame.height) as f64;
+    let mean =
+        frame.ldr.chunks_exact(4).map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0).sum::<f64>()
+            / (frame.width * frame.height) as f64;
     assert!(mean > min_mean, "frame too dark: mean {mean:.1}/255");
 }
 
@@ -64,4 +60,14 @@ fn alpha_mask_cuts_out_geometry() {
     let solid = render(&opaque, 240, 135);
     let (_, differing) = hybrid_rt::metrics::diff_stats(&masked.ldr, &solid.ldr, 4, 8);
     assert!(differing > 0.01, "alpha mask changed only {:.3}% of pixels", differing * 100.0);
+}
+
+/// The documents' test scene: Sponza with reflective and refractive spheres,
+/// rendered hybrid (G-buffer + ray-traced shadows, reflections, refractions).
+#[test]
+fn sponza_with_spheres_matches_reference() {
+    let scene = Scene::load(&common::repo_path("assets/sponza_spheres.toml")).unwrap();
+    let frame = render(&scene, 320, 180);
+    assert_lit(&frame, 5.0);
+    common::check_golden(&frame, "sponza_spheres_hybrid_320x180", MIN_PSNR);
 }

@@ -1,5 +1,6 @@
 //! Secondary rays from the G-buffer (ray-query backend), checked against
 //! closed-form answers on lavapipe with validation on.
+#![allow(clippy::needless_range_loop)] // per-channel loops read clearer with indices
 mod common;
 
 use glam::Vec3;
@@ -162,7 +163,12 @@ fn check_square_shadow(frame: &FrameOutput, pred: &[Option<(Vec3, bool)>], what:
             }
         }
     }
-    assert!(wrong.is_empty(), "{what}: {} wrong pixels, first {:?}", wrong.len(), &wrong[..wrong.len().min(5)]);
+    assert!(
+        wrong.is_empty(),
+        "{what}: {} wrong pixels, first {:?}",
+        wrong.len(),
+        &wrong[..wrong.len().min(5)]
+    );
     assert!(shadowed > 100, "{what}: only {shadowed} shadowed pixels checked");
     shadowed
 }
@@ -176,7 +182,8 @@ fn square_occluder_casts_its_projected_shadow() {
     eprintln!("shadow matches the projected square: {n} umbra pixels checked");
 
     // The same test fails when shadows are off: it can tell.
-    let unshadowed = common::render_scene(&scene, W, H, &RenderSettings { effects: Effects::NONE, ..settings() });
+    let unshadowed =
+        common::render_scene(&scene, W, H, &RenderSettings { effects: Effects::NONE, ..settings() });
     let leaked = pred
         .iter()
         .enumerate()
@@ -230,7 +237,11 @@ double_sided = true
             let e = lit_radiance(g);
             for c in 0..3 {
                 let ratio = l[c] / e;
-                assert!((ratio - tint[c]).abs() < 0.02, "pixel ({x},{y}) channel {c}: transmittance {ratio}, expected {}", tint[c]);
+                assert!(
+                    (ratio - tint[c]).abs() < 0.02,
+                    "pixel ({x},{y}) channel {c}: transmittance {ratio}, expected {}",
+                    tint[c]
+                );
             }
             checked += 1;
         }
@@ -297,7 +308,11 @@ fn mirror_shows_the_wall_times_f0() {
         let l = frame.radiance(x, y);
         for c in 0..3 {
             let expected = f0[c] * wall[c];
-            assert!((l[c] - expected).abs() <= 0.01 * expected, "pixel ({x},{y}) c{c}: {} vs {expected}", l[c]);
+            assert!(
+                (l[c] - expected).abs() <= 0.01 * expected,
+                "pixel ({x},{y}) c{c}: {} vs {expected}",
+                l[c]
+            );
         }
     }
     // Without reflections the mirror shows no wall at all.
@@ -449,7 +464,10 @@ material = "orange"
     let mut images = Vec::new();
     for depth in [2u32, 8, 64] {
         let t = std::time::Instant::now();
-        let s = RenderSettings { effects: Effects { max_depth: depth, min_weight: 0.0, ..Effects::default() }, ..settings() };
+        let s = RenderSettings {
+            effects: Effects { max_depth: depth, min_weight: 0.0, ..Effects::default() },
+            ..settings()
+        };
         images.push(common::render_scene(&scene, W, H, &s));
         eprintln!("facing mirrors, max depth {depth}: {:.2} s", t.elapsed().as_secs_f64());
     }
@@ -561,11 +579,15 @@ material = "red"
     );
     let hybrid = common::render_scene(&scene, W, H, &settings());
     let rt = common::render_scene(&scene, W, H, &RenderSettings { mode: Mode::Rt, ..settings() });
-    let ids = common::render_scene(&scene, W, H, &RenderSettings { debug_view: DebugView::Object, ..settings() });
+    let ids =
+        common::render_scene(&scene, W, H, &RenderSettings { debug_view: DebugView::Object, ..settings() });
     let mask = edge_mask(&ids);
     let psnr = hybrid_rt::metrics::psnr_rgb8(&hybrid.ldr, &rt.ldr, 4, Some(&mask));
     let excluded = mask.iter().filter(|k| !**k).count() as f64 / mask.len() as f64;
-    eprintln!("hybrid vs pure RT: PSNR {psnr:.1} dB over non-edge pixels ({:.1}% edge pixels excluded)", excluded * 100.0);
+    eprintln!(
+        "hybrid vs pure RT: PSNR {psnr:.1} dB over non-edge pixels ({:.1}% edge pixels excluded)",
+        excluded * 100.0
+    );
     assert!(psnr >= 40.0, "hybrid and pure RT disagree: PSNR {psnr:.1} dB");
     common::check_golden(&hybrid, "spheres_hybrid_160x90", 35.0);
 }

@@ -73,11 +73,8 @@ pub fn on_path(keys: &[CameraKey], t: f32, template: &Camera) -> Camera {
 /// camera gets a camera that frames its bounds.
 pub fn add_defaults(scene: &mut Scene) {
     let b = scene.bounds;
-    let (center, radius) = if b.is_empty() {
-        (Vec3::ZERO, 1.0)
-    } else {
-        (b.center(), (b.extent().length() * 0.5).max(1e-6))
-    };
+    let (center, radius) =
+        if b.is_empty() { (Vec3::ZERO, 1.0) } else { (b.center(), (b.extent().length() * 0.5).max(1e-6)) };
     if scene.lights.is_empty() {
         log::info!("scene has no lights: adding a default directional light");
         scene.lights.push(Light {

@@ -283,13 +283,7 @@ pub struct Environment {
 
 impl Default for Environment {
     fn default() -> Self {
-        Self {
-            color: Vec3::splat(0.05),
-            map: None,
-            map_path: None,
-            intensity: 1.0,
-            rotation: 0.0,
-        }
+        Self { color: Vec3::splat(0.05), map: None, map_path: None, intensity: 1.0, rotation: 0.0 }
     }
 }
 
@@ -438,10 +432,7 @@ impl Scene {
     }
 
     pub fn triangle_count(&self) -> usize {
-        self.instances
-            .iter()
-            .map(|i| self.meshes[i.mesh].primitives[i.primitive].indices.len() / 3)
-            .sum()
+        self.instances.iter().map(|i| self.meshes[i.mesh].primitives[i.primitive].indices.len() / 3).sum()
     }
 
     /// Effective material of an instance (object override wins).
