@@ -7,6 +7,7 @@ use anyhow::{bail, Context as _, Result};
 use ash::vk as avk;
 use glam::Vec3;
 
+use crate::render::shading::Mode;
 use crate::render::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::vk::{Context, ContextOptions, DeviceSelector};
@@ -50,7 +51,11 @@ pub enum CameraChoice {
     #[default]
     First,
     Index(usize),
-    LookAt { from: Vec3, to: Vec3, yfov_deg: f32 },
+    LookAt {
+        from: Vec3,
+        to: Vec3,
+        yfov_deg: f32,
+    },
 }
 
 impl CameraChoice {
@@ -58,7 +63,11 @@ impl CameraChoice {
         match self {
             CameraChoice::First => Ok(scene.cameras[0].clone()),
             CameraChoice::Index(i) => scene.cameras.get(*i).cloned().with_context(|| {
-                format!("camera {i} does not exist ({} has {} cameras)", scene.source.display(), scene.cameras.len())
+                format!(
+                    "camera {i} does not exist ({} has {} cameras)",
+                    scene.source.display(),
+                    scene.cameras.len()
+                )
             }),
             CameraChoice::LookAt { from, to, yfov_deg } => {
                 if (*from - *to).length_squared() == 0.0 || !from.is_finite() || !to.is_finite() {
@@ -176,6 +185,8 @@ pub struct PassStats {
 pub struct BenchReport {
     pub scene: PathBuf,
     pub device: String,
+    /// The shading variant measured (mode, backend, effects).
+    pub config: String,
     pub width: u32,
     pub height: u32,
     pub frames: usize,
@@ -186,12 +197,13 @@ pub struct BenchReport {
 impl BenchReport {
     pub fn table(&self) -> String {
         let mut s = format!(
-            "scene {}  device {}  {}x{}  {} frames (GPU ms)\n{:<12} {:>9} {:>9} {:>9}\n",
+            "scene {}  device {}  {}x{}  {} frames (GPU ms)\n{}\n{:<12} {:>9} {:>9} {:>9}\n",
             self.scene.display(),
             self.device,
             self.width,
             self.height,
             self.frames,
+            self.config,
             "pass",
             "min",
             "median",
@@ -215,52 +227,84 @@ fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
     }
 }
 
-/// `bench`: renders `frames` frames along the scene's camera path (or from
-/// its first camera) after `warmup` frames and reports per-pass GPU times.
-pub fn bench(ctx: &Context, job: &RenderJob, frames: usize, warmup: usize) -> Result<BenchReport> {
+/// `bench`: for each mode in `modes`, renders `warmup` unmeasured frames and
+/// then `frames` frames along the scene's camera path (or from its camera),
+/// with one renderer and one scene upload, and reports per-pass GPU times.
+pub fn bench(
+    ctx: &Context,
+    job: &RenderJob,
+    frames: usize,
+    warmup: usize,
+    modes: &[Mode],
+) -> Result<Vec<BenchReport>> {
     let extent = job.extent()?;
     let scene = Scene::load(&job.scene)?;
     let base_camera = job.camera.resolve(&scene)?;
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
-    let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
-    let mut totals = Vec::new();
+    let mut reports = Vec::new();
     let result: Result<()> = (|| {
-        for i in 0..warmup + frames {
-            let t = if frames > 1 { (i.saturating_sub(warmup)) as f32 / (frames - 1) as f32 } else { 0.0 };
-            let camera = crate::scene::camera::on_path(&scene.camera_path, t, &base_camera);
-            let out = renderer.render(ctx, &scene, &camera, &job.settings)?;
-            if i < warmup {
-                continue;
-            }
-            let mut total = 0.0;
-            for (name, ms) in out.timings.iter().filter(|(n, _)| *n != "readback") {
-                total += ms;
-                match per_pass.iter_mut().find(|(n, _)| n == name) {
-                    Some((_, v)) => v.push(*ms),
-                    None => per_pass.push((name, vec![*ms])),
+        for &mode in modes {
+            let settings = RenderSettings { mode, ..job.settings };
+            let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
+            let mut totals = Vec::new();
+            for i in 0..warmup + frames {
+                let t =
+                    if frames > 1 { (i.saturating_sub(warmup)) as f32 / (frames - 1) as f32 } else { 0.0 };
+                let camera = crate::scene::camera::on_path(&scene.camera_path, t, &base_camera);
+                let out = renderer.render(ctx, &scene, &camera, &settings)?;
+                if i < warmup {
+                    continue;
                 }
+                let mut total = 0.0;
+                for (name, ms) in out.timings.iter().filter(|(n, _)| *n != "readback") {
+                    total += ms;
+                    match per_pass.iter_mut().find(|(n, _)| n == name) {
+                        Some((_, v)) => v.push(*ms),
+                        None => per_pass.push((name, vec![*ms])),
+                    }
+                }
+                totals.push(total);
             }
-            totals.push(total);
+            reports.push(BenchReport {
+                scene: job.scene.clone(),
+                device: ctx.caps.name.clone(),
+                config: renderer.shading_config().map(|c| c.describe()).unwrap_or_default(),
+                width: job.width,
+                height: job.height,
+                frames,
+                passes: per_pass.into_iter().map(|(n, v)| stats(n, v)).collect(),
+                frame_total: stats("frame", totals),
+            });
         }
         Ok(())
     })();
     renderer.destroy(ctx);
     result?;
-    Ok(BenchReport {
-        scene: job.scene.clone(),
-        device: ctx.caps.name.clone(),
-        width: job.width,
-        height: job.height,
-        frames,
-        passes: per_pass.into_iter().map(|(n, v)| stats(n, v)).collect(),
-        frame_total: stats("frame", totals),
-    })
+    Ok(reports)
 }
 
-pub fn bench_command(gpu: &GpuOptions, job: &RenderJob, frames: usize, warmup: usize) -> Result<()> {
+pub fn bench_command(
+    gpu: &GpuOptions,
+    job: &RenderJob,
+    frames: usize,
+    warmup: usize,
+    modes: &[Mode],
+) -> Result<()> {
     let ctx = gpu.context()?;
-    let report = bench(&ctx, job, frames.max(1), warmup)?;
-    println!("{}", report.table());
+    let reports = bench(&ctx, job, frames.max(1), warmup, modes)?;
+    for r in &reports {
+        println!("{}", r.table());
+    }
+    if let [a, b, ..] = reports.as_slice() {
+        println!(
+            "median frame: {:.3} ms ({}) vs {:.3} ms ({}): ratio {:.2}x",
+            a.frame_total.median,
+            a.config,
+            b.frame_total.median,
+            b.config,
+            b.frame_total.median / a.frame_total.median
+        );
+    }
     check_validation(&ctx)
 }
 

@@ -68,6 +68,9 @@ enum Command {
         /// Frames rendered first and not measured (shader JIT, caches).
         #[arg(long, default_value_t = 3)]
         warmup: usize,
+        /// Measure hybrid and pure ray tracing side by side in this run.
+        #[arg(long)]
+        compare_modes: bool,
     },
     /// Open an interactive window (fly/orbit camera, debug views, screenshots).
     View {
@@ -180,7 +183,10 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Render { view, out, hdr_out }) => {
             app::render_command(&gpu, &view.job(), &out, hdr_out.as_deref())
         }
-        Some(Command::Bench { view, frames, warmup }) => app::bench_command(&gpu, &view.job(), frames, warmup),
+        Some(Command::Bench { view, frames, warmup, compare_modes }) => {
+            let modes = if compare_modes { vec![Mode::Hybrid, Mode::Rt] } else { vec![view.mode] };
+            app::bench_command(&gpu, &view.job(), frames, warmup, &modes)
+        }
         Some(Command::View { view, present_mode, frames, screenshot, test_resize }) => {
             let event_loop = viewer::open_display()?;
             let opts = ViewerOptions { gpu, job: view.job(), present_mode, frames, screenshot, test_resize };
@@ -206,7 +212,9 @@ fn default_command(gpu: GpuOptions) -> Result<()> {
             return headless(&gpu);
         }
     };
-    log::info!("display available: opening the viewer (`hybrid-rt render` or HYBRID_RT_HEADLESS=1 for a file)");
+    log::info!(
+        "display available: opening the viewer (`hybrid-rt render` or HYBRID_RT_HEADLESS=1 for a file)"
+    );
     let opts = ViewerOptions {
         gpu: gpu.clone(),
         job: job.clone(),

@@ -34,7 +34,10 @@ fn assert_clean_failure(out: &Output, needles: &[&str]) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "expected failure, got success; stderr:\n{stderr}");
     assert!(!stderr.contains("panicked"), "panicked:\n{stderr}");
-    let error_line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("no error line:\n{stderr}"));
+    let error_line = stderr
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_else(|| panic!("no error line:\n{stderr}"));
     for n in needles {
         assert!(error_line.contains(n), "error does not mention '{n}': {error_line}");
     }

@@ -25,7 +25,8 @@ fn info_lists_the_selected_device() {
 
 #[test]
 fn ray_tracing_can_be_switched_off() {
-    let ctx = GpuOptions { validation: true, disable_ray_tracing: true, ..Default::default() }.context().unwrap();
+    let ctx =
+        GpuOptions { validation: true, disable_ray_tracing: true, ..Default::default() }.context().unwrap();
     assert!(!ctx.rt.acceleration_structure && !ctx.rt.ray_query && !ctx.rt.ray_tracing_pipeline);
     assert!(ctx.accel.is_none());
     common::assert_validation_clean(&ctx);

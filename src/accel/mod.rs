@@ -21,13 +21,19 @@ pub struct AccelStruct {
 }
 
 impl AccelStruct {
-    fn new(ctx: &Context, name: &str, ty: vk::AccelerationStructureTypeKHR, size: u64) -> Result<AccelStruct> {
+    fn new(
+        ctx: &Context,
+        name: &str,
+        ty: vk::AccelerationStructureTypeKHR,
+        size: u64,
+    ) -> Result<AccelStruct> {
         let loader = ctx.accel.as_ref().context("acceleration structures are not enabled")?;
         let buffer = Buffer::new(
             ctx,
             &format!("{name} storage"),
             size,
-            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR
+                | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
             MemoryLocation::GpuOnly,
         )?;
         let raw = unsafe {
@@ -101,7 +107,9 @@ fn triangles<'a>(gpu: &GpuScene, r: &PrimitiveRange) -> vk::AccelerationStructur
         .vertex_stride(48)
         .max_vertex(r.vertex_count.saturating_sub(1))
         .index_type(vk::IndexType::UINT32)
-        .index_data(vk::DeviceOrHostAddressConstKHR { device_address: gpu.indices.address + r.first_index as u64 * 4 });
+        .index_data(vk::DeviceOrHostAddressConstKHR {
+            device_address: gpu.indices.address + r.first_index as u64 * 4,
+        });
     // Opacity is decided per instance (FORCE_OPAQUE / FORCE_NO_OPAQUE) since
     // objects can override the material of a shared primitive.
     vk::AccelerationStructureGeometryKHR::default()
@@ -178,7 +186,8 @@ impl SceneAccel {
         };
         let build_barrier = (
             vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
-            vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
+            vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR
+                | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
         );
         ctx.one_shot("build BLASes", |cmd| {
             unsafe { ctx.device.cmd_reset_query_pool(cmd, query_pool, 0, jobs.len().max(1) as u32) };
@@ -192,7 +201,9 @@ impl SceneAccel {
                     .dst_acceleration_structure(blases[*m][*p].as_ref().unwrap().raw)
                     .geometries(&geoms)
                     .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch_addr });
-                let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(r.index_count / 3)];
+                let range =
+                    [vk::AccelerationStructureBuildRangeInfoKHR::default()
+                        .primitive_count(r.index_count / 3)];
                 unsafe { loader.cmd_build_acceleration_structures(cmd, &[info], &[&range]) };
                 memory_barrier(ctx, cmd, build_barrier, build_barrier);
             }
@@ -229,7 +240,12 @@ impl SceneAccel {
         for ((m, p, _), size) in jobs.iter().zip(&compacted) {
             let old = blases[*m][*p].take().unwrap();
             let name = format!("BLAS '{}' #{p} (compacted)", scene.meshes[*m].name);
-            let new = AccelStruct::new(ctx, &name, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, (*size).max(256))?;
+            let new = AccelStruct::new(
+                ctx,
+                &name,
+                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                (*size).max(256),
+            )?;
             before += old.buffer.size;
             after += new.buffer.size;
             blases[*m][*p] = Some(new);
@@ -255,7 +271,8 @@ impl SceneAccel {
         let instances = Buffer::new(
             ctx,
             "TLAS instances",
-            (scene.instances.len().max(1) * std::mem::size_of::<vk::AccelerationStructureInstanceKHR>()) as u64,
+            (scene.instances.len().max(1) * std::mem::size_of::<vk::AccelerationStructureInstanceKHR>())
+                as u64,
             vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
                 | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
             MemoryLocation::CpuToGpu,
@@ -310,7 +327,10 @@ impl SceneAccel {
                 vk::AccelerationStructureInstanceKHR {
                     transform: vk::TransformMatrixKHR { matrix: t[..12].try_into().unwrap() },
                     instance_custom_index_and_mask: vk::Packed24_8::new(i as u32, mask),
-                    instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(0, flags.as_raw() as u8),
+                    instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
+                        0,
+                        flags.as_raw() as u8,
+                    ),
                     acceleration_structure_reference: vk::AccelerationStructureReferenceKHR {
                         device_handle: blas.map(|b| b.address).unwrap_or(0),
                     },
@@ -319,7 +339,10 @@ impl SceneAccel {
             .collect();
         // SAFETY: AccelerationStructureInstanceKHR is plain old data (repr(C), 64 bytes).
         let bytes = unsafe {
-            std::slice::from_raw_parts(records.as_ptr() as *const u8, std::mem::size_of_val(records.as_slice()))
+            std::slice::from_raw_parts(
+                records.as_ptr() as *const u8,
+                std::mem::size_of_val(records.as_slice()),
+            )
         };
         self.instances.write(0, bytes)?;
 
@@ -346,8 +369,12 @@ impl SceneAccel {
         };
         if self.tlas.buffer.size < sizes.acceleration_structure_size {
             self.tlas.destroy(ctx);
-            self.tlas =
-                AccelStruct::new(ctx, "TLAS", vk::AccelerationStructureTypeKHR::TOP_LEVEL, sizes.acceleration_structure_size)?;
+            self.tlas = AccelStruct::new(
+                ctx,
+                "TLAS",
+                vk::AccelerationStructureTypeKHR::TOP_LEVEL,
+                sizes.acceleration_structure_size,
+            )?;
         }
         let scratch = self.scratch.address(ctx, sizes.build_scratch_size)?;
         info = info

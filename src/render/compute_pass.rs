@@ -66,9 +66,14 @@ impl ComputePass {
     pub fn bind(&self, ctx: &Context, inputs: &[Input]) {
         for (i, input) in inputs.iter().enumerate() {
             match input {
-                Input::Sampled(v) => {
-                    self.set.write_image(ctx, i as u32, 0, *v, self.sampler, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
-                }
+                Input::Sampled(v) => self.set.write_image(
+                    ctx,
+                    i as u32,
+                    0,
+                    *v,
+                    self.sampler,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
                 Input::Storage(v) => {
                     self.set.write_image(ctx, i as u32, 0, *v, vk::Sampler::null(), vk::ImageLayout::GENERAL)
                 }
@@ -91,14 +96,7 @@ impl ComputePass {
         sets.extend_from_slice(extra);
         unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout,
-                0,
-                &sets,
-                &[],
-            );
+            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &sets, &[]);
             d.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1);
         }
     }

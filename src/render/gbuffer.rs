@@ -30,7 +30,8 @@ impl GBufferPass {
 
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, scene: &GpuScene, t: &Targets) {
         let d = &ctx.device;
-        let attach = (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
+        let attach =
+            (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
         let prior_reads = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_SAMPLED_READ);
         for img in &t.gbuffer {
             image_barrier(
@@ -54,7 +55,8 @@ impl GBufferPass {
             prior_reads,
             (
                 vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
+                    | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
             ),
         );
 
@@ -75,7 +77,9 @@ impl GBufferPass {
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::CLEAR)
             .store_op(vk::AttachmentStoreOp::STORE)
-            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 } });
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 },
+            });
         let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: t.extent };
         let info = vk::RenderingInfo::default()
             .render_area(area)
@@ -97,13 +101,21 @@ impl GBufferPass {
                 }],
             );
             d.cmd_set_scissor(cmd, 0, &[area]);
-            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[scene.set.set], &[]);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.layout,
+                0,
+                &[scene.set.set],
+                &[],
+            );
             d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
             // Opaque first so masked geometry is depth-tested against it.
             for (pipeline, masked) in [(self.opaque, false), (self.masked, true)] {
                 d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
                 for draw in scene.draws.iter().filter(|dr| (dr.alpha_mode != AlphaMode::Opaque) == masked) {
-                    let cull = if draw.double_sided { vk::CullModeFlags::NONE } else { vk::CullModeFlags::BACK };
+                    let cull =
+                        if draw.double_sided { vk::CullModeFlags::NONE } else { vk::CullModeFlags::BACK };
                     d.cmd_set_cull_mode(cmd, cull);
                     d.cmd_draw_indexed(
                         cmd,
@@ -158,7 +170,10 @@ fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) 
     let spec = Specialization::new(&[(0, alpha_test as u32)]);
     let spec_info = spec.info();
     let stages = [
-        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vs)
+            .name(c"main"),
         vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::FRAGMENT)
             .module(fs)
@@ -166,21 +181,25 @@ fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) 
             .specialization_info(&spec_info),
     ];
     let vertex_input = vk::PipelineVertexInputStateCreateInfo::default(); // vertex pulling
-    let ia = vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let ia =
+        vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
     let vp = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
     let rs = vk::PipelineRasterizationStateCreateInfo::default()
         .polygon_mode(vk::PolygonMode::FILL)
         .cull_mode(vk::CullModeFlags::BACK)
         .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
         .line_width(1.0);
-    let ms = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let ms =
+        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
     let ds = vk::PipelineDepthStencilStateCreateInfo::default()
         .depth_test_enable(true)
         .depth_write_enable(true)
         .depth_compare_op(vk::CompareOp::GREATER);
     let blend: Vec<_> = GBUFFER_FORMATS
         .iter()
-        .map(|_| vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA))
+        .map(|_| {
+            vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)
+        })
         .collect();
     let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
     let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR, vk::DynamicState::CULL_MODE];

@@ -107,8 +107,20 @@ fn tonemap_inputs(t: &Targets) -> Vec<Input> {
 
 fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
     let px = extent.width as u64 * extent.height as u64;
-    let ldr = Buffer::new(ctx, "readback ldr", px * 4, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
-    let hdr = Buffer::new(ctx, "readback hdr", px * 16, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+    let ldr = Buffer::new(
+        ctx,
+        "readback ldr",
+        px * 4,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+    )?;
+    let hdr = Buffer::new(
+        ctx,
+        "readback hdr",
+        px * 16,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+    )?;
     Ok((ldr, hdr))
 }
 
@@ -118,8 +130,15 @@ impl Renderer {
         let targets = Targets::new(ctx, extent)?;
         let gbuffer = GBufferPass::new(ctx, gpu.set.layout)?;
         let no_spec = Specialization::new(&[]);
-        let tonemap =
-            ComputePass::new(ctx, "tonemap", "tonemap.comp", gpu.set.layout, &tonemap_inputs(&targets), &[], &no_spec)?;
+        let tonemap = ComputePass::new(
+            ctx,
+            "tonemap",
+            "tonemap.comp",
+            gpu.set.layout,
+            &tonemap_inputs(&targets),
+            &[],
+            &no_spec,
+        )?;
         let timer = GpuTimer::new(ctx, 16)?;
         let cmd = ctx.allocate_command_buffer("frame")?;
         let (readback_ldr, readback_hdr) = readback_buffers(ctx, extent)?;
@@ -166,7 +185,8 @@ impl Renderer {
     /// the acceleration structures on first need). Waits for the GPU when it
     /// has to rebuild.
     fn ensure_shading(&mut self, ctx: &Context, scene: &Scene, settings: &RenderSettings) -> Result<()> {
-        let config = ShadingConfig::resolve(ctx, self.needs, settings.mode, settings.effects, settings.backend)?;
+        let config =
+            ShadingConfig::resolve(ctx, self.needs, settings.mode, settings.effects, settings.backend)?;
         if self.shading.as_ref().is_some_and(|(c, _)| *c == config) {
             return Ok(());
         }
@@ -211,7 +231,13 @@ impl Renderer {
     }
 
     /// Fills the frame uniforms for `camera` and selects the shading variant.
-    pub fn prepare(&mut self, ctx: &Context, scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<()> {
+    pub fn prepare(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<()> {
         self.ensure_shading(ctx, scene, settings)?;
         let e = self.targets.extent;
         let aspect = e.width as f32 / e.height.max(1) as f32;
@@ -273,8 +299,10 @@ impl Renderer {
             Ok(())
         })?;
         pass(ctx, &mut self.timer, cmd, "tonemap", |cmd| {
-            let compute_write = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE);
-            let compute_read = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ);
+            let compute_write =
+                (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE);
+            let compute_read =
+                (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ);
             image_barrier(
                 ctx,
                 cmd,
@@ -336,7 +364,9 @@ impl Renderer {
                     to,
                 );
                 let region = [vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(img.aspect).layer_count(1))
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default().aspect_mask(img.aspect).layer_count(1),
+                    )
                     .image_extent(vk::Extent3D { width: t.extent.width, height: t.extent.height, depth: 1 })];
                 unsafe {
                     ctx.device.cmd_copy_image_to_buffer(

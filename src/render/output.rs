@@ -33,8 +33,11 @@ impl FrameOutput {
     pub fn save_hdr(&self, path: &Path) -> Result<()> {
         create_parent(path)?;
         let file = std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-        let pixels: Vec<image::Rgb<f32>> =
-            self.hdr.chunks_exact(4).map(|p| image::Rgb([p[0].max(0.0), p[1].max(0.0), p[2].max(0.0)])).collect();
+        let pixels: Vec<image::Rgb<f32>> = self
+            .hdr
+            .chunks_exact(4)
+            .map(|p| image::Rgb([p[0].max(0.0), p[1].max(0.0), p[2].max(0.0)]))
+            .collect();
         image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
             .encode(&pixels, self.width as usize, self.height as usize)
             .with_context(|| format!("writing {}", path.display()))

@@ -97,7 +97,13 @@ pub struct ShadingConfig {
 }
 
 impl ShadingConfig {
-    pub fn resolve(ctx: &Context, needs: SceneNeeds, mode: Mode, wanted: Effects, backend: Backend) -> Result<Self> {
+    pub fn resolve(
+        ctx: &Context,
+        needs: SceneNeeds,
+        mode: Mode,
+        wanted: Effects,
+        backend: Backend,
+    ) -> Result<Self> {
         let effects = Effects {
             shadows: wanted.shadows && needs.shadows,
             reflections: wanted.reflections && needs.reflections,
@@ -112,9 +118,13 @@ impl ShadingConfig {
         } else {
             match (backend, mode) {
                 (Backend::Query, _) => bail!("--backend query: the device has no usable VK_KHR_ray_query"),
-                (Backend::Auto, Mode::Rt) => bail!("--mode rt needs a ray backend; this device has no ray query"),
+                (Backend::Auto, Mode::Rt) => {
+                    bail!("--mode rt needs a ray backend; this device has no ray query")
+                }
                 (Backend::Auto, Mode::Hybrid) => {
-                    log::warn!("no ray backend on this device: secondary effects off (raster + deferred only)");
+                    log::warn!(
+                        "no ray backend on this device: secondary effects off (raster + deferred only)"
+                    );
                     return Ok(ShadingConfig { mode, effects: Effects { ..Effects::NONE }, backend: None });
                 }
             }
@@ -145,11 +155,12 @@ impl ShadingConfig {
 
     pub fn describe(&self) -> String {
         let e = &self.effects;
-        let on: Vec<&str> = [(e.shadows, "shadows"), (e.reflections, "reflections"), (e.refractions, "refractions")]
-            .iter()
-            .filter(|(b, _)| *b && self.backend.is_some())
-            .map(|(_, n)| *n)
-            .collect();
+        let on: Vec<&str> =
+            [(e.shadows, "shadows"), (e.reflections, "reflections"), (e.refractions, "refractions")]
+                .iter()
+                .filter(|(b, _)| *b && self.backend.is_some())
+                .map(|(_, n)| *n)
+                .collect();
         format!(
             "mode {:?}, backend {}, secondary effects: {}",
             self.mode,

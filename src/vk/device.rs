@@ -95,9 +95,9 @@ pub fn query_capabilities(instance: &ash::Instance, pd: vk::PhysicalDevice, inde
 
     let base = unsafe { instance.get_physical_device_features(pd) };
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-    let gfx = families.iter().position(|f| {
-        f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
-    });
+    let gfx = families
+        .iter()
+        .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE));
     let timestamps = gfx.map(|g| families[g].timestamp_valid_bits > 0).unwrap_or(false)
         && props.limits.timestamp_period > 0.0;
 
@@ -126,8 +126,14 @@ pub fn query_capabilities(instance: &ash::Instance, pd: vk::PhysicalDevice, inde
         index,
         name: props.device_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default(),
         device_type: props.device_type,
-        driver_name: driver.driver_name_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default(),
-        driver_info: driver.driver_info_as_c_str().map(|c| c.to_string_lossy().into_owned()).unwrap_or_default(),
+        driver_name: driver
+            .driver_name_as_c_str()
+            .map(|c| c.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        driver_info: driver
+            .driver_info_as_c_str()
+            .map(|c| c.to_string_lossy().into_owned())
+            .unwrap_or_default(),
         api_version: props.api_version,
         acceleration_structure: as_ok,
         ray_query: as_ok && has_rq && rqf.ray_query != 0,
@@ -246,8 +252,7 @@ pub fn create_device(
         exts.push(khr::ray_tracing_pipeline::NAME.as_ptr());
     }
 
-    let base = vk::PhysicalDeviceFeatures::default()
-        .geometry_shader(true);
+    let base = vk::PhysicalDeviceFeatures::default().geometry_shader(true);
     let mut v11 = vk::PhysicalDeviceVulkan11Features::default();
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
         .buffer_device_address(true)
@@ -282,7 +287,9 @@ pub fn create_device(
     if rt.ray_tracing_pipeline {
         f2 = f2.push_next(&mut rtf);
     }
-    let info =
-        vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&exts).push_next(&mut f2);
+    let info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queues)
+        .enabled_extension_names(&exts)
+        .push_next(&mut f2);
     unsafe { instance.create_device(pd, &info, None) }.context("vkCreateDevice failed")
 }

@@ -85,8 +85,7 @@ impl Instance {
         let layers = unsafe { entry.enumerate_instance_layer_properties()? };
         let has_layer = |name: &CStr| layers.iter().any(|l| l.layer_name_as_c_str() == Ok(name));
         let exts = unsafe { entry.enumerate_instance_extension_properties(None)? };
-        let has_debug_utils =
-            exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
+        let has_debug_utils = exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
 
         let mut layer_names = Vec::new();
         if opts.validation {

@@ -46,7 +46,9 @@ impl Buffer {
         unsafe { ctx.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset())? };
         ctx.name(raw, name);
         let address = if usage.contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS) {
-            unsafe { ctx.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw)) }
+            unsafe {
+                ctx.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw))
+            }
         } else {
             0
         };
@@ -140,8 +142,9 @@ impl Image {
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
-        let raw = unsafe { ctx.device.create_image(&info, None) }
-            .with_context(|| format!("create image '{name}' ({format:?} {}x{})", extent.width, extent.height))?;
+        let raw = unsafe { ctx.device.create_image(&info, None) }.with_context(|| {
+            format!("create image '{name}' ({format:?} {}x{})", extent.width, extent.height)
+        })?;
         let req = unsafe { ctx.device.get_image_memory_requirements(raw) };
         let allocation = ctx
             .allocator
@@ -194,7 +197,9 @@ impl Image {
             format,
             extent,
             levels,
-            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC,
+            vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_DST
+                | vk::ImageUsageFlags::TRANSFER_SRC,
         )?;
         let mut staging = Buffer::new(
             ctx,
@@ -231,11 +236,17 @@ impl Image {
                 vk::ImageSubresourceLayers::default().aspect_mask(self.aspect).mip_level(0).layer_count(1),
             )
             .image_extent(vk::Extent3D { width: self.extent.width, height: self.extent.height, depth: 1 })];
-        unsafe { d.cmd_copy_buffer_to_image(cmd, src, self.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &copy) };
+        unsafe {
+            d.cmd_copy_buffer_to_image(cmd, src, self.raw, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &copy)
+        };
         let (mut w, mut h) = (self.extent.width as i32, self.extent.height as i32);
         for level in 1..self.mip_levels {
             let sub = |l: u32| {
-                vk::ImageSubresourceRange::default().aspect_mask(self.aspect).base_mip_level(l).level_count(1).layer_count(1)
+                vk::ImageSubresourceRange::default()
+                    .aspect_mask(self.aspect)
+                    .base_mip_level(l)
+                    .level_count(1)
+                    .layer_count(1)
             };
             // Previous level: transfer dst -> transfer src.
             let b = [vk::ImageMemoryBarrier2::default()
@@ -249,7 +260,9 @@ impl Image {
                 .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)];
             unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b)) };
             let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
-            let layers = |l: u32| vk::ImageSubresourceLayers::default().aspect_mask(self.aspect).mip_level(l).layer_count(1);
+            let layers = |l: u32| {
+                vk::ImageSubresourceLayers::default().aspect_mask(self.aspect).mip_level(l).layer_count(1)
+            };
             let blit = [vk::ImageBlit::default()
                 .src_subresource(layers(level - 1))
                 .src_offsets([vk::Offset3D::default(), vk::Offset3D { x: w, y: h, z: 1 }])
@@ -284,20 +297,25 @@ impl Image {
                 .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
                 .src_stage_mask(vk::PipelineStageFlags2::TRANSFER)
                 .src_access_mask(src_access)
-                .dst_stage_mask(vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COMPUTE_SHADER)
+                .dst_stage_mask(
+                    vk::PipelineStageFlags2::FRAGMENT_SHADER | vk::PipelineStageFlags2::COMPUTE_SHADER,
+                )
                 .dst_access_mask(vk::AccessFlags2::SHADER_SAMPLED_READ)
         };
         let last = self.mip_levels - 1;
-        let mut barriers = vec![to_read(
-            last,
-            1,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            vk::AccessFlags2::TRANSFER_WRITE,
-        )];
+        let mut barriers =
+            vec![to_read(last, 1, vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::AccessFlags2::TRANSFER_WRITE)];
         if last > 0 {
-            barriers.push(to_read(0, last, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, vk::AccessFlags2::TRANSFER_READ));
+            barriers.push(to_read(
+                0,
+                last,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::AccessFlags2::TRANSFER_READ,
+            ));
         }
-        unsafe { d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
+        unsafe {
+            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers))
+        };
     }
 
     pub fn destroy(&mut self, ctx: &Context) {

@@ -171,7 +171,8 @@ impl Context {
             unsafe {
                 self.device.begin_command_buffer(
                     cmd,
-                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                    &vk::CommandBufferBeginInfo::default()
+                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
                 )?
             };
             self.begin_label(cmd, name, [0.6, 0.6, 0.6, 1.0]);
@@ -244,7 +245,9 @@ pub fn image_barrier(
                 .level_count(vk::REMAINING_MIP_LEVELS)
                 .layer_count(vk::REMAINING_ARRAY_LAYERS),
         )];
-    unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b)) };
+    unsafe {
+        ctx.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b))
+    };
 }
 
 /// A global memory barrier (buffers, and images that keep their layout).

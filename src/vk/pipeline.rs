@@ -23,7 +23,8 @@ pub fn spirv(name: &str) -> Result<Vec<u32>> {
 
 pub fn shader_module(ctx: &Context, name: &str) -> Result<vk::ShaderModule> {
     let code = spirv(name)?;
-    let m = unsafe { ctx.device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)? };
+    let m =
+        unsafe { ctx.device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)? };
     ctx.name(m, name);
     Ok(m)
 }
@@ -40,7 +41,11 @@ impl Specialization {
         let entries = values
             .iter()
             .enumerate()
-            .map(|(i, (id, _))| vk::SpecializationMapEntry { constant_id: *id, offset: 4 * i as u32, size: 4 })
+            .map(|(i, (id, _))| vk::SpecializationMapEntry {
+                constant_id: *id,
+                offset: 4 * i as u32,
+                size: 4,
+            })
             .collect();
         let data = values.iter().flat_map(|(_, v)| v.to_ne_bytes()).collect();
         Specialization { entries, data }
@@ -148,13 +153,16 @@ impl DescriptorSet {
             .map(|b| vk::DescriptorPoolSize { ty: b.ty, descriptor_count: b.count.max(1) })
             .collect();
         let pool = unsafe {
-            ctx.device
-                .create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)?
+            ctx.device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes),
+                None,
+            )?
         };
         ctx.name(pool, &format!("{name} pool"));
         let layouts = [layout];
         let variable = [bindings.last().filter(|b| b.bindless).map(|b| b.count.max(1)).unwrap_or(0)];
-        let mut var_info = vk::DescriptorSetVariableDescriptorCountAllocateInfo::default().descriptor_counts(&variable);
+        let mut var_info =
+            vk::DescriptorSetVariableDescriptorCountAllocateInfo::default().descriptor_counts(&variable);
         let mut alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts);
         if bindings.last().is_some_and(|b| b.bindless) {
             alloc = alloc.push_next(&mut var_info);
@@ -183,7 +191,8 @@ impl DescriptorSet {
         sampler: vk::Sampler,
         layout: vk::ImageLayout,
     ) {
-        let info = [vk::DescriptorImageInfo::default().image_view(view).sampler(sampler).image_layout(layout)];
+        let info =
+            [vk::DescriptorImageInfo::default().image_view(view).sampler(sampler).image_layout(layout)];
         let w = vk::WriteDescriptorSet::default()
             .dst_set(self.set)
             .dst_binding(binding)
@@ -193,9 +202,15 @@ impl DescriptorSet {
         unsafe { ctx.device.update_descriptor_sets(&[w], &[]) };
     }
 
-    pub fn write_acceleration_structure(&self, ctx: &Context, binding: u32, accel: vk::AccelerationStructureKHR) {
+    pub fn write_acceleration_structure(
+        &self,
+        ctx: &Context,
+        binding: u32,
+        accel: vk::AccelerationStructureKHR,
+    ) {
         let structures = [accel];
-        let mut info = vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(&structures);
+        let mut info =
+            vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(&structures);
         let mut w = vk::WriteDescriptorSet::default()
             .dst_set(self.set)
             .dst_binding(binding)

@@ -21,7 +21,9 @@ impl GpuTimer {
         let pool = if enabled {
             let p = unsafe {
                 ctx.device.create_query_pool(
-                    &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity * 2),
+                    &vk::QueryPoolCreateInfo::default()
+                        .query_type(vk::QueryType::TIMESTAMP)
+                        .query_count(capacity * 2),
                     None,
                 )?
             };
@@ -31,7 +33,13 @@ impl GpuTimer {
             log::warn!("device has no timestamp queries: pass times unavailable");
             vk::QueryPool::null()
         };
-        Ok(GpuTimer { pool, capacity, names: Vec::new(), period_ns: ctx.caps.timestamp_period_ns as f64, enabled })
+        Ok(GpuTimer {
+            pool,
+            capacity,
+            names: Vec::new(),
+            period_ns: ctx.caps.timestamp_period_ns as f64,
+            enabled,
+        })
     }
 
     /// Resets the queries; call at the start of a frame's command buffer.

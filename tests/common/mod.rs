@@ -11,7 +11,9 @@ use hybrid_rt::vk::Context;
 /// A context with the Khronos validation layer on (tests always validate).
 pub fn validated_context() -> Context {
     let _ = env_logger::builder().is_test(true).try_init();
-    GpuOptions { validation: true, ..Default::default() }.context().expect("create a validated Vulkan context")
+    GpuOptions { validation: true, ..Default::default() }
+        .context()
+        .expect("create a validated Vulkan context")
 }
 
 /// Panics when the validation layer reported any error on `ctx`.
@@ -76,7 +78,8 @@ pub fn render_scene(
     settings: &hybrid_rt::render::RenderSettings,
 ) -> FrameOutput {
     let ctx = validated_context();
-    let mut r = hybrid_rt::render::Renderer::new(&ctx, scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
+    let mut r =
+        hybrid_rt::render::Renderer::new(&ctx, scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
     let out = r.render(&ctx, scene, &scene.cameras[0], settings).unwrap();
     r.destroy(&ctx);
     assert_validation_clean(&ctx);
