@@ -7,7 +7,7 @@ use anyhow::{bail, Context as _, Result};
 use ash::vk as avk;
 use glam::Vec3;
 
-use crate::render::shading::Mode;
+use crate::render::shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
 use crate::render::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::vk::{Context, ContextOptions, DeviceSelector};
@@ -192,6 +192,8 @@ pub struct BenchReport {
     pub frames: usize,
     pub passes: Vec<PassStats>,
     pub frame_total: PassStats,
+    /// Camera, shadow and secondary rays of the first camera's frame.
+    pub rays_first_frame: [u32; 3],
 }
 
 impl BenchReport {
@@ -212,6 +214,19 @@ impl BenchReport {
         for p in self.passes.iter().chain(std::iter::once(&self.frame_total)) {
             s.push_str(&format!("{:<12} {:>9.3} {:>9.3} {:>9.3}\n", p.name, p.min, p.median, p.max));
         }
+        let [camera, shadow, secondary] = self.rays_first_frame;
+        let total = (camera + shadow + secondary) as f64;
+        if total > 0.0 {
+            // Rays of the first frame over the median time of the pass that
+            // traces them (it also shades, so this is a lower bound).
+            let trace_ms =
+                self.passes.iter().find(|p| p.name == "shade+trace" || p.name == "rt").map(|p| p.median);
+            s.push_str(&format!("rays/frame: camera {camera}, shadow {shadow}, secondary {secondary}"));
+            if let Some(ms) = trace_ms {
+                s.push_str(&format!(" -> {:.2} Mrays/s in the tracing pass", total / (ms * 1e3)));
+            }
+            s.push('\n');
+        }
         s
     }
 }
@@ -227,15 +242,16 @@ fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
     }
 }
 
-/// `bench`: for each mode in `modes`, renders `warmup` unmeasured frames and
-/// then `frames` frames along the scene's camera path (or from its camera),
-/// with one renderer and one scene upload, and reports per-pass GPU times.
+/// `bench`: for each (mode, backend) variant, counts the rays of one frame,
+/// then renders `warmup` unmeasured frames and `frames` measured frames
+/// along the scene's camera path (or from its camera), all with one renderer
+/// and one scene upload, and reports per-pass GPU times.
 pub fn bench(
     ctx: &Context,
     job: &RenderJob,
     frames: usize,
     warmup: usize,
-    modes: &[Mode],
+    variants: &[(Mode, Backend)],
 ) -> Result<Vec<BenchReport>> {
     let extent = job.extent()?;
     let scene = Scene::load(&job.scene)?;
@@ -243,8 +259,18 @@ pub fn bench(
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let mut reports = Vec::new();
     let result: Result<()> = (|| {
-        for &mode in modes {
-            let settings = RenderSettings { mode, ..job.settings };
+        for &(mode, backend) in variants {
+            let settings = RenderSettings { mode, backend, ..job.settings };
+            if ShadingConfig::resolve(ctx, SceneNeeds::of(&scene), mode, settings.effects, backend).is_err() {
+                log::warn!(
+                    "bench: {mode:?} with backend {backend:?} is not available on this device, skipped"
+                );
+                continue;
+            }
+            // One counted frame: the atomics would distort the timings.
+            let counting =
+                RenderSettings { effects: Effects { count_rays: true, ..settings.effects }, ..settings };
+            let counted = renderer.render(ctx, &scene, &base_camera, &counting)?;
             let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
             let mut totals = Vec::new();
             for i in 0..warmup + frames {
@@ -274,6 +300,7 @@ pub fn bench(
                 frames,
                 passes: per_pass.into_iter().map(|(n, v)| stats(n, v)).collect(),
                 frame_total: stats("frame", totals),
+                rays_first_frame: counted.ray_counts,
             });
         }
         Ok(())
@@ -288,22 +315,24 @@ pub fn bench_command(
     job: &RenderJob,
     frames: usize,
     warmup: usize,
-    modes: &[Mode],
+    variants: &[(Mode, Backend)],
 ) -> Result<()> {
     let ctx = gpu.context()?;
-    let reports = bench(&ctx, job, frames.max(1), warmup, modes)?;
+    let reports = bench(&ctx, job, frames.max(1), warmup, variants)?;
     for r in &reports {
         println!("{}", r.table());
     }
-    if let [a, b, ..] = reports.as_slice() {
-        println!(
-            "median frame: {:.3} ms ({}) vs {:.3} ms ({}): ratio {:.2}x",
-            a.frame_total.median,
-            a.config,
-            b.frame_total.median,
-            b.config,
-            b.frame_total.median / a.frame_total.median
-        );
+    if reports.len() > 1 {
+        println!("side by side (median GPU ms per frame; ratio to the first row):");
+        let base = reports[0].frame_total.median;
+        for r in &reports {
+            println!(
+                "  {:>10.3} ms  {:>5.2}x  {}",
+                r.frame_total.median,
+                r.frame_total.median / base,
+                r.config
+            );
+        }
     }
     check_validation(&ctx)
 }

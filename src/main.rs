@@ -71,6 +71,9 @@ enum Command {
         /// Measure hybrid and pure ray tracing side by side in this run.
         #[arg(long)]
         compare_modes: bool,
+        /// Measure every ray backend the device offers side by side.
+        #[arg(long)]
+        compare_backends: bool,
     },
     /// Open an interactive window (fly/orbit camera, debug views, screenshots).
     View {
@@ -161,6 +164,7 @@ impl ViewArgs {
                     refractions: !self.no_refractions,
                     max_depth: self.max_depth.min(64),
                     min_weight: self.min_weight.max(0.0),
+                    count_rays: false,
                 },
             },
         }
@@ -183,9 +187,16 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Render { view, out, hdr_out }) => {
             app::render_command(&gpu, &view.job(), &out, hdr_out.as_deref())
         }
-        Some(Command::Bench { view, frames, warmup, compare_modes }) => {
+        Some(Command::Bench { view, frames, warmup, compare_modes, compare_backends }) => {
             let modes = if compare_modes { vec![Mode::Hybrid, Mode::Rt] } else { vec![view.mode] };
-            app::bench_command(&gpu, &view.job(), frames, warmup, &modes)
+            let backends = if compare_backends {
+                vec![Backend::Query, Backend::Pipeline, Backend::Compute]
+            } else {
+                vec![view.backend]
+            };
+            let variants: Vec<_> =
+                modes.iter().flat_map(|m| backends.iter().map(move |b| (*m, *b))).collect();
+            app::bench_command(&gpu, &view.job(), frames, warmup, &variants)
         }
         Some(Command::View { view, present_mode, frames, screenshot, test_resize }) => {
             let event_loop = viewer::open_display()?;

@@ -3,6 +3,8 @@
 #![allow(clippy::needless_range_loop)] // per-channel loops read clearer with indices
 mod common;
 
+use common::scenes::*;
+
 use glam::Vec3;
 use hybrid_rt::render::shading::{Effects, Mode};
 use hybrid_rt::render::{DebugView, FrameOutput, RenderSettings};
@@ -13,87 +15,6 @@ const H: u32 = 90;
 fn settings() -> RenderSettings {
     RenderSettings::default()
 }
-
-/// A similarity transform applied to a whole scene: x -> x * scale + offset.
-#[derive(Clone, Copy, Debug)]
-struct Frame {
-    scale: f32,
-    offset: Vec3,
-}
-
-impl Frame {
-    const IDENTITY: Frame = Frame { scale: 1.0, offset: Vec3::ZERO };
-    fn p(&self, v: [f32; 3]) -> String {
-        let v = Vec3::from(v) * self.scale + self.offset;
-        format!("[{:.9e}, {:.9e}, {:.9e}]", v.x, v.y, v.z)
-    }
-    fn s(&self, v: f32) -> String {
-        format!("{:.9e}", v * self.scale)
-    }
-}
-
-/// Ground plane, a point light at (0, 4, 0) and a 1 x 1 horizontal square
-/// at height 2 with material `occluder`: the shadow is the square
-/// [-1, 1] x [-1, 1] on the ground.
-fn shadow_scene(f: Frame, occluder: &str) -> String {
-    format!(
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = {cam}
-target = {target}
-yfov_deg = 60
-znear = {znear}
-
-[[light]]
-type = "point"
-position = {light}
-intensity = {intensity:.9e}
-
-[[material]]
-name = "ground"
-base_color = [0.8, 0.8, 0.8]
-metallic = 0.0
-roughness = 1.0
-ior = 1.0
-
-{occluder}
-
-[[object]]
-name = "ground"
-primitive = "plane"
-size = [{g}, {g}]
-translation = {origin}
-material = "ground"
-
-[[object]]
-name = "occluder"
-primitive = "plane"
-size = [{one}, {one}]
-translation = {occ}
-material = "occluder"
-"#,
-        cam = f.p([2.5, 7.0, 2.5]),
-        target = f.p([0.0, 0.0, 0.0]),
-        znear = f.s(0.05),
-        light = f.p([0.0, 4.0, 0.0]),
-        intensity = 50.0 * f.scale * f.scale,
-        g = f.s(40.0),
-        origin = f.p([0.0, 0.0, 0.0]),
-        one = f.s(1.0),
-        occ = f.p([0.0, 2.0, 0.0]),
-    )
-}
-
-const OPAQUE_OCCLUDER: &str = r#"
-[[material]]
-name = "occluder"
-base_color = [0.1, 0.1, 0.1]
-roughness = 1.0
-double_sided = true
-"#;
 
 /// Per pixel of the unscaled shadow scene: None where the camera sees the
 /// occluder (or close to it), else (ground point, inside the shadow square).
@@ -211,18 +132,7 @@ fn shadow_is_robust_far_from_origin_and_at_extreme_scales() {
 #[test]
 fn colored_glass_pane_casts_a_colored_shadow() {
     let tint = [1.0f32, 0.3, 0.1];
-    let glass = format!(
-        r#"
-[[material]]
-name = "occluder"
-base_color = [{}, {}, {}]
-transmission = 1.0
-ior = 1.5
-roughness = 0.0
-double_sided = true
-"#,
-        tint[0], tint[1], tint[2]
-    );
+    let glass = glass_occluder(tint);
     let scene = common::scene_from_toml("glass_shadow", &shadow_scene(Frame::IDENTITY, &glass));
     let pred = shadow_prediction(&scene);
     let frame = common::render_scene(&scene, W, H, &settings());
@@ -247,55 +157,6 @@ double_sided = true
         }
     }
     assert!(checked > 100, "only {checked} pixels in the coloured shadow");
-}
-
-/// A metal mirror at z = 0 facing +z, an emissive wall at z = 6 facing it,
-/// the camera in between looking at the mirror.
-fn mirror_scene(f0: [f32; 3], wall: [f32; 3]) -> String {
-    format!(
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 40
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "mirror"
-base_color = [{}, {}, {}]
-metallic = 1.0
-roughness = 0.0
-
-[[material]]
-name = "wall"
-base_color = [0.0, 0.0, 0.0]
-emissive = [{}, {}, {}]
-roughness = 1.0
-
-[[object]]
-name = "mirror"
-primitive = "plane"
-size = [4.0, 4.0]
-rotation_deg = [90.0, 0.0, 0.0]
-material = "mirror"
-
-[[object]]
-name = "wall"
-primitive = "plane"
-size = [40.0, 40.0]
-translation = [0.0, 0.0, 6.0]
-rotation_deg = [-90.0, 0.0, 0.0]
-material = "wall"
-"#,
-        f0[0], f0[1], f0[2], wall[0], wall[1], wall[2]
-    )
 }
 
 #[test]
@@ -411,56 +272,7 @@ material = "glass"
 
 #[test]
 fn facing_mirrors_terminate_at_max_depth() {
-    let scene = common::scene_from_toml(
-        "mirrors",
-        r#"
-[environment]
-color = [0.3, 0.3, 0.3]
-
-[[camera]]
-position = [0.3, 0.2, 1.5]
-target = [0.0, 0.0, -2.0]
-yfov_deg = 60
-
-[[light]]
-type = "point"
-position = [0.0, 1.5, 0.0]
-intensity = 10.0
-
-[[material]]
-name = "mirror"
-base_color = [0.98, 0.98, 0.98]
-metallic = 1.0
-roughness = 0.0
-
-[[material]]
-name = "orange"
-base_color = [1.0, 0.4, 0.0]
-
-[[object]]
-name = "front"
-primitive = "plane"
-size = [10.0, 10.0]
-translation = [0.0, 0.0, -2.0]
-rotation_deg = [90.0, 0.0, 0.0]
-material = "mirror"
-
-[[object]]
-name = "back"
-primitive = "plane"
-size = [10.0, 10.0]
-translation = [0.0, 0.0, 2.0]
-rotation_deg = [-90.0, 0.0, 0.0]
-material = "mirror"
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 0.3
-translation = [0.0, -0.3, 0.0]
-material = "orange"
-"#,
-    );
+    let scene = common::scene_from_toml("mirrors", FACING_MIRRORS);
     let mut images = Vec::new();
     for depth in [2u32, 8, 64] {
         let t = std::time::Instant::now();
@@ -496,87 +308,7 @@ fn edge_mask(ids: &FrameOutput) -> Vec<bool> {
 
 #[test]
 fn hybrid_matches_pure_ray_tracing() {
-    let scene = common::scene_from_toml(
-        "agreement",
-        r#"
-[environment]
-color = [0.3, 0.4, 0.6]
-
-[[camera]]
-position = [0.0, 2.5, 6.0]
-target = [0.0, 0.5, 0.0]
-yfov_deg = 50
-
-[[light]]
-type = "point"
-position = [2.0, 5.0, 2.0]
-intensity = 60.0
-
-[[light]]
-type = "spot"
-position = [-3.0, 4.0, 1.0]
-direction = [0.6, -0.8, -0.2]
-intensity = 80.0
-outer_cone_deg = 35
-inner_cone_deg = 20
-
-[[light]]
-type = "directional"
-direction = [-0.3, -1.0, -0.5]
-intensity = 2.0
-
-[[material]]
-name = "mirror"
-base_color = [0.9, 0.9, 0.9]
-metallic = 1.0
-roughness = 0.0
-
-[[material]]
-name = "glass"
-base_color = [1.0, 1.0, 1.0]
-transmission = 1.0
-ior = 1.5
-roughness = 0.0
-
-[[material]]
-name = "red"
-base_color = [0.8, 0.1, 0.1]
-roughness = 0.7
-
-[[material]]
-name = "ground"
-base_color = [0.7, 0.7, 0.7]
-roughness = 0.8
-
-[[object]]
-name = "ground"
-primitive = "plane"
-size = [20.0, 20.0]
-material = "ground"
-
-[[object]]
-name = "mirror ball"
-primitive = "sphere"
-radius = 0.8
-translation = [-1.2, 0.8, 0.0]
-material = "mirror"
-
-[[object]]
-name = "glass ball"
-primitive = "sphere"
-radius = 0.8
-translation = [1.2, 0.8, 0.5]
-material = "glass"
-
-[[object]]
-name = "box"
-primitive = "cube"
-size = 1.0
-translation = [0.3, 0.5, -2.0]
-rotation_deg = [0.0, 30.0, 0.0]
-material = "red"
-"#,
-    );
+    let scene = common::scene_from_toml("agreement", AGREEMENT);
     let hybrid = common::render_scene(&scene, W, H, &settings());
     let rt = common::render_scene(&scene, W, H, &RenderSettings { mode: Mode::Rt, ..settings() });
     let ids =

@@ -17,6 +17,11 @@ layout(constant_id = 2) const bool REFLECTIONS = false;
 layout(constant_id = 3) const bool REFRACTIONS = false;
 layout(constant_id = 4) const uint MAX_DEPTH = 8u;
 layout(constant_id = 5) const float MIN_WEIGHT = 0.01;
+layout(constant_id = 6) const bool COUNT_RAYS = false;
+
+void count_ray(uint kind) {
+    if (COUNT_RAYS) atomicAdd(ray_counts[kind], 1u);
+}
 
 // Surfaces at most this rough are traced as mirrors (glossy-as-mirror).
 const float MIRROR_ROUGHNESS = 0.35;
@@ -59,6 +64,7 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
             } else {
                 vec3 o = offset_ray(s.position, light_side ? gn : -gn);
                 float tmax = light.type == LIGHT_DIRECTIONAL ? RAY_TMAX : ls.distance * (1.0 - 1e-4);
+                count_ray(1u);
                 contrib *= trace_shadow(o, ls.l, tmax);
             }
         }
@@ -134,6 +140,7 @@ vec3 trace_branches() {
         g_sp--;
         Branch b = g_stack[g_sp];
         RayHit h;
+        count_ray(2u);
         if (trace_closest(b.origin, b.dir, RAY_TMAX, h)) {
             vec3 gn;
             bool back_face;

@@ -6,13 +6,31 @@ use anyhow::{Context as _, Result};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
+pub mod bvh;
+pub mod compute_bvh;
+
 use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
-use crate::scene::{AlphaMode, Scene};
+use crate::scene::{AlphaMode, Instance, Scene};
 use crate::vk::{memory_barrier, Buffer, Context};
 
 /// TLAS instance mask bits: what kind of ray may hit an instance.
 pub const MASK_VISIBLE: u8 = 0x01;
 pub const MASK_SHADOW: u8 = 0x02;
+
+/// Whether every hit on `inst` is final (no alpha test, no transmission):
+/// such instances skip any-hit processing in every backend.
+pub fn instance_opaque(scene: &Scene, inst: &Instance) -> bool {
+    let m = &scene.materials[scene.instance_material(inst)];
+    m.alpha_mode == AlphaMode::Opaque && m.transmission <= 0.0
+}
+
+/// Which rays may hit `inst` (MASK_VISIBLE always, MASK_SHADOW when both the
+/// object and its material cast shadows).
+pub fn instance_mask(scene: &Scene, inst: &Instance) -> u8 {
+    let m = &scene.materials[scene.instance_material(inst)];
+    let casts = scene.objects.get(inst.object).is_none_or(|o| o.props.casts_shadows) && m.casts_shadows;
+    MASK_VISIBLE | if casts { MASK_SHADOW } else { 0 }
+}
 
 pub struct AccelStruct {
     pub raw: vk::AccelerationStructureKHR,
@@ -112,8 +130,10 @@ fn triangles<'a>(gpu: &GpuScene, r: &PrimitiveRange) -> vk::AccelerationStructur
         });
     // Opacity is decided per instance (FORCE_OPAQUE / FORCE_NO_OPAQUE) since
     // objects can override the material of a shared primitive.
+    // Shadow transmittance multiplies every crossing once: no duplicates.
     vk::AccelerationStructureGeometryKHR::default()
         .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+        .flags(vk::GeometryFlagsKHR::NO_DUPLICATE_ANY_HIT_INVOCATION)
         .geometry(vk::AccelerationStructureGeometryDataKHR { triangles: tri })
 }
 
@@ -310,19 +330,13 @@ impl SceneAccel {
             .enumerate()
             .map(|(i, inst)| {
                 let blas = self.blases[inst.mesh][inst.primitive].as_ref();
-                let m = &scene.materials[scene.instance_material(inst)];
-                let props = scene.objects.get(inst.object).map(|o| o.props.clone()).unwrap_or_default();
-                let opaque = m.alpha_mode == AlphaMode::Opaque && m.transmission <= 0.0;
                 let mut flags = vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE;
-                flags |= if opaque {
+                flags |= if instance_opaque(scene, inst) {
                     vk::GeometryInstanceFlagsKHR::FORCE_OPAQUE
                 } else {
                     vk::GeometryInstanceFlagsKHR::FORCE_NO_OPAQUE
                 };
-                let mut mask = if blas.is_some() { MASK_VISIBLE } else { 0 };
-                if blas.is_some() && props.casts_shadows && m.casts_shadows {
-                    mask |= MASK_SHADOW;
-                }
+                let mask = if blas.is_some() { instance_mask(scene, inst) } else { 0 };
                 let t = inst.world.transpose().to_cols_array();
                 vk::AccelerationStructureInstanceKHR {
                     transform: vk::TransformMatrixKHR { matrix: t[..12].try_into().unwrap() },

@@ -1,10 +1,13 @@
-//! A full-screen compute pass: scene set 0, its own set 1 of images, one
-//! pipeline, 8x8 workgroups. Lighting and tone mapping are two of these.
+//! A full-screen pass: scene set 0, its own set 1 of images, optional extra
+//! sets, and either a compute pipeline (8x8 workgroups) or a ray-tracing
+//! pipeline launched one ray-generation invocation per pixel. Lighting (in
+//! every backend) and tone mapping are these.
 
 use anyhow::Result;
 use ash::vk;
 
 use crate::vk::pipeline::{compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization};
+use crate::vk::rt_pipeline::RtPipeline;
 use crate::vk::Context;
 
 /// How one set-1 binding is fed.
@@ -16,10 +19,15 @@ pub enum Input {
     Storage(vk::ImageView),
 }
 
+enum Kernel {
+    Compute(vk::Pipeline),
+    RayTracing(RtPipeline),
+}
+
 pub struct ComputePass {
     pub name: &'static str,
     layout: vk::PipelineLayout,
-    pipeline: vk::Pipeline,
+    kernel: Kernel,
     set: DescriptorSet,
     sampler: vk::Sampler,
 }
@@ -45,7 +53,12 @@ impl ComputePass {
         let mut sets = vec![scene_layout, set.layout];
         sets.extend_from_slice(extra_sets);
         let layout = pipeline_layout(ctx, &format!("{name} layout"), &sets, 0)?;
-        let pipeline = compute_pipeline(ctx, shader, layout, spec)?;
+        // A ray-generation shader makes this a ray-tracing pass.
+        let kernel = if shader.ends_with(".rgen") || shader.starts_with("rt_pipeline") {
+            Kernel::RayTracing(RtPipeline::new(ctx, shader, layout, spec)?)
+        } else {
+            Kernel::Compute(compute_pipeline(ctx, shader, layout, spec)?)
+        };
         let sampler = unsafe {
             ctx.device.create_sampler(
                 &vk::SamplerCreateInfo::default()
@@ -57,7 +70,7 @@ impl ComputePass {
             )?
         };
         ctx.name(sampler, &format!("{name} point sampler"));
-        let pass = ComputePass { name, layout, pipeline, set, sampler };
+        let pass = ComputePass { name, layout, kernel, set, sampler };
         pass.bind(ctx, inputs);
         Ok(pass)
     }
@@ -94,16 +107,28 @@ impl ComputePass {
         let d = &ctx.device;
         let mut sets = vec![scene_set, self.set.set];
         sets.extend_from_slice(extra);
+        let (bind_point, pipeline) = match &self.kernel {
+            Kernel::Compute(p) => (vk::PipelineBindPoint::COMPUTE, *p),
+            Kernel::RayTracing(rt) => (vk::PipelineBindPoint::RAY_TRACING_KHR, rt.pipeline),
+        };
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &sets, &[]);
-            d.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1);
+            d.cmd_bind_pipeline(cmd, bind_point, pipeline);
+            d.cmd_bind_descriptor_sets(cmd, bind_point, self.layout, 0, &sets, &[]);
+            match &self.kernel {
+                Kernel::Compute(_) => {
+                    d.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1)
+                }
+                Kernel::RayTracing(rt) => rt.trace(ctx, cmd, extent.width, extent.height),
+            }
         }
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
+        match &mut self.kernel {
+            Kernel::Compute(p) => unsafe { ctx.device.destroy_pipeline(*p, None) },
+            Kernel::RayTracing(rt) => rt.destroy(ctx),
+        }
         unsafe {
-            ctx.device.destroy_pipeline(self.pipeline, None);
             ctx.device.destroy_pipeline_layout(self.layout, None);
             ctx.device.destroy_sampler(self.sampler, None);
         }

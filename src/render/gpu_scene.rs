@@ -38,6 +38,8 @@ pub struct GpuScene {
     pub instances: Buffer,
     pub lights: Buffer,
     pub frame: Buffer,
+    /// Ray counters (camera, shadow, secondary, unused), host-visible.
+    pub ray_counters: Buffer,
     pub textures: Vec<Image>,
     samplers: Vec<(SamplerDesc, vk::Sampler)>,
     pub env_map: Image,
@@ -50,8 +52,6 @@ pub struct GpuScene {
     /// Mean environment radiance (solid-angle weighted), for the ambient term.
     pub env_mean: Vec3,
 }
-
-pub const SCENE_BINDINGS: usize = 8;
 
 impl GpuScene {
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<GpuScene> {
@@ -109,6 +109,13 @@ impl GpuScene {
             MemoryLocation::CpuToGpu,
         )?;
 
+        let ray_counters = Buffer::new(
+            ctx,
+            "ray counters",
+            16,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuToCpu,
+        )?;
         let (env_map, env_mean) = upload_environment(ctx, scene)?;
         let env_sampler = create_sampler(
             ctx,
@@ -134,6 +141,8 @@ impl GpuScene {
                 Binding::one(storage),
                 Binding::one(storage),
                 Binding::one(sampled),
+                Binding::one(storage),
+                // Bindless textures: variable-count, so the last binding.
                 Binding { ty: sampled, count: textures.len().max(1) as u32, bindless: true },
             ],
         )?;
@@ -143,11 +152,12 @@ impl GpuScene {
         set.write_buffer(ctx, 3, materials.raw);
         set.write_buffer(ctx, 4, instances.raw);
         set.write_buffer(ctx, 5, lights.raw);
+        set.write_buffer(ctx, 7, ray_counters.raw);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         set.write_image(ctx, 6, 0, env_map.view, env_sampler, read);
         for (i, (img, tex)) in textures.iter().zip(&scene.textures).enumerate() {
             let s = samplers.iter().find(|(d, _)| *d == tex.sampler).map(|(_, s)| *s).unwrap();
-            set.write_image(ctx, 7, i as u32, img.view, s, read);
+            set.write_image(ctx, 8, i as u32, img.view, s, read);
         }
 
         let draws = build_draws(scene, &ranges);
@@ -160,6 +170,7 @@ impl GpuScene {
             instances,
             lights,
             frame,
+            ray_counters,
             textures,
             samplers,
             env_map,
@@ -200,6 +211,7 @@ impl GpuScene {
             &mut self.instances,
             &mut self.lights,
             &mut self.frame,
+            &mut self.ray_counters,
         ] {
             b.destroy(ctx);
         }

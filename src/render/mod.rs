@@ -14,6 +14,7 @@ use ash::vk;
 use glam::Mat4;
 use gpu_allocator::MemoryLocation;
 
+use crate::accel::compute_bvh::ComputeBvh;
 use crate::accel::SceneAccel;
 use crate::scene::{Camera, Scene};
 use crate::vk::pipeline::{Binding, DescriptorSet, Specialization};
@@ -75,6 +76,9 @@ pub struct FrameOutput {
     pub hdr: Vec<f32>,
     /// GPU milliseconds per pass.
     pub timings: Vec<(&'static str, f64)>,
+    /// Rays traced by kind (camera, shadow, secondary) when
+    /// `Effects::count_rays` is on, else zeros.
+    pub ray_counts: [u32; 3],
 }
 
 pub struct Renderer {
@@ -87,6 +91,8 @@ pub struct Renderer {
     needs: SceneNeeds,
     /// Built on first use by a tracing variant.
     accel: Option<(SceneAccel, DescriptorSet)>,
+    /// The compute backend's BVH, built on first use.
+    bvh: Option<ComputeBvh>,
     pub timer: GpuTimer,
     cmd: vk::CommandBuffer,
     readback_ldr: Buffer,
@@ -150,6 +156,7 @@ impl Renderer {
             tonemap,
             needs: SceneNeeds::of(scene),
             accel: None,
+            bvh: None,
             timer,
             cmd,
             readback_ldr,
@@ -181,6 +188,15 @@ impl Renderer {
         self.shading.as_ref().map(|(c, _)| *c)
     }
 
+    /// The descriptor set (set 2) of the traversal `config` uses, if any.
+    fn trace_set(&self, config: &ShadingConfig) -> Option<&DescriptorSet> {
+        match config.backend {
+            Some(Backend::Compute) => self.bvh.as_ref().map(|b| &b.set),
+            Some(_) => self.accel.as_ref().map(|(_, s)| s),
+            None => None,
+        }
+    }
+
     /// Makes the shading pass match `settings` (rebuilding it, and building
     /// the acceleration structures on first need). Waits for the GPU when it
     /// has to rebuild.
@@ -194,26 +210,27 @@ impl Renderer {
         if let Some((_, mut old)) = self.shading.take() {
             old.destroy(ctx);
         }
-        if config.backend.is_some() && self.accel.is_none() {
-            let accel = SceneAccel::build(ctx, scene, &self.gpu)?;
-            let set = DescriptorSet::new(
-                ctx,
-                "trace set (TLAS)",
-                &[Binding::one(ash::vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)],
-            )?;
-            set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
-            self.accel = Some((accel, set));
+        match config.backend {
+            Some(Backend::Compute) if self.bvh.is_none() => {
+                self.bvh = Some(ComputeBvh::build(ctx, scene, &self.gpu)?);
+            }
+            Some(Backend::Query | Backend::Pipeline) if self.accel.is_none() => {
+                let accel = SceneAccel::build(ctx, scene, &self.gpu)?;
+                let set = DescriptorSet::new(
+                    ctx,
+                    "trace set (TLAS)",
+                    &[Binding::one(ash::vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)],
+                )?;
+                set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
+                self.accel = Some((accel, set));
+            }
+            _ => {}
         }
-        let extra: Vec<_> = match (&config.backend, &self.accel) {
-            (Some(_), Some((_, set))) => vec![set.layout],
-            _ => Vec::new(),
-        };
-        let name = if config.backend.is_none() {
-            "lighting"
-        } else if config.mode == Mode::Rt {
-            "rt"
-        } else {
-            "shade+trace"
+        let extra: Vec<_> = self.trace_set(&config).map(|s| s.layout).into_iter().collect();
+        let name = match (config.backend, config.mode) {
+            (None, _) => "lighting",
+            (Some(_), Mode::Rt) => "rt",
+            (Some(_), Mode::Hybrid) => "shade+trace",
         };
         let spec = Specialization::new(&config.specialization());
         let pass = ComputePass::new(
@@ -225,7 +242,7 @@ impl Renderer {
             &extra,
             &spec,
         )?;
-        log::info!("shading: {}", config.describe());
+        log::info!("shading: {} ({})", config.describe(), config.backend_reason(ctx, settings.backend));
         self.shading = Some((config, pass));
         Ok(())
     }
@@ -280,10 +297,7 @@ impl Renderer {
                 Ok(())
             })?;
         }
-        let trace_sets: Vec<_> = match (&config.backend, &self.accel) {
-            (Some(_), Some((_, set))) => vec![set.set],
-            _ => Vec::new(),
-        };
+        let trace_sets: Vec<_> = self.trace_set(config).map(|s| s.set).into_iter().collect();
         pass(ctx, &mut self.timer, cmd, shading.name, |cmd| {
             image_barrier(
                 ctx,
@@ -339,6 +353,7 @@ impl Renderer {
         settings: &RenderSettings,
     ) -> Result<FrameOutput> {
         self.prepare(ctx, scene, camera, settings)?;
+        self.gpu.ray_counters.write(0, &[0u8; 16])?;
         let cmd = self.cmd;
         unsafe {
             ctx.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
@@ -391,7 +406,9 @@ impl Renderer {
         let timings = self.timer.results(ctx)?;
         let ldr = self.readback_ldr.read()?.to_vec();
         let hdr = bytemuck::pod_collect_to_vec::<u8, f32>(self.readback_hdr.read()?);
-        Ok(FrameOutput { width: t.extent.width, height: t.extent.height, ldr, hdr, timings })
+        let counts: Vec<u32> = bytemuck::pod_collect_to_vec(self.gpu.ray_counters.read()?);
+        let ray_counts = [counts[0], counts[1], counts[2]];
+        Ok(FrameOutput { width: t.extent.width, height: t.extent.height, ldr, hdr, timings, ray_counts })
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
@@ -405,6 +422,9 @@ impl Renderer {
         self.tonemap.destroy(ctx);
         if let Some((_, mut p)) = self.shading.take() {
             p.destroy(ctx);
+        }
+        if let Some(mut b) = self.bvh.take() {
+            b.destroy(ctx);
         }
         if let Some((mut a, mut set)) = self.accel.take() {
             set.destroy(ctx);

@@ -23,11 +23,15 @@ pub enum Mode {
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Backend {
-    /// Ray query where supported.
+    /// Ray query where supported, else the compute BVH tracer.
     #[default]
     Auto,
     /// VK_KHR_ray_query.
     Query,
+    /// VK_KHR_ray_tracing_pipeline (ray generation + hit shaders).
+    Pipeline,
+    /// Our own BVH traversed in a compute shader (no ray-tracing extension).
+    Compute,
 }
 
 /// User-facing switches (all on by default; the scene may still not need them).
@@ -40,17 +44,32 @@ pub struct Effects {
     pub max_depth: u32,
     /// Branches whose weight falls below this are not traced.
     pub min_weight: f32,
+    /// Count rays by kind (benchmarks; costs atomics).
+    pub count_rays: bool,
 }
 
 impl Default for Effects {
     fn default() -> Self {
-        Self { shadows: true, reflections: true, refractions: true, max_depth: 8, min_weight: 0.01 }
+        Self {
+            shadows: true,
+            reflections: true,
+            refractions: true,
+            max_depth: 8,
+            min_weight: 0.01,
+            count_rays: false,
+        }
     }
 }
 
 impl Effects {
-    pub const NONE: Effects =
-        Effects { shadows: false, reflections: false, refractions: false, max_depth: 8, min_weight: 0.01 };
+    pub const NONE: Effects = Effects {
+        shadows: false,
+        reflections: false,
+        refractions: false,
+        max_depth: 8,
+        min_weight: 0.01,
+        count_rays: false,
+    };
 }
 
 /// What the scene contains that each effect needs.
@@ -113,21 +132,19 @@ impl ShadingConfig {
         let traces = mode == Mode::Rt || effects.shadows || effects.reflections || effects.refractions;
         let backend = if !traces {
             None
-        } else if ctx.rt.ray_query {
-            Some(Backend::Query)
         } else {
-            match (backend, mode) {
-                (Backend::Query, _) => bail!("--backend query: the device has no usable VK_KHR_ray_query"),
-                (Backend::Auto, Mode::Rt) => {
-                    bail!("--mode rt needs a ray backend; this device has no ray query")
+            Some(match backend {
+                Backend::Query if !ctx.rt.ray_query => {
+                    bail!("--backend query: the device has no usable VK_KHR_ray_query (see `info`)")
                 }
-                (Backend::Auto, Mode::Hybrid) => {
-                    log::warn!(
-                        "no ray backend on this device: secondary effects off (raster + deferred only)"
-                    );
-                    return Ok(ShadingConfig { mode, effects: Effects { ..Effects::NONE }, backend: None });
+                Backend::Pipeline if !ctx.rt.ray_tracing_pipeline => {
+                    bail!("--backend pipeline: the device has no usable VK_KHR_ray_tracing_pipeline (see `info`)")
                 }
-            }
+                Backend::Auto if ctx.rt.ray_query => Backend::Query,
+                Backend::Auto if ctx.rt.ray_tracing_pipeline => Backend::Pipeline,
+                Backend::Auto => Backend::Compute,
+                b => b,
+            })
         };
         Ok(ShadingConfig { mode, effects, backend })
     }
@@ -135,8 +152,25 @@ impl ShadingConfig {
     pub fn shader(&self) -> &'static str {
         match (self.backend, self.mode) {
             (None, _) => "lighting.comp",
+            (Some(Backend::Compute), Mode::Hybrid) => "lighting_compute",
+            (Some(Backend::Compute), Mode::Rt) => "rt_compute",
+            (Some(Backend::Pipeline), Mode::Hybrid) => "lighting.rgen",
+            (Some(Backend::Pipeline), Mode::Rt) => "rt_pipeline",
             (Some(_), Mode::Hybrid) => "lighting_query",
             (Some(_), Mode::Rt) => "rt_query",
+        }
+    }
+
+    /// Why this backend (for the log).
+    pub fn backend_reason(&self, ctx: &Context, requested: Backend) -> &'static str {
+        match (self.backend, requested) {
+            (None, _) => "no secondary effect needs rays",
+            (Some(_), Backend::Auto) if ctx.rt.ray_query => "auto: the device supports ray queries",
+            (Some(_), Backend::Auto) if ctx.rt.ray_tracing_pipeline => {
+                "auto: no ray queries, the device offers ray-tracing pipelines"
+            }
+            (Some(_), Backend::Auto) => "auto: no ray-tracing extension, using the compute BVH fallback",
+            (Some(_), _) => "requested with --backend",
         }
     }
 
@@ -150,6 +184,7 @@ impl ShadingConfig {
             (3, (on && e.refractions) as u32),
             (4, e.max_depth),
             (5, e.min_weight.to_bits()),
+            (6, (on && e.count_rays) as u32),
         ]
     }
 

@@ -5,6 +5,7 @@ pub mod device;
 pub mod instance;
 pub mod memory;
 pub mod pipeline;
+pub mod rt_pipeline;
 pub mod timer;
 
 use std::ffi::CString;
@@ -45,6 +46,7 @@ pub struct Context {
     pub debug_utils: Option<ext::debug_utils::Device>,
     pub rt: RtEnables,
     pub accel: Option<khr::acceleration_structure::Device>,
+    pub rt_pipeline: Option<khr::ray_tracing_pipeline::Device>,
 }
 
 impl Context {
@@ -108,6 +110,7 @@ impl Context {
         let accel = rt
             .acceleration_structure
             .then(|| khr::acceleration_structure::Device::new(&instance.raw, &device));
+        let rt_pipeline = rt.ray_tracing_pipeline.then(|| rt_pipeline::loader(&instance.raw, &device));
         let ctx = Context {
             queue_family: caps.graphics_queue_family,
             instance,
@@ -120,6 +123,7 @@ impl Context {
             debug_utils,
             rt,
             accel,
+            rt_pipeline,
         };
         ctx.name(ctx.queue, "main queue");
         ctx.name(ctx.command_pool, "main command pool");

@@ -2,6 +2,8 @@
 //! golden-image comparison.
 #![allow(dead_code)]
 
+pub mod scenes;
+
 use std::path::PathBuf;
 
 use hybrid_rt::app::GpuOptions;

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Runs the standard benchmarks and writes their tables to bench/results/.
+# Usage: bash bench/run.sh [label]    (label defaults to the host name)
+# Everything is measured side by side within one process per table: same
+# device, scene, resolution and camera path.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+label=${1:-$(hostname)}
+out=bench/results
+mkdir -p "$out"
+cargo build --locked
+bin=./target/debug/hybrid-rt
+{
+  echo "# $label, $(date -u +%Y-%m-%d), $($bin info | head -3 | tr '\n' ' ')"
+  echo
+  echo "## Hybrid vs pure ray tracing, Sponza with spheres, 320x180"
+  $bin --log warn bench --scene assets/sponza_spheres.toml --width 320 --height 180 \
+    --frames 10 --warmup 2 --compare-modes
+  echo "## Ray backends side by side, Sponza with spheres, 320x180 (hybrid)"
+  $bin --log warn bench --scene assets/sponza_spheres.toml --width 320 --height 180 \
+    --frames 5 --warmup 1 --compare-backends
+  echo "## Ray backends side by side, default scene, 320x180 (hybrid)"
+  $bin --log warn bench --width 320 --height 180 --frames 10 --warmup 2 --compare-backends
+} | tee "$out/$label.md"

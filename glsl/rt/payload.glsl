@@ -1,0 +1,17 @@
+// Payload shared by the ray-generation shader and the hit/miss shaders of
+// the RT-pipeline backend. Hit shaders only report; shading stays in the
+// shared integrator.
+#ifndef PAYLOAD_GLSL
+#define PAYLOAD_GLSL
+struct TracePayload {
+    uint instance;
+    uint primitive;
+    vec2 bary;
+    float t;
+    uint hit;            // 1 = something was hit (for shadow rays: blocked)
+    vec3 transmittance;  // shadow rays: product over transmissive crossings
+};
+// Hit groups in the shader binding table (stride 2 per geometry).
+#define HIT_GROUP_VISIBLE 0u
+#define HIT_GROUP_SHADOW 1u
+#endif

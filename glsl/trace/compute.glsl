@@ -1,0 +1,224 @@
+// Traversal with our own two-level BVH in a compute shader: no ray-tracing
+// extension needed. Same interface as trace/query.glsl:
+//   bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit)
+//   vec3 trace_shadow(vec3 o, vec3 d, float tmax)   -> transmittance
+// Layout (src/accel/bvh.rs, src/accel/compute_bvh.rs): nodes are 32 bytes;
+// count == 0 marks an interior node whose children are left and left + 1;
+// count > 0 a leaf over prims[first .. first + count]. Triangles are read
+// from the one shared vertex/index copy.
+#ifndef TRACE_COMPUTE_GLSL
+#define TRACE_COMPUTE_GLSL
+#include "../common/hit.glsl"
+
+struct BvhNode {
+    vec3 bmin;
+    uint left_or_first;
+    vec3 bmax;
+    uint count;
+};
+
+struct BvhInstance {
+    mat4 world_to_object;
+    uint node_offset;  // root of this instance's BLAS in blas_nodes
+    uint prim_offset;  // base of its triangle list in blas_prims
+    uint mask;
+    uint opaque;
+};
+
+layout(set = 2, binding = 0, scalar) readonly buffer BlasNodes { BvhNode blas_nodes[]; };
+layout(set = 2, binding = 1, scalar) readonly buffer BlasPrims { uint blas_prims[]; };
+layout(set = 2, binding = 2, scalar) readonly buffer TlasNodes { BvhNode tlas_nodes[]; };
+layout(set = 2, binding = 3, scalar) readonly buffer TlasPrims { uint tlas_prims[]; };
+layout(set = 2, binding = 4, scalar) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
+
+const uint MASK_VISIBLE = 0x01u;
+const uint MASK_SHADOW = 0x02u;
+#define BVH_STACK 32
+
+// Slab test; inv_d may hold +-inf for zero direction components. The
+// min/max formulation keeps 0 * inf (a NaN) from deciding the result:
+// GLSL min/max return the non-NaN operand on the hardware we target, and
+// a ray parallel to a slab it starts outside of yields +-inf on both sides.
+float ray_box(vec3 o, vec3 inv_d, float tmax, vec3 bmin, vec3 bmax) {
+    vec3 t0 = (bmin - o) * inv_d;
+    vec3 t1 = (bmax - o) * inv_d;
+    vec3 tn = min(t0, t1);
+    vec3 tf = max(t0, t1);
+    float enter = max(max(tn.x, tn.y), max(tn.z, 0.0));
+    float exit = min(min(tf.x, tf.y), min(tf.z, tmax));
+    return enter <= exit ? enter : 1e38;
+}
+
+// Per-ray constants of the watertight test (Woop, Benthin, Wald 2013).
+struct WatertightRay {
+    vec3 o;
+    ivec3 k;  // kx, ky, kz
+    vec3 s;   // Sx, Sy, Sz
+};
+
+WatertightRay watertight_setup(vec3 o, vec3 d) {
+    vec3 ad = abs(d);
+    int kz = ad.x > ad.y ? (ad.x > ad.z ? 0 : 2) : (ad.y > ad.z ? 1 : 2);
+    int kx = (kz + 1) % 3;
+    int ky = (kx + 1) % 3;
+    if (d[kz] < 0.0) { int t = kx; kx = ky; ky = t; }  // keep the winding
+    WatertightRay r;
+    r.o = o;
+    r.k = ivec3(kx, ky, kz);
+    r.s = vec3(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    return r;
+}
+
+// Returns t (or -1) and the barycentrics of vertices 1 and 2. Both windings hit.
+float watertight_hit(WatertightRay r, vec3 p0, vec3 p1, vec3 p2, float tmax, out vec2 bary) {
+    vec3 a = p0 - r.o, b = p1 - r.o, c = p2 - r.o;
+    float ax = a[r.k.x] - r.s.x * a[r.k.z], ay = a[r.k.y] - r.s.y * a[r.k.z];
+    float bx = b[r.k.x] - r.s.x * b[r.k.z], by = b[r.k.y] - r.s.y * b[r.k.z];
+    float cx = c[r.k.x] - r.s.x * c[r.k.z], cy = c[r.k.y] - r.s.y * c[r.k.z];
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    // Edge functions of mixed sign: outside. Exactly zero counts as on the
+    // edge for both neighbours, so a ray through a shared edge is never lost.
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return -1.0;
+    float det = u + v + w;
+    if (det == 0.0) return -1.0;  // degenerate or edge-on
+    float t = (u * r.s.z * a[r.k.z] + v * r.s.z * b[r.k.z] + w * r.s.z * c[r.k.z]) / det;
+    if (!(t > 0.0 && t < tmax)) return -1.0;
+    bary = vec2(v, w) / det;
+    return t;
+}
+
+// Triangle `prim` of instance `inst` in object space.
+void object_triangle(Instance inst, uint prim, out vec3 p0, out vec3 p1, out vec3 p2) {
+    uint base = inst.first_index + 3u * prim;
+    p0 = vertices[inst.vertex_offset + indices[base]].position;
+    p1 = vertices[inst.vertex_offset + indices[base + 1u]].position;
+    p2 = vertices[inst.vertex_offset + indices[base + 2u]].position;
+}
+
+// Any-hit decision shared by both queries: 0 = ignore this candidate,
+// 1 = accept it as a hit. Shadow rays also fold transmittance into `tr`.
+uint candidate(bool shadow, uint inst, uint prim, vec2 b, inout vec3 tr) {
+    if (bvh_instances[inst].opaque != 0u) return 1u;
+    if (!shadow) return hit_alpha_passes(inst, prim, b) ? 1u : 0u;
+    vec3 t = occluder_transmittance(inst, prim, b);
+    if (all(equal(t, vec3(0.0)))) return 1u;
+    tr *= t;
+    return 0u;
+}
+
+// Closest hit within one instance's BLAS (ray in object space). For shadow
+// rays it returns at the first blocking hit.
+bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
+    BvhInstance bi = bvh_instances[inst_index];
+    Instance inst = instances[inst_index];
+    vec3 inv_d = 1.0 / d;
+    WatertightRay wr = watertight_setup(o, d);
+    uint stack[BVH_STACK];
+    int sp = 0;
+    uint node = 0u;
+    bool found = false;
+    if (ray_box(o, inv_d, tmax, blas_nodes[bi.node_offset].bmin, blas_nodes[bi.node_offset].bmax) > 1e37) return false;
+    while (true) {
+        BvhNode n = blas_nodes[bi.node_offset + node];
+        if (n.count > 0u) {
+            for (uint i = 0u; i < n.count; ++i) {
+                uint prim = blas_prims[bi.prim_offset + n.left_or_first + i];
+                vec3 p0, p1, p2;
+                object_triangle(inst, prim, p0, p1, p2);
+                vec2 b;
+                float t = watertight_hit(wr, p0, p1, p2, tmax, b);
+                if (t > 0.0 && candidate(shadow, inst_index, prim, b, tr) == 1u) {
+                    tmax = t;
+                    hit = RayHit(inst_index, prim, b, t);
+                    found = true;
+                    if (shadow) return true;
+                }
+            }
+        } else {
+            // Ordered traversal: visit the nearer child first.
+            uint l = n.left_or_first, r = l + 1u;
+            BvhNode cl = blas_nodes[bi.node_offset + l];
+            BvhNode cr = blas_nodes[bi.node_offset + r];
+            float tl = ray_box(o, inv_d, tmax, cl.bmin, cl.bmax);
+            float tr2 = ray_box(o, inv_d, tmax, cr.bmin, cr.bmax);
+            bool hl = tl < 1e37, hr = tr2 < 1e37;
+            if (hl && hr) {
+                uint near = tl <= tr2 ? l : r;
+                uint far = tl <= tr2 ? r : l;
+                if (sp < BVH_STACK) stack[sp++] = far;
+                node = near;
+                continue;
+            } else if (hl || hr) {
+                node = hl ? l : r;
+                continue;
+            }
+        }
+        if (sp == 0) break;
+        node = stack[--sp];
+    }
+    return found;
+}
+
+bool trace_bvh(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit hit, inout vec3 tr) {
+    vec3 inv_d = 1.0 / d;
+    uint stack[BVH_STACK];
+    int sp = 0;
+    uint node = 0u;
+    bool found = false;
+    hit = RayHit(0u, 0u, vec2(0.0), tmax);
+    if (tlas_nodes.length() == 0 || ray_box(o, inv_d, tmax, tlas_nodes[0].bmin, tlas_nodes[0].bmax) > 1e37) {
+        return false;
+    }
+    while (true) {
+        BvhNode n = tlas_nodes[node];
+        if (n.count > 0u) {
+            for (uint i = 0u; i < n.count; ++i) {
+                uint inst = tlas_prims[n.left_or_first + i];
+                BvhInstance bi = bvh_instances[inst];
+                if ((bi.mask & mask) == 0u) continue;
+                // Object-space ray; the direction is not renormalized, so t
+                // is the same in both spaces.
+                vec3 oo = (bi.world_to_object * vec4(o, 1.0)).xyz;
+                vec3 od = mat3(bi.world_to_object) * d;
+                if (trace_blas(inst, oo, od, shadow, tmax, hit, tr)) {
+                    found = true;
+                    if (shadow) return true;
+                }
+            }
+        } else {
+            uint l = n.left_or_first, r = l + 1u;
+            float tl = ray_box(o, inv_d, tmax, tlas_nodes[l].bmin, tlas_nodes[l].bmax);
+            float tr2 = ray_box(o, inv_d, tmax, tlas_nodes[r].bmin, tlas_nodes[r].bmax);
+            bool hl = tl < 1e37, hr = tr2 < 1e37;
+            if (hl && hr) {
+                uint near = tl <= tr2 ? l : r;
+                uint far = tl <= tr2 ? r : l;
+                if (sp < BVH_STACK) stack[sp++] = far;
+                node = near;
+                continue;
+            } else if (hl || hr) {
+                node = hl ? l : r;
+                continue;
+            }
+        }
+        if (sp == 0) break;
+        node = stack[--sp];
+    }
+    return found;
+}
+
+bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
+    vec3 unused = vec3(1.0);
+    return trace_bvh(o, d, tmax, MASK_VISIBLE, false, hit, unused);
+}
+
+vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
+    vec3 tr = vec3(1.0);
+    RayHit hit;
+    if (trace_bvh(o, d, tmax, MASK_SHADOW, true, hit, tr)) return vec3(0.0);
+    return tr;
+}
+
+#endif

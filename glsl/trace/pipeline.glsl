@@ -1,0 +1,32 @@
+// Traversal with VK_KHR_ray_tracing_pipeline (traceRayEXT from the
+// ray-generation shader). Same interface as trace/query.glsl.
+#ifndef TRACE_PIPELINE_GLSL
+#define TRACE_PIPELINE_GLSL
+#extension GL_EXT_ray_tracing : require
+#include "../common/hit.glsl"
+#include "../rt/payload.glsl"
+
+layout(set = 2, binding = 0) uniform accelerationStructureEXT tlas;
+layout(location = 0) rayPayloadEXT TracePayload payload;
+
+const uint MASK_VISIBLE = 0x01u;
+const uint MASK_SHADOW = 0x02u;
+
+bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
+    payload.hit = 0u;
+    traceRayEXT(tlas, gl_RayFlagsNoneEXT, MASK_VISIBLE, HIT_GROUP_VISIBLE, 2u, 0u, o, 0.0, d, tmax, 0);
+    hit = RayHit(payload.instance, payload.primitive, payload.bary, payload.t);
+    return payload.hit != 0u;
+}
+
+vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
+    // Assume blocked; the miss shader clears it. Opaque hits (and accepted
+    // any-hits) end the ray without a miss.
+    payload.hit = 1u;
+    payload.transmittance = vec3(1.0);
+    uint flags = gl_RayFlagsTerminateOnFirstHitEXT | gl_RayFlagsSkipClosestHitShaderEXT;
+    traceRayEXT(tlas, flags, MASK_SHADOW, HIT_GROUP_SHADOW, 2u, 0u, o, 0.0, d, tmax, 0);
+    return payload.hit != 0u ? vec3(0.0) : payload.transmittance;
+}
+
+#endif

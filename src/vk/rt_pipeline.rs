@@ -1,0 +1,171 @@
+//! Ray-tracing pipeline (VK_KHR_ray_tracing_pipeline) for the full-screen
+//! integrator: one ray-generation shader, one miss shader and two triangle
+//! hit groups (visibility: closest + any hit; shadow: any hit only), with a
+//! shader binding table laid out from the driver's handle size and
+//! alignments.
+
+use anyhow::{Context as _, Result};
+use ash::{khr, vk};
+use gpu_allocator::MemoryLocation;
+
+use super::pipeline::{shader_module, Specialization};
+use super::{Buffer, Context};
+
+pub const CLOSEST_HIT: &str = "rt/closest.rchit";
+pub const VISIBLE_ANY_HIT: &str = "rt/visible.rahit";
+pub const SHADOW_ANY_HIT: &str = "rt/shadow.rahit";
+pub const MISS: &str = "rt/miss.rmiss";
+
+pub struct RtPipeline {
+    pub pipeline: vk::Pipeline,
+    sbt: Buffer,
+    /// raygen, miss, hit, callable.
+    regions: [vk::StridedDeviceAddressRegionKHR; 4],
+}
+
+fn align_up(x: u64, a: u64) -> u64 {
+    x.div_ceil(a.max(1)) * a.max(1)
+}
+
+impl RtPipeline {
+    pub fn new(
+        ctx: &Context,
+        raygen: &str,
+        layout: vk::PipelineLayout,
+        spec: &Specialization,
+    ) -> Result<RtPipeline> {
+        let loader = ctx.rt_pipeline.as_ref().context("ray-tracing pipelines are not enabled")?;
+        let mut props = vk::PhysicalDeviceRayTracingPipelinePropertiesKHR::default();
+        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut props);
+        unsafe { ctx.instance.raw.get_physical_device_properties2(ctx.physical_device, &mut p2) };
+
+        let names = [raygen, MISS, CLOSEST_HIT, VISIBLE_ANY_HIT, SHADOW_ANY_HIT];
+        let modules = names.iter().map(|n| shader_module(ctx, n)).collect::<Result<Vec<_>>>()?;
+        let spec_info = spec.info();
+        let stage_flags = [
+            vk::ShaderStageFlags::RAYGEN_KHR,
+            vk::ShaderStageFlags::MISS_KHR,
+            vk::ShaderStageFlags::CLOSEST_HIT_KHR,
+            vk::ShaderStageFlags::ANY_HIT_KHR,
+            vk::ShaderStageFlags::ANY_HIT_KHR,
+        ];
+        let stages: Vec<_> = modules
+            .iter()
+            .zip(stage_flags)
+            .enumerate()
+            .map(|(i, (m, f))| {
+                let s = vk::PipelineShaderStageCreateInfo::default().stage(f).module(*m).name(c"main");
+                if i == 0 {
+                    s.specialization_info(&spec_info)
+                } else {
+                    s
+                }
+            })
+            .collect();
+        let unused = vk::SHADER_UNUSED_KHR;
+        let general = |i: u32| {
+            vk::RayTracingShaderGroupCreateInfoKHR::default()
+                .ty(vk::RayTracingShaderGroupTypeKHR::GENERAL)
+                .general_shader(i)
+                .closest_hit_shader(unused)
+                .any_hit_shader(unused)
+                .intersection_shader(unused)
+        };
+        let hit = |closest: u32, any: u32| {
+            vk::RayTracingShaderGroupCreateInfoKHR::default()
+                .ty(vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP)
+                .general_shader(unused)
+                .closest_hit_shader(closest)
+                .any_hit_shader(any)
+                .intersection_shader(unused)
+        };
+        // Group order = SBT order: raygen, miss, hit (visible), hit (shadow).
+        let groups = [general(0), general(1), hit(2, 3), hit(unused, 4)];
+        let info = [vk::RayTracingPipelineCreateInfoKHR::default()
+            .stages(&stages)
+            .groups(&groups)
+            .max_pipeline_ray_recursion_depth(1)
+            .layout(layout)];
+        let r = unsafe {
+            loader.create_ray_tracing_pipelines(
+                vk::DeferredOperationKHR::null(),
+                vk::PipelineCache::null(),
+                &info,
+                None,
+            )
+        };
+        for m in modules {
+            unsafe { ctx.device.destroy_shader_module(m, None) };
+        }
+        let pipeline = r.map_err(|(_, e)| e).context("create ray-tracing pipeline")?[0];
+        ctx.name(pipeline, raygen);
+
+        // Shader binding table: each region starts at the base alignment,
+        // records are the handle size rounded up to the handle alignment.
+        let handle = props.shader_group_handle_size as u64;
+        let stride = align_up(handle, props.shader_group_handle_alignment as u64);
+        let base = props.shader_group_base_alignment as u64;
+        let handles = unsafe {
+            loader.get_ray_tracing_shader_group_handles(
+                pipeline,
+                0,
+                groups.len() as u32,
+                groups.len() * handle as usize,
+            )?
+        };
+        let raygen_size = align_up(stride, base);
+        let miss_off = raygen_size;
+        let miss_size = align_up(stride, base);
+        let hit_off = miss_off + miss_size;
+        let hit_size = align_up(2 * stride, base);
+        let total = hit_off + hit_size;
+        let mut data = vec![0u8; total as usize];
+        let copy = |data: &mut Vec<u8>, group: usize, at: u64| {
+            let h = &handles[group * handle as usize..(group + 1) * handle as usize];
+            data[at as usize..(at + handle) as usize].copy_from_slice(h);
+        };
+        copy(&mut data, 0, 0);
+        copy(&mut data, 1, miss_off);
+        copy(&mut data, 2, hit_off);
+        copy(&mut data, 3, hit_off + stride);
+        // Extra room so the table's start can be moved to the base alignment.
+        let mut sbt = Buffer::new(
+            ctx,
+            "shader binding table",
+            total + base,
+            vk::BufferUsageFlags::SHADER_BINDING_TABLE_KHR | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let start = align_up(sbt.address, base);
+        sbt.write((start - sbt.address) as usize, &data)?;
+        let region = |off: u64, stride: u64, size: u64| vk::StridedDeviceAddressRegionKHR {
+            device_address: start + off,
+            stride,
+            size,
+        };
+        let regions = [
+            region(0, raygen_size, raygen_size), // raygen: stride must equal size
+            region(miss_off, stride, stride),
+            region(hit_off, stride, 2 * stride),
+            vk::StridedDeviceAddressRegionKHR::default(),
+        ];
+        Ok(RtPipeline { pipeline, sbt, regions })
+    }
+
+    pub fn trace(&self, ctx: &Context, cmd: vk::CommandBuffer, width: u32, height: u32) {
+        if let Some(loader) = ctx.rt_pipeline.as_ref() {
+            let [rg, miss, hit, call] = &self.regions;
+            unsafe { loader.cmd_trace_rays(cmd, rg, miss, hit, call, width, height, 1) };
+        }
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        unsafe { ctx.device.destroy_pipeline(self.pipeline, None) };
+        self.sbt.destroy(ctx);
+    }
+}
+
+/// Loader for the extension's device functions.
+pub fn loader(ctx_instance: &ash::Instance, device: &ash::Device) -> khr::ray_tracing_pipeline::Device {
+    khr::ray_tracing_pipeline::Device::new(ctx_instance, device)
+}

@@ -1,0 +1,280 @@
+//! Scene texts shared by the ray-tracing and backend tests: analytic
+//! set-ups whose correct image is known in closed form.
+#![allow(dead_code)]
+
+use glam::Vec3;
+
+/// A similarity transform applied to a whole scene: x -> x * scale + offset.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    pub scale: f32,
+    pub offset: Vec3,
+}
+
+impl Frame {
+    pub const IDENTITY: Frame = Frame { scale: 1.0, offset: Vec3::ZERO };
+    fn p(&self, v: [f32; 3]) -> String {
+        let v = Vec3::from(v) * self.scale + self.offset;
+        format!("[{:.9e}, {:.9e}, {:.9e}]", v.x, v.y, v.z)
+    }
+    fn s(&self, v: f32) -> String {
+        format!("{:.9e}", v * self.scale)
+    }
+}
+
+/// Ground plane, a point light at (0, 4, 0) and a 1 x 1 horizontal square
+/// at height 2 with material `occluder`: the shadow is the square
+/// [-1, 1] x [-1, 1] on the ground.
+pub fn shadow_scene(f: Frame, occluder: &str) -> String {
+    format!(
+        r#"
+[environment]
+color = [0.0, 0.0, 0.0]
+
+[[camera]]
+position = {cam}
+target = {target}
+yfov_deg = 60
+znear = {znear}
+
+[[light]]
+type = "point"
+position = {light}
+intensity = {intensity:.9e}
+
+[[material]]
+name = "ground"
+base_color = [0.8, 0.8, 0.8]
+metallic = 0.0
+roughness = 1.0
+ior = 1.0
+
+{occluder}
+
+[[object]]
+name = "ground"
+primitive = "plane"
+size = [{g}, {g}]
+translation = {origin}
+material = "ground"
+
+[[object]]
+name = "occluder"
+primitive = "plane"
+size = [{one}, {one}]
+translation = {occ}
+material = "occluder"
+"#,
+        cam = f.p([2.5, 7.0, 2.5]),
+        target = f.p([0.0, 0.0, 0.0]),
+        znear = f.s(0.05),
+        light = f.p([0.0, 4.0, 0.0]),
+        intensity = 50.0 * f.scale * f.scale,
+        g = f.s(40.0),
+        origin = f.p([0.0, 0.0, 0.0]),
+        one = f.s(1.0),
+        occ = f.p([0.0, 2.0, 0.0]),
+    )
+}
+
+pub const OPAQUE_OCCLUDER: &str = r#"
+[[material]]
+name = "occluder"
+base_color = [0.1, 0.1, 0.1]
+roughness = 1.0
+double_sided = true
+"#;
+
+/// A glass square (transmission 1) tinted `tint`, as the shadow scene's occluder.
+pub fn glass_occluder(tint: [f32; 3]) -> String {
+    format!(
+        r#"
+[[material]]
+name = "occluder"
+base_color = [{}, {}, {}]
+transmission = 1.0
+ior = 1.5
+roughness = 0.0
+double_sided = true
+"#,
+        tint[0], tint[1], tint[2]
+    )
+}
+
+/// A metal mirror at z = 0 facing +z, an emissive wall at z = 6 facing it,
+/// the camera in between looking at the mirror.
+pub fn mirror_scene(f0: [f32; 3], wall: [f32; 3]) -> String {
+    format!(
+        r#"
+[environment]
+color = [0.0, 0.0, 0.0]
+
+[[camera]]
+position = [0.0, 0.0, 3.0]
+target = [0.0, 0.0, 0.0]
+yfov_deg = 40
+
+[[light]]
+type = "directional"
+direction = [0.0, -1.0, 0.0]
+intensity = 0.0
+
+[[material]]
+name = "mirror"
+base_color = [{}, {}, {}]
+metallic = 1.0
+roughness = 0.0
+
+[[material]]
+name = "wall"
+base_color = [0.0, 0.0, 0.0]
+emissive = [{}, {}, {}]
+roughness = 1.0
+
+[[object]]
+name = "mirror"
+primitive = "plane"
+size = [4.0, 4.0]
+rotation_deg = [90.0, 0.0, 0.0]
+material = "mirror"
+
+[[object]]
+name = "wall"
+primitive = "plane"
+size = [40.0, 40.0]
+translation = [0.0, 0.0, 6.0]
+rotation_deg = [-90.0, 0.0, 0.0]
+material = "wall"
+"#,
+        f0[0], f0[1], f0[2], wall[0], wall[1], wall[2]
+    )
+}
+
+/// Two mirrors facing each other with a ball between them.
+pub const FACING_MIRRORS: &str = r#"
+[environment]
+color = [0.3, 0.3, 0.3]
+
+[[camera]]
+position = [0.3, 0.2, 1.5]
+target = [0.0, 0.0, -2.0]
+yfov_deg = 60
+
+[[light]]
+type = "point"
+position = [0.0, 1.5, 0.0]
+intensity = 10.0
+
+[[material]]
+name = "mirror"
+base_color = [0.98, 0.98, 0.98]
+metallic = 1.0
+roughness = 0.0
+
+[[material]]
+name = "orange"
+base_color = [1.0, 0.4, 0.0]
+
+[[object]]
+name = "front"
+primitive = "plane"
+size = [10.0, 10.0]
+translation = [0.0, 0.0, -2.0]
+rotation_deg = [90.0, 0.0, 0.0]
+material = "mirror"
+
+[[object]]
+name = "back"
+primitive = "plane"
+size = [10.0, 10.0]
+translation = [0.0, 0.0, 2.0]
+rotation_deg = [-90.0, 0.0, 0.0]
+material = "mirror"
+
+[[object]]
+name = "ball"
+primitive = "sphere"
+radius = 0.3
+translation = [0.0, -0.3, 0.0]
+material = "orange"
+"#;
+
+/// Mirror ball, glass ball, box, ground; point, spot and directional lights.
+pub const AGREEMENT: &str = r#"
+[environment]
+color = [0.3, 0.4, 0.6]
+
+[[camera]]
+position = [0.0, 2.5, 6.0]
+target = [0.0, 0.5, 0.0]
+yfov_deg = 50
+
+[[light]]
+type = "point"
+position = [2.0, 5.0, 2.0]
+intensity = 60.0
+
+[[light]]
+type = "spot"
+position = [-3.0, 4.0, 1.0]
+direction = [0.6, -0.8, -0.2]
+intensity = 80.0
+outer_cone_deg = 35
+inner_cone_deg = 20
+
+[[light]]
+type = "directional"
+direction = [-0.3, -1.0, -0.5]
+intensity = 2.0
+
+[[material]]
+name = "mirror"
+base_color = [0.9, 0.9, 0.9]
+metallic = 1.0
+roughness = 0.0
+
+[[material]]
+name = "glass"
+base_color = [1.0, 1.0, 1.0]
+transmission = 1.0
+ior = 1.5
+roughness = 0.0
+
+[[material]]
+name = "red"
+base_color = [0.8, 0.1, 0.1]
+roughness = 0.7
+
+[[material]]
+name = "ground"
+base_color = [0.7, 0.7, 0.7]
+roughness = 0.8
+
+[[object]]
+name = "ground"
+primitive = "plane"
+size = [20.0, 20.0]
+material = "ground"
+
+[[object]]
+name = "mirror ball"
+primitive = "sphere"
+radius = 0.8
+translation = [-1.2, 0.8, 0.0]
+material = "mirror"
+
+[[object]]
+name = "glass ball"
+primitive = "sphere"
+radius = 0.8
+translation = [1.2, 0.8, 0.5]
+material = "glass"
+
+[[object]]
+name = "box"
+primitive = "cube"
+size = 1.0
+translation = [0.3, 0.5, -2.0]
+rotation_deg = [0.0, 30.0, 0.0]
+material = "red"
+"#;
