@@ -184,7 +184,8 @@ fn bad_resolution_is_rejected() {
 #[test]
 fn no_arguments_renders_the_default_scene() {
     let d = tmp("noargs");
-    let out = bin().current_dir(&d).output().unwrap();
+    // Without a display the no-argument run is the headless render.
+    let out = bin().current_dir(&d).env_remove("DISPLAY").env_remove("WAYLAND_DISPLAY").output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("out/default.png"), "does not say where it wrote:\n{stderr}");

@@ -1,0 +1,179 @@
+//! The interactive viewer end to end on a private Xvfb server: the window
+//! opens, survives two resizes and a minimize/restore, presents frames with
+//! the validation layer on, exits cleanly, and its last frame matches a
+//! headless render of the same view. Xvfb missing is a failure, not a skip.
+
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+/// A running `Xvfb :N`, killed when dropped (also when the test panics).
+struct Xvfb {
+    child: Child,
+    display: u32,
+}
+
+impl Xvfb {
+    fn start() -> Xvfb {
+        let first = 100 + std::process::id() % 800;
+        for display in first..first + 50 {
+            let socket = PathBuf::from(format!("/tmp/.X11-unix/X{display}"));
+            let lock = PathBuf::from(format!("/tmp/.X{display}-lock"));
+            if socket.exists() || lock.exists() {
+                continue;
+            }
+            let child = match Command::new("Xvfb")
+                .arg(format!(":{display}"))
+                .args(["-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+            {
+                Ok(c) => c,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => panic!(
+                    "Xvfb not found on PATH: the viewer test needs it (Debian: apt-get install xvfb, \
+                     or run bash .ci/setup-debian.sh)"
+                ),
+                Err(e) => panic!("cannot start Xvfb: {e}"),
+            };
+            let mut x = Xvfb { child, display };
+            let deadline = Instant::now() + Duration::from_secs(15);
+            while Instant::now() < deadline {
+                if socket.exists() {
+                    return x;
+                }
+                if let Ok(Some(_)) = x.child.try_wait() {
+                    break; // lost a race for this display number: try the next
+                }
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            drop(x);
+        }
+        panic!("could not start Xvfb on any display :{first}..:{}", first + 50);
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        if let Ok(Some(_)) = self.child.try_wait() {
+            return; // already gone (and reaped: its pid must not be signalled)
+        }
+        // SIGTERM lets Xvfb remove its lock file and socket; SIGKILL if it hangs.
+        let _ = Command::new("kill").arg("-TERM").arg(self.child.id().to_string()).status();
+        let deadline = Instant::now() + Duration::from_secs(5);
+        while Instant::now() < deadline {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_file(format!("/tmp/.X11-unix/X{}", self.display));
+        let _ = std::fs::remove_file(format!("/tmp/.X{}-lock", self.display));
+    }
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs `cmd` with its stdout+stderr in `log`, killing it after `limit`.
+/// Returns the exit status and the log text.
+fn run_logged(mut cmd: Command, log: &Path, limit: Duration) -> (ExitStatus, String) {
+    let f = File::create(log).unwrap();
+    cmd.stdout(f.try_clone().unwrap()).stderr(f);
+    let mut child = cmd.spawn().expect("start hybrid-rt");
+    let deadline = Instant::now() + limit;
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            let _ = child.wait();
+            let text = std::fs::read_to_string(log).unwrap_or_default();
+            panic!("timed out after {limit:?}; log:\n{text}");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    (status, std::fs::read_to_string(log).unwrap_or_default())
+}
+
+fn bin() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_hybrid-rt"));
+    c.env("HYBRID_RT_VALIDATION", "1").env_remove("WAYLAND_DISPLAY");
+    c
+}
+
+fn default_scene() -> PathBuf {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets/default.toml");
+    assert!(p.exists(), "{} missing", p.display());
+    p
+}
+
+#[test]
+fn viewer_presents_resizes_and_matches_headless() {
+    let d = tmp("present");
+    let scene = default_scene();
+    let shot = d.join("shot.png");
+    let headless = d.join("headless.png");
+    let xvfb = Xvfb::start();
+
+    let mut view = bin();
+    view.env("DISPLAY", format!(":{}", xvfb.display))
+        .args(["view", "--width", "320", "--height", "180", "--frames", "40", "--test-resize", "--scene"])
+        .arg(&scene)
+        .arg("--screenshot")
+        .arg(&shot);
+    let (status, log) = run_logged(view, &d.join("view.log"), Duration::from_secs(600));
+    drop(xvfb);
+    assert!(status.success(), "view failed ({status}):\n{log}");
+    assert!(!log.contains("panicked"), "panicked:\n{log}");
+
+    let presented: u64 = log
+        .lines()
+        .find_map(|l| l.split("presented ").nth(1)?.strip_suffix(" frames")?.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no 'presented N frames' line:\n{log}"));
+    eprintln!("viewer presented {presented} frames");
+    assert!(presented >= 30, "only {presented} frames presented:\n{log}");
+    // The swapchain followed both resizes and came back to the requested size.
+    for size in ["480x270", "200x120", "320x180"] {
+        assert!(log.contains(&format!("swapchain {size}")), "no swapchain at {size}:\n{log}");
+    }
+
+    let mut render = bin();
+    render
+        .env_remove("DISPLAY")
+        .args(["render", "--width", "320", "--height", "180", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&headless);
+    let (status, rlog) = run_logged(render, &d.join("render.log"), Duration::from_secs(600));
+    assert!(status.success(), "headless render failed ({status}):\n{rlog}");
+
+    let a = image::open(&shot).unwrap_or_else(|e| panic!("{}: {e}\n{log}", shot.display())).into_rgb8();
+    let b = image::open(&headless).unwrap().into_rgb8();
+    assert_eq!(a.dimensions(), (320, 180), "screenshot size");
+    assert_eq!(b.dimensions(), (320, 180), "headless size");
+    let psnr = hybrid_rt::metrics::psnr_rgb8(a.as_raw(), b.as_raw(), 3, None);
+    eprintln!("viewer screenshot vs headless render: PSNR {psnr:.2} dB");
+    assert!(psnr >= 40.0, "screenshot differs from the headless render: PSNR {psnr:.2} dB");
+}
+
+#[test]
+fn view_without_a_display_fails_cleanly() {
+    let d = tmp("nodisplay");
+    let mut view = bin();
+    view.env_remove("DISPLAY").args(["view", "--frames", "1", "--scene"]).arg(default_scene());
+    let (status, log) = run_logged(view, &d.join("view.log"), Duration::from_secs(120));
+    assert!(!status.success(), "expected failure:\n{log}");
+    assert!(!log.contains("panicked"), "panicked:\n{log}");
+    let error =
+        log.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("no error line:\n{log}"));
+    assert!(error.contains("cannot open a window") && error.contains("DISPLAY"), "{error}");
+}
