@@ -35,15 +35,20 @@ const uint MASK_VISIBLE = 0x01u;
 const uint MASK_SHADOW = 0x02u;
 #define BVH_STACK 32
 
-// Slab test; inv_d may hold +-inf for zero direction components. The
-// min/max formulation keeps 0 * inf (a NaN) from deciding the result:
-// GLSL min/max return the non-NaN operand on the hardware we target, and
-// a ray parallel to a slab it starts outside of yields +-inf on both sides.
+// Slab test; inv_d may hold +-inf for zero direction components. A NaN
+// (0 * inf: origin on a slab plane, ray parallel to it) puts no constraint
+// on that axis; GLSL's min/max make no promise about NaN, so it is replaced
+// explicitly. The exit distance is widened by 2*gamma(3) (PBRT's bound) so a
+// ray entering exactly through a box corner or edge is not lost to
+// rounding. Inverted boxes (an empty level) are never entered.
 float ray_box(vec3 o, vec3 inv_d, float tmax, vec3 bmin, vec3 bmax) {
+    if (any(greaterThan(bmin, bmax))) return 1e38;
     vec3 t0 = (bmin - o) * inv_d;
     vec3 t1 = (bmax - o) * inv_d;
-    vec3 tn = min(t0, t1);
-    vec3 tf = max(t0, t1);
+    bvec3 n0 = isnan(t0), n1 = isnan(t1);
+    vec3 tn = min(mix(t0, vec3(-1e38), n0), mix(t1, vec3(-1e38), n1));
+    vec3 tf = max(mix(t0, vec3(1e38), n0), mix(t1, vec3(1e38), n1));
+    tf += abs(tf) * 3.6e-7;
     float enter = max(max(tn.x, tn.y), max(tn.z, 0.0));
     float exit = min(min(tf.x, tf.y), min(tf.z, tmax));
     return enter <= exit ? enter : 1e38;
@@ -85,6 +90,10 @@ float watertight_hit(WatertightRay r, vec3 p0, vec3 p1, vec3 p2, float tmax, out
     if (det == 0.0) return -1.0;  // degenerate or edge-on
     float t = (u * r.s.z * a[r.k.z] + v * r.s.z * b[r.k.z] + w * r.s.z * c[r.k.z]) / det;
     if (!(t > 0.0 && t < tmax)) return -1.0;
+    // A zero-area triangle can still pass the sign test through rounding;
+    // its normal would be zero, so it is never a hit.
+    vec3 cr = cross(p1 - p0, p2 - p0);
+    if (dot(cr, cr) == 0.0) return -1.0;
     bary = vec2(v, w) / det;
     return t;
 }

@@ -8,6 +8,7 @@ use gpu_allocator::MemoryLocation;
 
 pub mod bvh;
 pub mod compute_bvh;
+pub mod watertight;
 
 use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
 use crate::scene::{AlphaMode, Instance, Scene};
