@@ -845,7 +845,8 @@ mod tests {
 
     /// An empty scratch directory for one test.
     fn temp_dir(test: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("scene-gltf-{}-{test}", std::process::id()));
+        // One fixed folder per test, emptied first: reruns do not pile up temp dirs.
+        let dir = std::env::temp_dir().join("hybrid-rt-tests").join(format!("gltf-{test}"));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("cannot create a temp dir");
         dir

@@ -625,7 +625,8 @@ mod tests {
 
     /// Writes `text` as `name` in a scratch directory unique to one test.
     fn write(test: &str, name: &str, text: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("scene-file-{}-{test}", std::process::id()));
+        // One fixed folder per test, emptied first: reruns do not pile up temp dirs.
+        let dir = std::env::temp_dir().join("hybrid-rt-tests").join(format!("scene-file-{test}"));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("cannot create a temp dir");
         let path = dir.join(name);
