@@ -323,3 +323,80 @@ fn hybrid_matches_pure_ray_tracing() {
     assert!(psnr >= 40.0, "hybrid and pure RT disagree: PSNR {psnr:.1} dB");
     common::check_golden(&hybrid, "spheres_hybrid_160x90", 35.0);
 }
+
+/// Snell's window: from inside a block of glass (IOR 1.5) looking up at its
+/// top face, rays steeper than the critical angle (asin(1/1.5) = 41.8°)
+/// leave and see a glowing ceiling; rays just past it are totally internally
+/// reflected and stay trapped in the block until the depth limit: dark.
+#[test]
+fn total_internal_reflection_outside_the_critical_angle() {
+    let scene = common::scene_from_toml(
+        "snell_window",
+        r#"
+[environment]
+color = [0.0, 0.0, 0.0]
+
+[[camera]]
+position = [0.0, 0.0, 0.0]
+target = [0.0, 1.0, 0.0]
+yfov_deg = 120
+
+[[light]]
+type = "directional"
+direction = [0.0, -1.0, 0.0]
+intensity = 0.0
+
+[[material]]
+name = "glass"
+base_color = [1.0, 1.0, 1.0]
+transmission = 1.0
+roughness = 0.0
+ior = 1.5
+double_sided = true
+
+[[material]]
+name = "ceiling"
+base_color = [0.0, 0.0, 0.0]
+emissive = [1.0, 1.0, 1.0]
+
+[[object]]
+name = "block"
+primitive = "cube"
+size = 20.0
+material = "glass"
+
+[[object]]
+name = "ceiling"
+primitive = "plane"
+size = [400.0, 400.0]
+translation = [0.0, 11.0, 0.0]
+rotation_deg = [180.0, 0.0, 0.0]
+material = "ceiling"
+"#,
+    );
+    let frame = common::render_scene(&scene, W, H, &settings());
+    let critical = (1.0f32 / 1.5).asin().to_degrees();
+    let (mut inside, mut outside) = (0, 0);
+    for y in 0..H {
+        for x in 0..W {
+            let (_, d) = common::pixel_ray(&scene.cameras[0], W, H, x, y);
+            // Only rays that reach the top face (not a side face first).
+            if d.y <= 0.0 || d.x.abs() > d.y || d.z.abs() > d.y {
+                continue;
+            }
+            let angle = d.y.clamp(-1.0, 1.0).acos().to_degrees();
+            let l = frame.radiance(x, y)[0];
+            if angle < critical - 2.0 {
+                inside += 1;
+                assert!(l > 0.3, "pixel ({x},{y}) at {angle:.1}° inside the window is dark: {l}");
+            } else if angle > critical + 1.0 && angle < critical + 3.0 {
+                // Just past the critical angle the reflected ray is still
+                // trapped (it meets every face beyond the critical angle);
+                // without TIR it would refract out and see the ceiling.
+                outside += 1;
+                assert!(l < 0.05, "pixel ({x},{y}) at {angle:.1}° should be totally reflected: {l}");
+            }
+        }
+    }
+    assert!(inside > 200 && outside > 50, "window {inside} / TIR {outside} pixels");
+}
