@@ -88,6 +88,12 @@ pub struct RenderJob {
     pub height: u32,
     pub camera: CameraChoice,
     pub settings: RenderSettings,
+    /// glTF animation to play (name or index), if any.
+    pub animation: Option<String>,
+    /// Animation time in seconds for a single frame (`render`).
+    pub time: f32,
+    /// Fixed animation step for benchmarks: frame i is at time i / fps.
+    pub fps: f32,
 }
 
 impl RenderJob {
@@ -98,6 +104,9 @@ impl RenderJob {
             height,
             camera: CameraChoice::First,
             settings: RenderSettings::default(),
+            animation: None,
+            time: 0.0,
+            fps: 30.0,
         }
     }
 
@@ -111,9 +120,25 @@ impl RenderJob {
 
 /// Loads, uploads and renders one frame; returns it with the context's
 /// validation error count.
+/// Loads the job's scene; with an animation, also returns its index (the
+/// scene is posed at `job.time`).
+fn load_posed(job: &RenderJob) -> Result<(Scene, Option<usize>)> {
+    let mut scene = Scene::load(&job.scene)?;
+    let anim = match &job.animation {
+        Some(a) => {
+            let i = crate::scene::animation::find_animation(&scene, a)
+                .with_context(|| format!("--animation {a}"))?;
+            scene.animate(i, job.time);
+            Some(i)
+        }
+        None => None,
+    };
+    Ok((scene, anim))
+}
+
 pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
     let extent = job.extent()?;
-    let scene = Scene::load(&job.scene)?;
+    let (scene, _) = load_posed(job)?;
     let camera = job.camera.resolve(&scene)?;
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let out = renderer.render(ctx, &scene, &camera, &job.settings);
@@ -254,7 +279,7 @@ pub fn bench(
     variants: &[(Mode, Backend)],
 ) -> Result<Vec<BenchReport>> {
     let extent = job.extent()?;
-    let scene = Scene::load(&job.scene)?;
+    let (mut scene, anim) = load_posed(job)?;
     let base_camera = job.camera.resolve(&scene)?;
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let mut reports = Vec::new();
@@ -277,6 +302,11 @@ pub fn bench(
                 let t =
                     if frames > 1 { (i.saturating_sub(warmup)) as f32 / (frames - 1) as f32 } else { 0.0 };
                 let camera = crate::scene::camera::on_path(&scene.camera_path, t, &base_camera);
+                if let Some(a) = anim {
+                    // Fixed-step clock: deterministic frames.
+                    scene.animate(a, job.time + i as f32 / job.fps.max(1e-3));
+                    renderer.update_scene(ctx, &scene)?;
+                }
                 let out = renderer.render(ctx, &scene, &camera, &settings)?;
                 if i < warmup {
                     continue;

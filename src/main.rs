@@ -139,6 +139,15 @@ struct ViewArgs {
     /// Importance cutoff: branches with a smaller weight are not traced.
     #[arg(long, default_value_t = 0.01)]
     min_weight: f32,
+    /// glTF animation to play, by name or index.
+    #[arg(long)]
+    animation: Option<String>,
+    /// Animation time in seconds (render: the frame's time; bench: the start).
+    #[arg(long, default_value_t = 0.0)]
+    time: f32,
+    /// Fixed animation step of `bench`: frame i is at time + i / fps.
+    #[arg(long, default_value_t = 30.0)]
+    fps: f32,
 }
 
 impl ViewArgs {
@@ -167,6 +176,9 @@ impl ViewArgs {
                     count_rays: false,
                 },
             },
+            animation: self.animation.clone(),
+            time: self.time,
+            fps: self.fps,
         }
     }
 }

@@ -125,6 +125,30 @@ impl ComputeBvh {
         Ok(bvh)
     }
 
+    /// Rebuilds the small top level (and the per-instance records) after
+    /// instances moved; the per-primitive BVHs are untouched. The caller
+    /// ensures the GPU is not reading the old buffers.
+    pub fn update_instances(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        let (tlas, instances) = top_level(scene, &self.blas);
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        for b in [&mut self.tlas_nodes, &mut self.tlas_prims, &mut self.instances] {
+            b.destroy(ctx);
+        }
+        self.tlas_nodes =
+            Buffer::with_data(ctx, "BVH top-level nodes", bytemuck::cast_slice(&tlas.nodes), storage)?;
+        self.tlas_prims = Buffer::with_data(
+            ctx,
+            "BVH top-level instance order",
+            bytemuck::cast_slice(&tlas.prim_indices),
+            storage,
+        )?;
+        self.instances = Buffer::with_data(ctx, "BVH instances", bytemuck::cast_slice(&instances), storage)?;
+        self.set.write_buffer(ctx, 2, self.tlas_nodes.raw);
+        self.set.write_buffer(ctx, 3, self.tlas_prims.raw);
+        self.set.write_buffer(ctx, 4, self.instances.raw);
+        Ok(())
+    }
+
     /// SAH cost of the per-primitive BVHs, averaged with triangle counts as weights.
     pub fn mean_sah_cost(&self) -> f32 {
         let (mut sum, mut weight) = (0.0f64, 0.0f64);

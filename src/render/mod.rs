@@ -183,6 +183,25 @@ impl Renderer {
         Ok(())
     }
 
+    /// Brings the GPU copies of everything that can move (instance
+    /// transforms, lights) up to date with `scene` and rebuilds the top
+    /// level of whichever acceleration structure exists (TLAS, or the compute
+    /// BVH's top level); per-mesh structures are untouched. Call only when
+    /// something moved, with the GPU idle (headless frames wait; the viewer
+    /// waits for the previous frame).
+    pub fn update_scene(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        self.gpu.update_dynamic(scene)?;
+        if let Some((accel, set)) = &mut self.accel {
+            accel.build_tlas(ctx, scene)?;
+            // A TLAS that had to grow is a new object.
+            set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
+        }
+        if let Some(bvh) = &mut self.bvh {
+            bvh.update_instances(ctx, scene)?;
+        }
+        Ok(())
+    }
+
     /// The shading variant in use (after `prepare`).
     pub fn shading_config(&self) -> Option<ShadingConfig> {
         self.shading.as_ref().map(|(c, _)| *c)

@@ -14,6 +14,7 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 
+use super::animation::{Animation, AnimationChannel, Channel, Interpolation};
 use super::tangents::{
     bounds_of, fallback_tangent, fill_fallback_tangents, flatten_with_face_normals, generate_tangents,
     smooth_normals,
@@ -36,6 +37,7 @@ fn import(path: &Path) -> Result<Scene> {
         gltf::Gltf::from_slice_without_validation(&bytes).context("cannot parse glTF")?;
     let json = document.into_json();
     check_position_references(&json)?;
+    check_animation_targets(&json)?;
     let doc = gltf::Document::from_json(json).context("invalid glTF")?;
     warn_about_ignored_extensions(&doc, path);
     let base = path.parent().unwrap_or(Path::new("."));
@@ -55,6 +57,7 @@ fn import(path: &Path) -> Result<Scene> {
     }
     scene.textures = slots.decode(&doc, base, &buffers)?;
     build_nodes(&doc, &mut scene)?;
+    scene.animations = convert_animations(&doc, &buffers, path)?;
     Ok(scene)
 }
 
@@ -107,6 +110,29 @@ fn check_position_references(json: &gltf::json::Root) -> Result<()> {
                     json.accessors.len()
                 );
             }
+        }
+    }
+    Ok(())
+}
+
+/// The crate's validation skips animation channel targets, and its accessors
+/// unwrap them, so a dangling node or unknown path is rejected here.
+fn check_animation_targets(json: &gltf::json::Root) -> Result<()> {
+    use gltf::json::validation::Checked;
+    for (a, anim) in json.animations.iter().enumerate() {
+        let name =
+            anim.name.as_deref().map_or_else(|| format!("animation {a}"), |n| format!("animation '{n}'"));
+        for (c, channel) in anim.channels.iter().enumerate() {
+            let node = channel.target.node.value();
+            ensure!(
+                node < json.nodes.len(),
+                "{name} channel {c}: targets node {node} but there are only {}",
+                json.nodes.len()
+            );
+            ensure!(
+                matches!(channel.target.path, Checked::Valid(_)),
+                "{name} channel {c}: unknown target path (expected translation, rotation, scale or weights)"
+            );
         }
     }
     Ok(())
@@ -687,6 +713,90 @@ fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> Material {
 }
 
 // ---------------------------------------------------------------------------
+// Animations
+
+const ANIMATION_INPUT: Expected =
+    Expected { what: "animation input", dims: Dimensions::Scalar, types: &[DataType::F32] };
+const ANIMATION_VEC3: Expected =
+    Expected { what: "animation output", dims: Dimensions::Vec3, types: &[DataType::F32] };
+const ANIMATION_ROTATION: Expected = Expected {
+    what: "animation output",
+    dims: Dimensions::Vec4,
+    types: &[DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16],
+};
+
+/// Node animations; glTF node indices are the scene's node indices. Morph
+/// target (`weights`) channels are skipped with a warning.
+fn convert_animations(doc: &gltf::Document, buffers: &[Vec<u8>], path: &Path) -> Result<Vec<Animation>> {
+    let mut animations = Vec::new();
+    for anim in doc.animations() {
+        let name = anim.name().map_or_else(|| format!("animation {}", anim.index()), str::to_string);
+        let mut channels = Vec::new();
+        for channel in anim.channels() {
+            let context = || format!("animation '{name}' channel {}", channel.index());
+            if channel.target().property() == gltf::animation::Property::MorphTargetWeights {
+                log::warn!(
+                    "{}: {}: morph target weights are not supported, channel skipped",
+                    path.display(),
+                    context()
+                );
+                continue;
+            }
+            channels.push(convert_channel(&channel, buffers).with_context(context)?);
+        }
+        animations.push(Animation::new(name, channels));
+    }
+    Ok(animations)
+}
+
+fn convert_channel(channel: &gltf::animation::Channel, buffers: &[Vec<u8>]) -> Result<AnimationChannel> {
+    use gltf::animation::util::ReadOutputs;
+    let sampler = channel.sampler();
+    let interpolation = match sampler.interpolation() {
+        gltf::animation::Interpolation::Step => Interpolation::Step,
+        gltf::animation::Interpolation::Linear => Interpolation::Linear,
+        gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
+    };
+    let (input, output) = (sampler.input(), sampler.output());
+    check_accessor(&input, &ANIMATION_INPUT, buffers)?;
+    let rotation = channel.target().property() == gltf::animation::Property::Rotation;
+    check_accessor(&output, if rotation { &ANIMATION_ROTATION } else { &ANIMATION_VEC3 }, buffers)?;
+    ensure!(
+        output.data_type() == DataType::F32 || output.normalized(),
+        "animation output accessor {}: integer rotations must be normalized",
+        output.index()
+    );
+    let reader = channel.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let times: Vec<f32> = reader.read_inputs().context("cannot read the animation input")?.collect();
+    ensure!(
+        times.len() == input.count(),
+        "animation input: read {} of {} key times",
+        times.len(),
+        input.count()
+    );
+    let values = match reader.read_outputs().context("cannot read the animation output")? {
+        ReadOutputs::Translations(it) => Channel::Translation(it.map(Vec3::from).collect()),
+        ReadOutputs::Scales(it) => Channel::Scale(it.map(Vec3::from).collect()),
+        ReadOutputs::Rotations(it) => Channel::Rotation(it.into_f32().map(Quat::from_array).collect()),
+        ReadOutputs::MorphTargetWeights(_) => bail!("morph target weights are not supported"),
+    };
+    ensure!(
+        values.len() == output.count(),
+        "animation output: read {} of {} values",
+        values.len(),
+        output.count()
+    );
+    let finite = match &values {
+        Channel::Translation(v) | Channel::Scale(v) => v.iter().all(|v| v.is_finite()),
+        Channel::Rotation(v) => v.iter().all(|q| q.is_finite()),
+    };
+    ensure!(finite, "animation output has non-finite values");
+    let channel = AnimationChannel { node: channel.target().node().index(), times, interpolation, values };
+    channel.check()?;
+    Ok(channel)
+}
+
+// ---------------------------------------------------------------------------
 // Nodes, cameras, lights
 
 fn build_nodes(doc: &gltf::Document, scene: &mut Scene) -> Result<()> {
@@ -1259,6 +1369,94 @@ mod tests {
         let path = write_triangle(&dir, &triangle_bin(TRIANGLE, [0, 1, 2]), &json);
         let err = error_of(&path);
         assert!(err.contains("tri.gltf") && err.contains("light"), "{err}");
+    }
+
+    /// The triangle plus a SCALAR accessor 3 over the UVs (0, 0, 1) for key
+    /// times and an animation 'slide' whose channels are `channels`.
+    fn animated_triangle(dir: &Path, channels: &str, samplers: &str) -> PathBuf {
+        let extra = format!(
+            r#", "animations": [{{"name": "slide", "channels": [{channels}], "samplers": [{samplers}]}}]"#
+        );
+        let json = triangle_json("tri.bin", 3, false, &extra).replace(
+            r#""count": 3, "type": "VEC2"}"#,
+            r#""count": 3, "type": "VEC2"}, {"bufferView": 2, "componentType": 5126, "count": 3, "type": "SCALAR"}"#,
+        );
+        write_triangle(dir, &triangle_bin(TRIANGLE, [0, 1, 2]), &json)
+    }
+
+    #[test]
+    fn animations_are_imported_and_morph_channels_skipped() {
+        use crate::scene::animation::{Channel, Interpolation};
+        let dir = temp_dir("animation");
+        let path = animated_triangle(
+            &dir,
+            r#"{"sampler": 0, "target": {"node": 0, "path": "translation"}},
+               {"sampler": 1, "target": {"node": 0, "path": "weights"}}"#,
+            r#"{"input": 3, "output": 0, "interpolation": "STEP"}, {"input": 3, "output": 3}"#,
+        );
+        let mut scene = load(&path).unwrap();
+        assert_eq!(scene.animations.len(), 1);
+        let a = &scene.animations[0];
+        assert_eq!((a.name.as_str(), a.duration, a.channels.len()), ("slide", 1.0, 1));
+        let c = &a.channels[0];
+        assert_eq!((c.node, c.interpolation, &c.times), (0, Interpolation::Step, &vec![0.0, 0.0, 1.0]));
+        assert_eq!(c.values, Channel::Translation(TRIANGLE.iter().map(|&p| Vec3::from(p)).collect()));
+        scene.animate(0, 0.5);
+        assert_eq!(scene.nodes[0].local.translation, Vec3::new(1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn malformed_animations_are_reported_with_the_file_and_channel() {
+        let dir = temp_dir("bad-animation");
+        let translation = r#"{"sampler": 0, "target": {"node": 0, "path": "translation"}}"#;
+        let rotation = r#"{"sampler": 0, "target": {"node": 0, "path": "rotation"}}"#;
+        let cases = [
+            // VEC2 output for a translation.
+            (translation, r#"{"input": 3, "output": 2}"#, "animation output accessor 2"),
+            // Three values for three keys is not enough for a cubic spline.
+            (translation, r#"{"input": 3, "output": 0, "interpolation": "CUBICSPLINE"}"#, "needs 9"),
+            // VEC3 output for a rotation.
+            (rotation, r#"{"input": 3, "output": 0}"#, "Vec4"),
+            // VEC3 key times.
+            (translation, r#"{"input": 0, "output": 0}"#, "animation input accessor 0"),
+        ];
+        for (channel, sampler, expected) in cases {
+            let path = animated_triangle(&dir, channel, sampler);
+            let err = error_of(&path);
+            assert!(
+                err.contains("tri.gltf")
+                    && err.contains("animation 'slide' channel 0")
+                    && err.contains(expected),
+                "{sampler}: {err}"
+            );
+        }
+        // Out-of-range accessor, sampler and node references never panic.
+        for (channel, sampler) in [
+            (translation, r#"{"input": 9, "output": 0}"#),
+            (
+                r#"{"sampler": 4, "target": {"node": 0, "path": "translation"}}"#,
+                r#"{"input": 3, "output": 0}"#,
+            ),
+            (
+                r#"{"sampler": 0, "target": {"node": 7, "path": "translation"}}"#,
+                r#"{"input": 3, "output": 0}"#,
+            ),
+            (r#"{"sampler": 0, "target": {"node": 0, "path": "colour"}}"#, r#"{"input": 3, "output": 0}"#),
+        ] {
+            let err = error_of(&animated_triangle(&dir, channel, sampler));
+            assert!(err.contains("tri.gltf"), "{err}");
+        }
+        // Every number of a valid animation, in turn, replaced by edge cases.
+        let (channel, sampler) = (rotation, r#"{"input": 3, "output": 0, "interpolation": "CUBICSPLINE"}"#);
+        let text = format!("{channel}|{sampler}");
+        for (i, _) in text.char_indices().filter(|(_, c)| c.is_ascii_digit()) {
+            for value in ["1", "2", "4", "9", "4294967295"] {
+                let mutated = format!("{}{value}{}", &text[..i], &text[i + 1..]);
+                let (c, s) = mutated.split_once('|').unwrap();
+                // Errors are fine; a panic fails the test.
+                let _ = load(&animated_triangle(&dir, c, s));
+            }
+        }
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! stay hierarchical so animation can re-evaluate them; `instances` is the
 //! flattened draw/trace list derived from the nodes.
 
+pub mod animation;
 pub mod camera;
 pub mod gltf_import;
 pub mod obj;
@@ -366,6 +367,8 @@ pub struct Scene {
     pub instances: Vec<Instance>,
     /// World-space bounds of all instances, rebuilt by `update_world`.
     pub bounds: Aabb,
+    /// glTF node animations (see [`Scene::animate`]).
+    pub animations: Vec<animation::Animation>,
 }
 
 impl Scene {
@@ -413,9 +416,17 @@ impl Scene {
         (0..self.nodes.len()).map(|i| resolve(self, i, &mut world)).collect()
     }
 
-    /// Rebuilds `instances` and `bounds` from the node hierarchy.
+    /// Rebuilds `instances` and `bounds` from the node hierarchy, and places
+    /// the lights attached to nodes (`Light::node`): position = world *
+    /// origin, direction = world * -Z, normalized (the KHR_lights_punctual
+    /// convention). Cameras attached to nodes are not updated.
     pub fn update_world(&mut self) {
         let world = self.world_matrices();
+        for light in &mut self.lights {
+            let Some(m) = light.node.and_then(|n| world.get(n)) else { continue };
+            light.position = m.transform_point3(Vec3::ZERO);
+            light.direction = m.transform_vector3(Vec3::NEG_Z).normalize_or(light.direction);
+        }
         self.instances.clear();
         self.bounds = Aabb::EMPTY;
         for (n, node) in self.nodes.iter().enumerate() {

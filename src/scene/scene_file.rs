@@ -557,6 +557,10 @@ fn merge(scene: &mut Scene, sub: Scene, name: &str, local: Transform, object: us
         c
     }));
     scene.lights.extend(sub.lights.into_iter().map(|l| place_light(l, &placement, node_base)));
+    scene.animations.extend(sub.animations.into_iter().map(|mut a| {
+        a.channels.iter_mut().for_each(|c| c.node += node_base);
+        a
+    }));
 }
 
 fn place_light(mut l: Light, placement: &Mat4, node_base: usize) -> Light {
@@ -825,6 +829,41 @@ relevance = 3
         assert_eq!(scene.textures.len(), 5);
         let imported = &scene.meshes[helmet[0].mesh].primitives[helmet[0].primitive];
         assert!(scene.materials[imported.material].normal_texture.is_some());
+    }
+
+    #[test]
+    fn merged_gltf_animations_target_the_merged_nodes() {
+        let box_path = shared("gltf/BoxAnimated/glTF/BoxAnimated.gltf");
+        let text = format!(
+            r#"
+[[object]]
+name = "plain"
+primitive = "cube"
+
+[[object]]
+name = "box"
+gltf = "{box_path}"
+translation = [5, 0, 0]
+"#
+        );
+        let mut scene = Scene::load(&write("animation", "scene.toml", &text)).unwrap();
+        let alone = Scene::load(Path::new(&box_path)).unwrap();
+        assert_eq!(scene.animations.len(), 1);
+        let (merged, original) = (&scene.animations[0], &alone.animations[0]);
+        assert_eq!(merged.duration, original.duration);
+        let root = scene.roots[1];
+        for (m, o) in merged.channels.iter().zip(&original.channels) {
+            assert_eq!(m.node, o.node + root + 1);
+            assert_eq!(scene.nodes[m.node].name, alone.nodes[o.node].name);
+        }
+        let boxed =
+            |s: &Scene| s.instances.iter().filter(|i| i.object == 1).map(|i| i.world).collect::<Vec<_>>();
+        scene.animate(0, 0.0);
+        let before = boxed(&scene);
+        scene.animate(0, 1.3);
+        assert_ne!(before, boxed(&scene));
+        let plain: Vec<_> = scene.instances.iter().filter(|i| i.object == 0).map(|i| i.world).collect();
+        assert_eq!(plain, vec![glam::Mat4::IDENTITY], "the animation moves only the merged glTF");
     }
 
     #[test]

@@ -197,6 +197,10 @@ struct Viewer {
     shot_request: Option<PathBuf>,
     shots_taken: u32,
     scene: Scene,
+    /// Animation being played: (index, clock in seconds, paused).
+    animation: Option<(usize, f32, bool)>,
+    /// The scene moved since the last frame: the renderer must update.
+    scene_dirty: bool,
     controller: CameraController,
     settings: RenderSettings,
     stats: FrameStats,
@@ -232,7 +236,15 @@ impl Viewer {
     fn new(el: &ActiveEventLoop, opts: &ViewerOptions) -> Result<Viewer> {
         let job = &opts.job;
         let requested = validate_extent(job)?;
-        let scene = Scene::load(&job.scene)?;
+        let mut scene = Scene::load(&job.scene)?;
+        let animation = match &job.animation {
+            Some(a) => {
+                let i = crate::scene::animation::find_animation(&scene, a)?;
+                scene.animate(i, job.time);
+                Some((i, job.time, false))
+            }
+            None => None,
+        };
         let camera = job.camera.resolve(&scene)?;
         let start_index = match job.camera {
             CameraChoice::First => Some(0),
@@ -278,6 +290,8 @@ impl Viewer {
             shot_request: None,
             shots_taken: 0,
             scene,
+            animation,
+            scene_dirty: false,
             controller,
             settings: job.settings,
             stats: FrameStats::new(now),
@@ -452,6 +466,18 @@ impl Viewer {
             KeyCode::F6 => toggle("reflections", &mut self.settings.effects.reflections),
             KeyCode::F7 => toggle("refractions", &mut self.settings.effects.refractions),
             KeyCode::F8 => log::info!("toggle the per-object heuristic: not available yet"),
+            KeyCode::Space | KeyCode::Comma | KeyCode::Period => {
+                if let Some((_, clock, paused)) = &mut self.animation {
+                    match code {
+                        KeyCode::Space => *paused = !*paused,
+                        // Scrub a tenth of a second (pauses playback).
+                        KeyCode::Comma => (*clock, *paused) = ((*clock - 0.1).max(0.0), true),
+                        _ => (*clock, *paused) = (*clock + 0.1, true),
+                    }
+                    self.scene_dirty = true;
+                    log::info!("animation t = {:.2} s{}", clock, if *paused { " (paused)" } else { "" });
+                }
+            }
             KeyCode::KeyT => {
                 if self.ctx.rt.ray_query {
                     self.settings.mode = match self.settings.mode {
@@ -613,6 +639,19 @@ impl Viewer {
         self.finish_screenshot()?;
 
         self.controller.update(dt);
+        if let Some((i, clock, paused)) = &mut self.animation {
+            if !*paused {
+                // Wall-clock playback in the viewer (headless runs use a fixed step).
+                *clock += dt;
+                self.scene_dirty = true;
+            }
+            if self.scene_dirty {
+                self.scene.animate(*i, *clock);
+            }
+        }
+        if std::mem::take(&mut self.scene_dirty) {
+            self.renderer.update_scene(&self.ctx, &self.scene)?;
+        }
         let camera = self.controller.camera();
         self.renderer.prepare(&self.ctx, &self.scene, &camera, &self.settings)?;
 
