@@ -205,3 +205,47 @@ fn info_reports_devices() {
     let s = String::from_utf8_lossy(&out.stdout);
     assert!(s.contains("ray query") && s.contains("(selected)"), "{s}");
 }
+
+/// Synchronization validation over every backend and over animated frames
+/// (instances moved, top level rebuilt between frames): no hazard reported.
+#[test]
+fn synchronization_validation_is_clean() {
+    let d = tmp("syncval");
+    for backend in ["query", "pipeline", "compute"] {
+        let out = bin()
+            .args([
+                "--sync-validation",
+                "render",
+                "--width",
+                "96",
+                "--height",
+                "54",
+                "--backend",
+                backend,
+                "--out",
+            ])
+            .arg(d.join(format!("{backend}.png")))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{backend}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    let animated = common::shared_asset("gltf/BoxAnimated/glTF/BoxAnimated.gltf");
+    let out = bin()
+        .args([
+            "--sync-validation",
+            "bench",
+            "--width",
+            "96",
+            "--height",
+            "54",
+            "--frames",
+            "3",
+            "--warmup",
+            "0",
+        ])
+        .args(["--compare-backends", "--animation", "0", "--scene"])
+        .arg(&animated)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
