@@ -98,6 +98,23 @@ float watertight_hit(WatertightRay r, vec3 p0, vec3 p1, vec3 p2, float tmax, out
     return t;
 }
 
+// Ordered traversal step for the children l and l + 1 with entry distances
+// tl and tr (>= 1e37: missed). Returns how many are hit; `near` is the one
+// to visit next, `far` the one to push when both are hit.
+uint order_children(uint l, float tl, float tr, inout uint near, out uint far) {
+    bool hl = tl < 1e37, hr = tr < 1e37;
+    far = tl <= tr ? l + 1u : l;
+    if (hl && hr) {
+        near = tl <= tr ? l : l + 1u;
+        return 2u;
+    }
+    if (hl || hr) {
+        near = hl ? l : l + 1u;
+        return 1u;
+    }
+    return 0u;
+}
+
 // Triangle `prim` of instance `inst` in object space.
 void object_triangle(Instance inst, uint prim, out vec3 p0, out vec3 p1, out vec3 p2) {
     uint base = inst.first_index + 3u * prim;
@@ -147,22 +164,14 @@ bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, 
             }
         } else {
             // Ordered traversal: visit the nearer child first.
-            uint l = n.left_or_first, r = l + 1u;
+            uint l = n.left_or_first;
             BvhNode cl = blas_nodes[bi.node_offset + l];
-            BvhNode cr = blas_nodes[bi.node_offset + r];
-            float tl = ray_box(o, inv_d, tmax, cl.bmin, cl.bmax);
-            float tr2 = ray_box(o, inv_d, tmax, cr.bmin, cr.bmax);
-            bool hl = tl < 1e37, hr = tr2 < 1e37;
-            if (hl && hr) {
-                uint near = tl <= tr2 ? l : r;
-                uint far = tl <= tr2 ? r : l;
-                if (sp < BVH_STACK) stack[sp++] = far;
-                node = near;
-                continue;
-            } else if (hl || hr) {
-                node = hl ? l : r;
-                continue;
-            }
+            BvhNode cr = blas_nodes[bi.node_offset + l + 1u];
+            uint far;
+            uint visit = order_children(l, ray_box(o, inv_d, tmax, cl.bmin, cl.bmax),
+                                        ray_box(o, inv_d, tmax, cr.bmin, cr.bmax), node, far);
+            if (visit == 2u && sp < BVH_STACK) stack[sp++] = far;
+            if (visit > 0u) continue;
         }
         if (sp == 0) break;
         node = stack[--sp];
@@ -197,20 +206,13 @@ bool trace_bvh(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit hi
                 }
             }
         } else {
-            uint l = n.left_or_first, r = l + 1u;
-            float tl = ray_box(o, inv_d, tmax, tlas_nodes[l].bmin, tlas_nodes[l].bmax);
-            float tr2 = ray_box(o, inv_d, tmax, tlas_nodes[r].bmin, tlas_nodes[r].bmax);
-            bool hl = tl < 1e37, hr = tr2 < 1e37;
-            if (hl && hr) {
-                uint near = tl <= tr2 ? l : r;
-                uint far = tl <= tr2 ? r : l;
-                if (sp < BVH_STACK) stack[sp++] = far;
-                node = near;
-                continue;
-            } else if (hl || hr) {
-                node = hl ? l : r;
-                continue;
-            }
+            uint l = n.left_or_first;
+            uint far;
+            uint visit = order_children(l, ray_box(o, inv_d, tmax, tlas_nodes[l].bmin, tlas_nodes[l].bmax),
+                                        ray_box(o, inv_d, tmax, tlas_nodes[l + 1u].bmin, tlas_nodes[l + 1u].bmax),
+                                        node, far);
+            if (visit == 2u && sp < BVH_STACK) stack[sp++] = far;
+            if (visit > 0u) continue;
         }
         if (sp == 0) break;
         node = stack[--sp];
