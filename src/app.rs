@@ -302,17 +302,20 @@ pub fn bench(
                 let t =
                     if frames > 1 { (i.saturating_sub(warmup)) as f32 / (frames - 1) as f32 } else { 0.0 };
                 let camera = crate::scene::camera::on_path(&scene.camera_path, t, &base_camera);
+                let mut update = Vec::new();
                 if let Some(a) = anim {
                     // Fixed-step clock: deterministic frames.
                     scene.animate(a, job.time + i as f32 / job.fps.max(1e-3));
                     renderer.update_scene(ctx, &scene)?;
+                    update = renderer.update_timings.clone();
                 }
                 let out = renderer.render(ctx, &scene, &camera, &settings)?;
                 if i < warmup {
                     continue;
                 }
                 let mut total = 0.0;
-                for (name, ms) in out.timings.iter().filter(|(n, _)| *n != "readback") {
+                let passes = update.iter().chain(&out.timings);
+                for (name, ms) in passes.filter(|(n, _)| *n != "readback") {
                     total += ms;
                     match per_pass.iter_mut().find(|(n, _)| n == name) {
                         Some((_, v)) => v.push(*ms),

@@ -38,7 +38,13 @@ fn quad_scene(light: Light) -> Scene {
     let mut scene = Scene {
         meshes: vec![Mesh {
             name: "quad".into(),
-            primitives: vec![Primitive { vertices, indices: vec![0, 1, 2, 0, 2, 3], material: 0, bounds }],
+            primitives: vec![Primitive {
+                vertices,
+                indices: vec![0, 1, 2, 0, 2, 3],
+                material: 0,
+                bounds,
+                skin: None,
+            }],
         }],
         materials: vec![material],
         nodes: vec![Node { name: "quad".into(), mesh: Some(0), object: Some(0), ..Default::default() }],

@@ -346,6 +346,29 @@ impl Bvh {
         max
     }
 
+    /// Node indices grouped by depth, deepest level first, plus the level
+    /// boundaries into that list (`levels.len() == depth + 1`): the order a
+    /// parallel refit must follow, one level at a time.
+    pub fn levels(&self) -> (Vec<u32>, Vec<u32>) {
+        let mut depth = vec![0usize; self.nodes.len()];
+        // Children come after their parents, so one forward sweep suffices.
+        for (i, n) in self.nodes.iter().enumerate() {
+            if n.count == 0 {
+                let c = n.left_or_first as usize;
+                depth[c] = depth[i] + 1;
+                depth[c + 1] = depth[i] + 1;
+            }
+        }
+        let levels = depth.iter().max().map_or(0, |d| d + 1);
+        let mut order = Vec::with_capacity(self.nodes.len());
+        let mut bounds = vec![0u32];
+        for d in (0..levels).rev() {
+            order.extend((0..self.nodes.len() as u32).filter(|&i| depth[i as usize] == d));
+            bounds.push(order.len() as u32);
+        }
+        (order, bounds)
+    }
+
     /// Checks the layout invariants: node and primitive indices in range,
     /// children after their parents, every node reachable exactly once,
     /// every primitive in exactly one leaf, `1 <= count <= MAX_LEAF`, depth
@@ -670,6 +693,25 @@ mod tests {
             .collect();
         let bvh = check(&a);
         eprintln!("skewed: depth {}", bvh.depth());
+    }
+
+    #[test]
+    fn levels_put_children_before_parents() {
+        let p = uv_sphere(1.0, 24, 12);
+        let bvh = check(&tri_aabbs(&triangle_positions(&p.vertices, &p.indices)));
+        let (order, levels) = bvh.levels();
+        assert_eq!(levels.len(), bvh.depth() + 1);
+        assert_eq!(order.len(), bvh.nodes.len());
+        assert_eq!(*order.last().unwrap(), 0, "the root is the last level");
+        let mut rank = vec![usize::MAX; bvh.nodes.len()];
+        for (r, &n) in order.iter().enumerate() {
+            assert_eq!(rank[n as usize], usize::MAX, "node {n} listed twice");
+            rank[n as usize] = r;
+        }
+        for (i, n) in bvh.nodes.iter().enumerate().filter(|(_, n)| n.count == 0) {
+            let c = n.left_or_first as usize;
+            assert!(rank[c] < rank[i] && rank[c + 1] < rank[i], "node {i} comes before its children");
+        }
     }
 
     #[test]

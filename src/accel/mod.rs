@@ -8,7 +8,11 @@ use gpu_allocator::MemoryLocation;
 
 pub mod bvh;
 pub mod compute_bvh;
+pub mod compute_refit;
+pub mod dynamic;
 pub mod watertight;
+
+use dynamic::{DynamicBlases, Update};
 
 use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
 use crate::scene::{AlphaMode, Instance, Scene};
@@ -117,7 +121,7 @@ impl Scratch {
     }
 }
 
-fn triangles<'a>(gpu: &GpuScene, r: &PrimitiveRange) -> vk::AccelerationStructureGeometryKHR<'a> {
+pub(crate) fn triangles<'a>(gpu: &GpuScene, r: &PrimitiveRange) -> vk::AccelerationStructureGeometryKHR<'a> {
     let tri = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
         .vertex_format(vk::Format::R32G32B32_SFLOAT)
         .vertex_data(vk::DeviceOrHostAddressConstKHR {
@@ -143,6 +147,8 @@ pub struct SceneAccel {
     /// Indexed by mesh, then primitive; None for empty primitives.
     pub blases: Vec<Vec<Option<AccelStruct>>>,
     pub tlas: AccelStruct,
+    /// Updatable BLASes of skinned instances (by slot), if any.
+    pub dynamic: Option<DynamicBlases>,
     instances: Buffer,
     scratch: Scratch,
     pub build_ms: f64,
@@ -305,10 +311,14 @@ impl SceneAccel {
                 address: 0,
             },
             blases,
+            dynamic: None,
             instances,
             scratch,
             build_ms: 0.0,
         };
+        if !gpu.skinned.is_empty() {
+            accel.dynamic = Some(DynamicBlases::new(ctx, gpu, &gpu.skinned_bounds, accel.scratch.align)?);
+        }
         accel.build_tlas(ctx, scene)?;
         accel.build_ms = t0.elapsed().as_secs_f64() * 1e3;
         log::info!(
@@ -322,15 +332,47 @@ impl SceneAccel {
         Ok(accel)
     }
 
-    /// Writes the instance records and (re)builds the TLAS.
+    /// Writes the instance records and (re)builds the TLAS, waiting for it.
     pub fn build_tlas(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        let cmd = ctx.allocate_command_buffer("build TLAS")?;
+        let r = (|| {
+            unsafe { ctx.device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())? };
+            self.record_tlas(ctx, cmd, scene)?;
+            unsafe { ctx.device.end_command_buffer(cmd)? };
+            ctx.submit_and_wait(cmd)
+        })();
+        unsafe { ctx.device.free_command_buffers(ctx.command_pool, &[cmd]) };
+        r
+    }
+
+    /// Records the refit / rebuild of every skinned BLAS (one entry per
+    /// slot), followed by the barrier the TLAS build needs.
+    pub fn record_dynamic(&self, ctx: &Context, cmd: vk::CommandBuffer, gpu: &GpuScene, updates: &[Update]) {
+        let Some(d) = &self.dynamic else { return };
+        d.record(ctx, cmd, gpu, updates);
+        let build = vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR;
+        memory_barrier(
+            ctx,
+            cmd,
+            (build, vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR),
+            (build, vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR),
+        );
+    }
+
+    /// Writes the instance records (host; the GPU must not be reading them)
+    /// and records the TLAS build, growing the TLAS first if it must.
+    pub fn record_tlas(&mut self, ctx: &Context, cmd: vk::CommandBuffer, scene: &Scene) -> Result<()> {
         let loader = ctx.accel.as_ref().context("acceleration structures are not enabled")?;
+        let dynamic = self.dynamic.as_ref();
         let records: Vec<vk::AccelerationStructureInstanceKHR> = scene
             .instances
             .iter()
             .enumerate()
             .map(|(i, inst)| {
-                let blas = self.blases[inst.mesh][inst.primitive].as_ref();
+                let blas = match inst.skinned {
+                    Some(slot) => dynamic.map(|d| &d.blases[slot].accel),
+                    None => self.blases[inst.mesh][inst.primitive].as_ref(),
+                };
                 let mut flags = vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE;
                 flags |= if instance_opaque(scene, inst) {
                     vk::GeometryInstanceFlagsKHR::FORCE_OPAQUE
@@ -396,16 +438,26 @@ impl SceneAccel {
             .dst_acceleration_structure(self.tlas.raw)
             .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch });
         let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
-        ctx.one_shot("build TLAS", |cmd| {
-            memory_barrier(
-                ctx,
-                cmd,
-                (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_WRITE),
-                (vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR, vk::AccessFlags2::SHADER_READ),
-            );
-            unsafe { loader.cmd_build_acceleration_structures(cmd, &[info], &[&range]) };
-            Ok(())
-        })
+        let build = vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR;
+        memory_barrier(
+            ctx,
+            cmd,
+            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_WRITE),
+            (build, vk::AccessFlags2::SHADER_READ),
+        );
+        unsafe { loader.cmd_build_acceleration_structures(cmd, &[info], &[&range]) };
+        // The shading passes of later submissions trace against it.
+        let mut tracers = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        if ctx.rt.ray_tracing_pipeline {
+            tracers |= vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
+        }
+        memory_barrier(
+            ctx,
+            cmd,
+            (build, vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR),
+            (tracers, vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR),
+        );
+        Ok(())
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
@@ -415,6 +467,9 @@ impl SceneAccel {
             }
         }
         self.tlas.destroy(ctx);
+        if let Some(d) = &mut self.dynamic {
+            d.destroy(ctx);
+        }
         self.instances.destroy(ctx);
         self.scratch.destroy(ctx);
     }

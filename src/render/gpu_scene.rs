@@ -9,7 +9,8 @@ use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
 use super::gpu_types::*;
-use crate::scene::{AlphaMode, Filter, LightKind, SamplerDesc, Scene, TextureRef, Wrap};
+use crate::scene::tangents::bounds_of;
+use crate::scene::{Aabb, AlphaMode, Filter, Instance, LightKind, SamplerDesc, Scene, TextureRef, Wrap};
 use crate::vk::pipeline::{Binding, DescriptorSet};
 use crate::vk::{Buffer, Context, Image};
 
@@ -47,6 +48,11 @@ pub struct GpuScene {
     pub set: DescriptorSet,
     /// Indexed by mesh, then primitive.
     pub ranges: Vec<Vec<PrimitiveRange>>,
+    /// Deformed vertex range of each skinned instance (by `Instance::skinned`
+    /// slot): written by the skinning pass, read by everything else.
+    pub skinned: Vec<PrimitiveRange>,
+    /// Bounds of each skinned slot's first pose (posed on the CPU).
+    pub skinned_bounds: Vec<Aabb>,
     pub draws: Vec<Draw>,
     pub light_count: u32,
     /// Mean environment radiance (solid-angle weighted), for the ambient term.
@@ -56,7 +62,7 @@ pub struct GpuScene {
 impl GpuScene {
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<GpuScene> {
         let t0 = std::time::Instant::now();
-        let (vertices, indices, ranges) = upload_geometry(ctx, scene)?;
+        let (vertices, indices, ranges, skinned, skinned_bounds) = upload_geometry(ctx, scene)?;
 
         let mut samplers = Vec::new();
         let mut textures = Vec::with_capacity(scene.textures.len());
@@ -160,8 +166,8 @@ impl GpuScene {
             set.write_image(ctx, 8, i as u32, img.view, s, read);
         }
 
-        let draws = build_draws(scene, &ranges);
-        write_instances(scene, &ranges, &mut instances)?;
+        let draws = build_draws(scene, &ranges, &skinned);
+        write_instances(scene, &ranges, &skinned, &mut instances)?;
         write_lights(scene, &mut lights)?;
         let gs = GpuScene {
             vertices,
@@ -177,6 +183,8 @@ impl GpuScene {
             env_sampler,
             set,
             ranges,
+            skinned,
+            skinned_bounds,
             draws,
             light_count: scene.lights.len() as u32,
             env_mean,
@@ -195,8 +203,13 @@ impl GpuScene {
 
     /// Re-writes instance transforms and lights (animation, later issues).
     pub fn update_dynamic(&mut self, scene: &Scene) -> Result<()> {
-        write_instances(scene, &self.ranges, &mut self.instances)?;
+        write_instances(scene, &self.ranges, &self.skinned, &mut self.instances)?;
         write_lights(scene, &mut self.lights)
+    }
+
+    /// Where `inst`'s vertices live: its own deformed range when skinned.
+    pub fn instance_range(&self, inst: &Instance) -> PrimitiveRange {
+        instance_range(&self.ranges, &self.skinned, inst)
     }
 
     pub fn write_frame(&mut self, frame: &GpuFrame) -> Result<()> {
@@ -229,8 +242,23 @@ impl GpuScene {
     }
 }
 
-/// Concatenates every primitive into one vertex and one index buffer.
-fn upload_geometry(ctx: &Context, scene: &Scene) -> Result<(Buffer, Buffer, Vec<Vec<PrimitiveRange>>)> {
+fn instance_range(
+    ranges: &[Vec<PrimitiveRange>],
+    skinned: &[PrimitiveRange],
+    inst: &Instance,
+) -> PrimitiveRange {
+    match inst.skinned {
+        Some(slot) => skinned[slot],
+        None => ranges[inst.mesh][inst.primitive],
+    }
+}
+
+type Geometry = (Buffer, Buffer, Vec<Vec<PrimitiveRange>>, Vec<PrimitiveRange>, Vec<Aabb>);
+
+/// Concatenates every primitive into one vertex and one index buffer, then
+/// appends one deformed copy per skinned instance (posed on the CPU for the
+/// first frame; the skinning pass rewrites it on the GPU from then on).
+fn upload_geometry(ctx: &Context, scene: &Scene) -> Result<Geometry> {
     let mut vertex_data = Vec::new();
     let mut index_data: Vec<u32> = Vec::new();
     let mut ranges = Vec::with_capacity(scene.meshes.len());
@@ -248,6 +276,17 @@ fn upload_geometry(ctx: &Context, scene: &Scene) -> Result<(Buffer, Buffer, Vec<
         }
         ranges.push(r);
     }
+    let (mut skinned, mut skinned_bounds) = (Vec::new(), Vec::new());
+    let world = scene.world_matrices();
+    for inst in &scene.instances {
+        let Some(posed) = scene.skinned_pose(inst, &world) else { continue };
+        skinned.push(PrimitiveRange {
+            vertex_offset: vertex_data.len() as u32,
+            ..ranges[inst.mesh][inst.primitive]
+        });
+        skinned_bounds.push(bounds_of(&posed));
+        vertex_data.extend(posed);
+    }
     // The usage flags every consumer needs, so no second copy is ever made.
     let mut usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
     if ctx.rt.acceleration_structure {
@@ -260,10 +299,10 @@ fn upload_geometry(ctx: &Context, scene: &Scene) -> Result<(Buffer, Buffer, Vec<
         bytemuck::cast_slice(&index_data),
         usage | vk::BufferUsageFlags::INDEX_BUFFER,
     )?;
-    Ok((vertices, indices, ranges))
+    Ok((vertices, indices, ranges, skinned, skinned_bounds))
 }
 
-fn build_draws(scene: &Scene, ranges: &[Vec<PrimitiveRange>]) -> Vec<Draw> {
+fn build_draws(scene: &Scene, ranges: &[Vec<PrimitiveRange>], skinned: &[PrimitiveRange]) -> Vec<Draw> {
     scene
         .instances
         .iter()
@@ -272,7 +311,7 @@ fn build_draws(scene: &Scene, ranges: &[Vec<PrimitiveRange>]) -> Vec<Draw> {
             let m = &scene.materials[scene.instance_material(inst)];
             Draw {
                 instance: i as u32,
-                range: ranges[inst.mesh][inst.primitive],
+                range: instance_range(ranges, skinned, inst),
                 alpha_mode: m.alpha_mode,
                 double_sided: m.double_sided,
             }
@@ -312,12 +351,17 @@ fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
     }
 }
 
-fn write_instances(scene: &Scene, ranges: &[Vec<PrimitiveRange>], buf: &mut Buffer) -> Result<()> {
+fn write_instances(
+    scene: &Scene,
+    ranges: &[Vec<PrimitiveRange>],
+    skinned: &[PrimitiveRange],
+    buf: &mut Buffer,
+) -> Result<()> {
     let data: Vec<GpuInstance> = scene
         .instances
         .iter()
         .map(|inst| {
-            let r = ranges[inst.mesh][inst.primitive];
+            let r = instance_range(ranges, skinned, inst);
             let props = &scene.objects.get(inst.object).map(|o| o.props.clone()).unwrap_or_default();
             let normal = normal_matrix(&inst.world);
             GpuInstance {

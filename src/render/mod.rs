@@ -7,6 +7,7 @@ pub mod gpu_scene;
 pub mod gpu_types;
 pub mod output;
 pub mod shading;
+pub mod skinning;
 pub mod targets;
 
 use anyhow::{Context as _, Result};
@@ -15,6 +16,7 @@ use glam::Mat4;
 use gpu_allocator::MemoryLocation;
 
 use crate::accel::compute_bvh::ComputeBvh;
+use crate::accel::dynamic::{RebuildPolicy, Update};
 use crate::accel::SceneAccel;
 use crate::scene::{Camera, Scene};
 use crate::vk::pipeline::{Binding, DescriptorSet, Specialization};
@@ -25,6 +27,7 @@ use gbuffer::GBufferPass;
 use gpu_scene::GpuScene;
 use gpu_types::GpuFrame;
 use shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
+use skinning::Skinning;
 use targets::Targets;
 
 /// G-buffer debug views (also selectable in the viewer).
@@ -95,6 +98,17 @@ pub struct Renderer {
     bvh: Option<ComputeBvh>,
     pub timer: GpuTimer,
     cmd: vk::CommandBuffer,
+    /// Skinning of skinned instances, if the scene has any.
+    skinning: Option<Skinning>,
+    /// When skinned acceleration structures are rebuilt instead of refit.
+    pub rebuild_policy: RebuildPolicy,
+    update_cmd: vk::CommandBuffer,
+    update_timer: GpuTimer,
+    /// GPU ms per pass of the last `update_scene` (plus the host's
+    /// top-level work), for benchmarks.
+    pub update_timings: Vec<(&'static str, f64)>,
+    /// Skinned structures refit / rebuilt by the last `update_scene`.
+    pub update_counts: [usize; 2],
     readback_ldr: Buffer,
     readback_hdr: Buffer,
     frame_index: u32,
@@ -148,7 +162,14 @@ impl Renderer {
         let timer = GpuTimer::new(ctx, 16)?;
         let cmd = ctx.allocate_command_buffer("frame")?;
         let (readback_ldr, readback_hdr) = readback_buffers(ctx, extent)?;
+        let skinning = Skinning::new(ctx, scene, &gpu)?;
         Ok(Renderer {
+            skinning,
+            rebuild_policy: RebuildPolicy::default(),
+            update_cmd: ctx.allocate_command_buffer("scene update")?,
+            update_timer: GpuTimer::new(ctx, 8)?,
+            update_timings: Vec::new(),
+            update_counts: [0; 2],
             gpu,
             targets,
             gbuffer,
@@ -183,22 +204,112 @@ impl Renderer {
         Ok(())
     }
 
-    /// Brings the GPU copies of everything that can move (instance
-    /// transforms, lights) up to date with `scene` and rebuilds the top
-    /// level of whichever acceleration structure exists (TLAS, or the compute
-    /// BVH's top level); per-mesh structures are untouched. Call only when
-    /// something moved, with the GPU idle (headless frames wait; the viewer
-    /// waits for the previous frame).
+    /// Brings the GPU copies of everything that can move up to date with
+    /// `scene` (already posed by `Scene::animate`): instance transforms and
+    /// lights, then in one submission skinning -> skinned BLAS refit (or
+    /// rebuild, per `rebuild_policy`) -> TLAS build, or for the compute
+    /// backend skinning -> BVH refit, after which the host rebuilds the top
+    /// level. Static per-mesh structures are untouched. Call only when
+    /// something moved (so a still scene rebuilds nothing), with the GPU
+    /// idle; it waits for its own work. Pass times land in `update_timings`.
     pub fn update_scene(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         self.gpu.update_dynamic(scene)?;
+        // Keep only the structures the current backend traces: refitting the
+        // other kind every frame would be wasted work (it is rebuilt if the
+        // backend changes back).
+        match self.shading_config().and_then(|c| c.backend) {
+            Some(Backend::Compute) => {
+                if let Some((mut a, mut set)) = self.accel.take() {
+                    set.destroy(ctx);
+                    a.destroy(ctx);
+                }
+            }
+            Some(Backend::Query | Backend::Pipeline) => {
+                if let Some(mut b) = self.bvh.take() {
+                    b.destroy(ctx);
+                }
+            }
+            _ => {}
+        }
+        if let Some(s) = &mut self.skinning {
+            s.write(scene)?;
+        }
+        let policy = self.rebuild_policy;
+        let bvh_updates = match &mut self.bvh {
+            Some(b) => b.prepare_skinned(ctx, scene, &policy)?,
+            None => Vec::new(),
+        };
+        let blas_updates: Vec<Update> = match self.accel.as_ref().and_then(|(a, _)| a.dynamic.as_ref()) {
+            Some(d) => d.blases.iter().map(|b| b.state.next(&policy)).collect(),
+            None => Vec::new(),
+        };
+        let cmd = self.update_cmd;
+        unsafe {
+            ctx.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
+            ctx.device.begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )?;
+        }
+        let timer = &mut self.update_timer;
+        timer.begin_frame(ctx, cmd);
+        // Uploads (rebuilt trees) and the previous frame's reads come first.
+        let all = vk::PipelineStageFlags2::ALL_COMMANDS;
+        crate::vk::memory_barrier(
+            ctx,
+            cmd,
+            (all, vk::AccessFlags2::MEMORY_WRITE | vk::AccessFlags2::MEMORY_READ),
+            (all, vk::AccessFlags2::MEMORY_WRITE | vk::AccessFlags2::MEMORY_READ),
+        );
+        if let Some(s) = &self.skinning {
+            pass(ctx, timer, cmd, "skinning", |cmd| {
+                s.record(ctx, cmd);
+                Ok(())
+            })?;
+        }
+        if let Some((accel, _)) = &mut self.accel {
+            if !blas_updates.is_empty() {
+                let name =
+                    if blas_updates.contains(&Update::Rebuild) { "blas rebuild" } else { "blas refit" };
+                pass(ctx, timer, cmd, name, |cmd| {
+                    accel.record_dynamic(ctx, cmd, &self.gpu, &blas_updates);
+                    Ok(())
+                })?;
+            }
+            pass(ctx, timer, cmd, "tlas build", |cmd| accel.record_tlas(ctx, cmd, scene))?;
+        }
+        if let Some(bvh) = &self.bvh {
+            if bvh.skinned_count() > 0 {
+                pass(ctx, timer, cmd, "bvh refit", |cmd| {
+                    bvh.record_refit(ctx, cmd);
+                    Ok(())
+                })?;
+            }
+        }
+        unsafe { ctx.device.end_command_buffer(cmd)? };
+        ctx.submit_and_wait(cmd)?;
+        self.update_timings = self.update_timer.results(ctx)?;
+
+        // Judge this frame's results for the next frame's rebuild decisions.
+        let t0 = std::time::Instant::now();
         if let Some((accel, set)) = &mut self.accel {
-            accel.build_tlas(ctx, scene)?;
             // A TLAS that had to grow is a new object.
             set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
+            if let (Some(d), Some(s)) = (&mut accel.dynamic, &self.skinning) {
+                for ((b, bounds), u) in d.blases.iter_mut().zip(s.bounds()?).zip(&blas_updates) {
+                    b.state.done(*u, &bounds, &policy);
+                }
+            }
         }
         if let Some(bvh) = &mut self.bvh {
-            bvh.update_instances(ctx, scene)?;
+            bvh.finish_refit(scene, &bvh_updates, &policy)?;
         }
+        self.update_timings.push(("top level (CPU)", t0.elapsed().as_secs_f64() * 1e3));
+        let count = |u: &[Update], k: Update| u.iter().filter(|x| **x == k).count();
+        self.update_counts = [
+            count(&blas_updates, Update::Refit) + count(&bvh_updates, Update::Refit),
+            count(&blas_updates, Update::Rebuild) + count(&bvh_updates, Update::Rebuild),
+        ];
         Ok(())
     }
 
@@ -433,7 +544,11 @@ impl Renderer {
     pub fn destroy(&mut self, ctx: &Context) {
         unsafe {
             let _ = ctx.device.device_wait_idle();
-            ctx.device.free_command_buffers(ctx.command_pool, &[self.cmd]);
+            ctx.device.free_command_buffers(ctx.command_pool, &[self.cmd, self.update_cmd]);
+        }
+        self.update_timer.destroy(ctx);
+        if let Some(mut s) = self.skinning.take() {
+            s.destroy(ctx);
         }
         self.readback_ldr.destroy(ctx);
         self.readback_hdr.destroy(ctx);

@@ -15,6 +15,7 @@ use gltf::mesh::Mode;
 use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 
 use super::animation::{Animation, AnimationChannel, Channel, Interpolation};
+use super::skin::{Skin, SkinWeights};
 use super::tangents::{
     bounds_of, fallback_tangent, fill_fallback_tangents, flatten_with_face_normals, generate_tangents,
     smooth_normals,
@@ -57,6 +58,7 @@ fn import(path: &Path) -> Result<Scene> {
     }
     scene.textures = slots.decode(&doc, base, &buffers)?;
     build_nodes(&doc, &mut scene)?;
+    convert_skins(&doc, &buffers, &mut scene)?;
     scene.animations = convert_animations(&doc, &buffers, path)?;
     Ok(scene)
 }
@@ -216,27 +218,46 @@ struct Expected {
     what: &'static str,
     dims: Dimensions,
     types: &'static [DataType],
+    /// Whether u8/u16 vector data must be normalized (everything but joints).
+    normalized: bool,
 }
 
-const POSITION: Expected = Expected { what: "POSITION", dims: Dimensions::Vec3, types: &[DataType::F32] };
-const NORMAL: Expected = Expected { what: "NORMAL", dims: Dimensions::Vec3, types: &[DataType::F32] };
-const TANGENT: Expected = Expected { what: "TANGENT", dims: Dimensions::Vec4, types: &[DataType::F32] };
+const POSITION: Expected =
+    Expected { what: "POSITION", dims: Dimensions::Vec3, types: &[DataType::F32], normalized: true };
+const NORMAL: Expected =
+    Expected { what: "NORMAL", dims: Dimensions::Vec3, types: &[DataType::F32], normalized: true };
+const TANGENT: Expected =
+    Expected { what: "TANGENT", dims: Dimensions::Vec4, types: &[DataType::F32], normalized: true };
 const TEXCOORD_0: Expected = Expected {
     what: "TEXCOORD_0",
     dims: Dimensions::Vec2,
     types: &[DataType::F32, DataType::U8, DataType::U16],
+    normalized: true,
 };
 const INDICES: Expected = Expected {
     what: "indices",
     dims: Dimensions::Scalar,
     types: &[DataType::U8, DataType::U16, DataType::U32],
+    normalized: false,
+};
+const JOINTS_0: Expected = Expected {
+    what: "JOINTS_0",
+    dims: Dimensions::Vec4,
+    types: &[DataType::U8, DataType::U16],
+    normalized: false,
+};
+const WEIGHTS_0: Expected = Expected {
+    what: "WEIGHTS_0",
+    dims: Dimensions::Vec4,
+    types: &[DataType::F32, DataType::U8, DataType::U16],
+    normalized: true,
 };
 
 /// Rejects accessors the `gltf` readers would mis-read or panic on: wrong
 /// type, zero count, strides smaller than an element, ranges outside their
 /// buffer view or the view outside its buffer.
 fn check_accessor(acc: &gltf::Accessor, expected: &Expected, buffers: &[Vec<u8>]) -> Result<()> {
-    let Expected { what, dims, types } = *expected;
+    let Expected { what, dims, types, normalized } = *expected;
     let context = || format!("{what} accessor {}{}", acc.index(), quoted(acc.name()));
     ensure!(
         acc.dimensions() == dims && types.contains(&acc.data_type()),
@@ -247,7 +268,7 @@ fn check_accessor(acc: &gltf::Accessor, expected: &Expected, buffers: &[Vec<u8>]
     );
     ensure!(acc.count() > 0, "{}: count is 0", context());
     let normalized_ints =
-        matches!(acc.data_type(), DataType::U8 | DataType::U16) && dims != Dimensions::Scalar;
+        normalized && matches!(acc.data_type(), DataType::U8 | DataType::U16) && dims != Dimensions::Scalar;
     ensure!(!normalized_ints || acc.normalized(), "{}: integer data must be normalized", context());
     match acc.view() {
         Some(view) => {
@@ -350,17 +371,23 @@ fn convert_primitive(
         reader.read_tangents().map(|it| it.collect::<Vec<_>>())
     })?;
     let indices = triangle_list(prim.mode(), read_indices(prim, &reader, buffers, count)?);
+    let skin = read_skin_weights(prim, &reader, count, buffers)?;
 
-    let (mut vertices, indices, tangents) = match normals {
+    let (mut vertices, indices, tangents, skin) = match normals {
         Some(normals) => {
             apply_normals(&mut vertices, &normals, &indices);
-            (vertices, indices, tangents)
+            (vertices, indices, tangents, skin)
         }
         // The spec asks for flat normals when a primitive has none, and for
         // its tangents (if any) to be ignored then.
         None => {
+            // Flattening makes one vertex per index; the weights follow.
+            let skin = skin.map(|s| SkinWeights {
+                joints: indices.iter().map(|&i| s.joints[i as usize]).collect(),
+                weights: indices.iter().map(|&i| s.weights[i as usize]).collect(),
+            });
             let (vertices, indices) = flatten_with_face_normals(&vertices, &indices);
-            (vertices, indices, None)
+            (vertices, indices, None, skin)
         }
     };
     match tangents {
@@ -369,7 +396,31 @@ fn convert_primitive(
         None => fill_fallback_tangents(&mut vertices),
     }
     let bounds = bounds_of(&vertices);
-    Ok(Some(Primitive { vertices, indices, material: 0, bounds }))
+    Ok(Some(Primitive { vertices, indices, material: 0, bounds, skin }))
+}
+
+/// JOINTS_0 + WEIGHTS_0 (both or neither), checked and renormalized.
+fn read_skin_weights<'a, 's, F>(
+    prim: &gltf::Primitive,
+    reader: &gltf::mesh::Reader<'a, 's, F>,
+    count: usize,
+    buffers: &[Vec<u8>],
+) -> Result<Option<SkinWeights>>
+where
+    F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+{
+    let joints = read_attribute(prim.get(&gltf::Semantic::Joints(0)), &JOINTS_0, count, buffers, || {
+        reader.read_joints(0).map(|it| it.into_u16().map(|j| j.map(u32::from)).collect::<Vec<_>>())
+    })?;
+    let weights = read_attribute(prim.get(&gltf::Semantic::Weights(0)), &WEIGHTS_0, count, buffers, || {
+        reader.read_weights(0).map(|it| it.into_f32().collect::<Vec<_>>())
+    })?;
+    match (joints, weights) {
+        (Some(j), Some(w)) => Ok(Some(SkinWeights::new(j, w)?)),
+        (None, None) => Ok(None),
+        (Some(_), None) => bail!("has JOINTS_0 but no WEIGHTS_0"),
+        (None, Some(_)) => bail!("has WEIGHTS_0 but no JOINTS_0"),
+    }
 }
 
 fn read_positions<'a, 's, F>(
@@ -716,13 +767,14 @@ fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> Material {
 // Animations
 
 const ANIMATION_INPUT: Expected =
-    Expected { what: "animation input", dims: Dimensions::Scalar, types: &[DataType::F32] };
+    Expected { what: "animation input", dims: Dimensions::Scalar, types: &[DataType::F32], normalized: true };
 const ANIMATION_VEC3: Expected =
-    Expected { what: "animation output", dims: Dimensions::Vec3, types: &[DataType::F32] };
+    Expected { what: "animation output", dims: Dimensions::Vec3, types: &[DataType::F32], normalized: true };
 const ANIMATION_ROTATION: Expected = Expected {
     what: "animation output",
     dims: Dimensions::Vec4,
     types: &[DataType::F32, DataType::I8, DataType::U8, DataType::I16, DataType::U16],
+    normalized: true,
 };
 
 /// Node animations; glTF node indices are the scene's node indices. Morph
@@ -815,6 +867,65 @@ fn build_nodes(doc: &gltf::Document, scene: &mut Scene) -> Result<()> {
     let world = scene.world_matrices();
     for node in doc.nodes().filter(|n| reachable[n.index()]) {
         attach_node_content(&node, &world[node.index()], scene);
+    }
+    Ok(())
+}
+
+/// glTF skins, and the joint indices of every skinned node's mesh checked
+/// against its skin (an out-of-range joint would read past the joint
+/// matrices on the GPU).
+fn convert_skins(doc: &gltf::Document, buffers: &[Vec<u8>], scene: &mut Scene) -> Result<()> {
+    for skin in doc.skins() {
+        let name = skin.name().map_or_else(|| format!("skin {}", skin.index()), str::to_string);
+        let context = || format!("skin '{name}'");
+        let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+        ensure!(!joints.is_empty(), "{}: has no joints", context());
+        let inverse_bind = match skin.inverse_bind_matrices() {
+            Some(acc) => {
+                const IBM: Expected = Expected {
+                    what: "inverseBindMatrices",
+                    dims: Dimensions::Mat4,
+                    types: &[DataType::F32],
+                    normalized: true,
+                };
+                check_accessor(&acc, &IBM, buffers).with_context(context)?;
+                ensure!(
+                    acc.count() >= joints.len(),
+                    "{}: {} inverse bind matrices for {} joints",
+                    context(),
+                    acc.count(),
+                    joints.len()
+                );
+                let reader = skin.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+                let m: Vec<Mat4> = reader
+                    .read_inverse_bind_matrices()
+                    .with_context(|| format!("{}: cannot read inverseBindMatrices", context()))?
+                    .map(|m| Mat4::from_cols_array_2d(&m))
+                    .collect();
+                ensure!(m.iter().all(|m| m.is_finite()), "{}: non-finite inverse bind matrix", context());
+                m
+            }
+            None => vec![Mat4::IDENTITY; joints.len()],
+        };
+        scene.skins.push(Skin { name, joints, inverse_bind });
+    }
+    for node in doc.nodes() {
+        let (Some(skin), Some(mesh)) = (node.skin(), node.mesh()) else { continue };
+        let n = node.index();
+        scene.nodes[n].skin = Some(skin.index());
+        let s = &scene.skins[skin.index()];
+        let m = &scene.meshes[mesh.index()];
+        for (p, prim) in m.primitives.iter().enumerate() {
+            let Some(max) = prim.skin.as_ref().and_then(SkinWeights::max_joint) else { continue };
+            ensure!(
+                (max as usize) < s.joints.len(),
+                "node '{}': mesh '{}' primitive {p} uses joint {max} but skin '{}' has {} joints",
+                scene.nodes[n].name,
+                m.name,
+                s.name,
+                s.joints.len()
+            );
+        }
     }
     Ok(())
 }
@@ -1272,6 +1383,59 @@ mod tests {
         );
         let err = error_of(&path);
         assert!(err.contains("tri.gltf") && err.contains("no such.png"), "{err}");
+    }
+
+    /// SimpleSkin with its JSON edited by `edit`, beside copies of its buffers.
+    fn edited_simple_skin(test: &str, edit: impl Fn(&str) -> String) -> PathBuf {
+        let src = shared("gltf/SimpleSkin/glTF");
+        let dir = temp_dir(test);
+        for f in ["skinGeometry.bin", "skinningData.bin", "inverseBindMatrices.bin", "skinAnimation.bin"] {
+            std::fs::copy(src.join(f), dir.join(f)).unwrap();
+        }
+        let json = std::fs::read_to_string(src.join("SimpleSkin.gltf")).unwrap();
+        let path = dir.join("SimpleSkin.gltf");
+        std::fs::write(&path, edit(&json)).unwrap();
+        path
+    }
+
+    #[test]
+    fn skins_and_weights_are_imported() {
+        let scene = load(&shared("gltf/SimpleSkin/glTF/SimpleSkin.gltf")).unwrap();
+        assert_eq!(scene.skins.len(), 1);
+        assert_eq!(scene.skins[0].joints, vec![1, 2]);
+        assert_eq!(scene.nodes[0].skin, Some(0));
+        let w = scene.meshes[0].primitives[0].skin.as_ref().expect("JOINTS_0/WEIGHTS_0 read");
+        assert_eq!(w.joints.len(), scene.meshes[0].primitives[0].vertices.len());
+        for ws in &w.weights {
+            assert!((ws.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+        }
+        let inst = &scene.instances[0];
+        assert_eq!(inst.skinned, Some(0));
+        for model in [
+            "gltf/Fox/glTF/Fox.gltf",
+            "gltf/CesiumMan/glTF/CesiumMan.gltf",
+            "gltf/RiggedFigure/glTF/RiggedFigure.gltf",
+        ] {
+            let s = load(&shared(model)).unwrap();
+            assert!(s.instances.iter().any(|i| i.skinned.is_some()), "{model}: nothing skinned");
+        }
+    }
+
+    #[test]
+    fn out_of_range_joint_is_rejected() {
+        // Only one joint left while the weights still reference joint 1.
+        let path =
+            edited_simple_skin("bad-joint", |j| j.replace("\"joints\" : [ 1, 2 ]", "\"joints\" : [ 1 ]"));
+        let err = error_of(&path);
+        assert!(err.contains("uses joint 1") && err.contains("has 1 joints"), "{err}");
+        assert!(err.contains("SimpleSkin.gltf"), "{err}");
+    }
+
+    #[test]
+    fn joints_without_weights_are_rejected() {
+        let path = edited_simple_skin("no-weights", |j| j.replace(",\n        \"WEIGHTS_0\" : 3", ""));
+        let err = error_of(&path);
+        assert!(err.contains("JOINTS_0 but no WEIGHTS_0"), "{err}");
     }
 
     #[test]

@@ -11,6 +11,7 @@ pub mod gltf_import;
 pub mod obj;
 pub mod primitives;
 pub mod scene_file;
+pub mod skin;
 pub mod tangents;
 
 use std::path::{Path, PathBuf};
@@ -40,8 +41,10 @@ pub struct Primitive {
     /// Always u32 on the CPU side (u8/u16 glTF indices are widened on import).
     pub indices: Vec<u32>,
     pub material: usize,
-    /// Object-space bounds of `vertices`.
+    /// Object-space bounds of `vertices` (the bind pose when skinned).
     pub bounds: Aabb,
+    /// JOINTS_0 / WEIGHTS_0, when the primitive is skinned.
+    pub skin: Option<skin::SkinWeights>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -243,6 +246,8 @@ pub struct Node {
     pub camera: Option<usize>,
     /// Object id (index into `Scene::objects`) this node's mesh belongs to.
     pub object: Option<usize>,
+    /// Skin (index into `Scene::skins`) deforming this node's mesh.
+    pub skin: Option<usize>,
 }
 
 /// A user-visible object: one loaded model or primitive of a scene file, or
@@ -261,6 +266,10 @@ pub struct Instance {
     pub primitive: usize,
     pub object: usize,
     pub world: Mat4,
+    /// For a skinned primitive: its slot among the scene's skinned instances
+    /// (stable while the node hierarchy does not change), which owns a
+    /// deformed vertex range and an updatable acceleration structure.
+    pub skinned: Option<usize>,
 }
 
 /// Linear RGB float image (equirectangular environment).
@@ -369,6 +378,8 @@ pub struct Scene {
     pub bounds: Aabb,
     /// glTF node animations (see [`Scene::animate`]).
     pub animations: Vec<animation::Animation>,
+    /// glTF skins, referenced by `Node::skin`.
+    pub skins: Vec<skin::Skin>,
 }
 
 impl Scene {
@@ -429,6 +440,7 @@ impl Scene {
         }
         self.instances.clear();
         self.bounds = Aabb::EMPTY;
+        let mut skinned_slots = 0;
         for (n, node) in self.nodes.iter().enumerate() {
             let Some(mesh) = node.mesh else { continue };
             let object = node.object.unwrap_or(0);
@@ -436,7 +448,20 @@ impl Scene {
                 if prim.indices.is_empty() {
                     continue;
                 }
-                self.instances.push(Instance { node: n, mesh, primitive: p, object, world: world[n] });
+                let skinned = (node.skin.is_some() && prim.skin.is_some()).then(|| {
+                    skinned_slots += 1;
+                    skinned_slots - 1
+                });
+                self.instances.push(Instance {
+                    node: n,
+                    mesh,
+                    primitive: p,
+                    object,
+                    world: world[n],
+                    skinned,
+                });
+                // Skinned bounds are the bind pose's: good enough for framing
+                // a camera, never used for culling or tracing.
                 self.bounds = self.bounds.union(&prim.bounds.transformed(&world[n]));
             }
         }

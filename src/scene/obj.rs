@@ -181,7 +181,7 @@ fn build_mesh(p: Parsed, name: &str) -> Result<Mesh> {
     let bounds = bounds_of(&vertices);
     Ok(Mesh {
         name: name.to_string(),
-        primitives: vec![Primitive { vertices, indices, material: 0, bounds }],
+        primitives: vec![Primitive { vertices, indices, material: 0, bounds, skin: None }],
     })
 }
 

@@ -75,7 +75,7 @@ pub fn uv_sphere(radius: f32, slices: u32, stacks: u32) -> Primitive {
         }
     }
     let bounds = bounds_of(&vertices);
-    Primitive { vertices, indices, material: 0, bounds }
+    Primitive { vertices, indices, material: 0, bounds, skin: None }
 }
 
 /// One sphere vertex with its analytic tangent (along +u), which stays
@@ -121,7 +121,7 @@ fn push_face(vertices: &mut Vec<Vertex>, indices: &mut Vec<u32>, f: Face, half: 
 fn finish(mut vertices: Vec<Vertex>, indices: Vec<u32>) -> Primitive {
     generate_tangents(&mut vertices, &indices);
     let bounds = bounds_of(&vertices);
-    Primitive { vertices, indices, material: 0, bounds }
+    Primitive { vertices, indices, material: 0, bounds, skin: None }
 }
 
 #[cfg(test)]

@@ -515,7 +515,7 @@ fn procedural(o: &ObjectDef, kind: PrimitiveKind) -> Result<Primitive> {
 fn merge(scene: &mut Scene, sub: Scene, name: &str, local: Transform, object: usize) {
     let (mesh_base, material_base, texture_base) =
         (scene.meshes.len(), scene.materials.len(), scene.textures.len());
-    let camera_base = scene.cameras.len();
+    let (camera_base, skin_base) = (scene.cameras.len(), scene.skins.len());
     let root = scene.nodes.len();
     let node_base = root + 1;
     let placement = local.matrix();
@@ -548,6 +548,7 @@ fn merge(scene: &mut Scene, sub: Scene, name: &str, local: Transform, object: us
         n.children.iter_mut().for_each(|c| *c += node_base);
         n.mesh = n.mesh.map(|m| m + mesh_base);
         n.camera = n.camera.map(|c| c + camera_base);
+        n.skin = n.skin.map(|k| k + skin_base);
         n.object = n.mesh.map(|_| object);
         scene.nodes.push(n);
     }
@@ -557,6 +558,10 @@ fn merge(scene: &mut Scene, sub: Scene, name: &str, local: Transform, object: us
         c
     }));
     scene.lights.extend(sub.lights.into_iter().map(|l| place_light(l, &placement, node_base)));
+    scene.skins.extend(sub.skins.into_iter().map(|mut k| {
+        k.joints.iter_mut().for_each(|j| *j += node_base);
+        k
+    }));
     scene.animations.extend(sub.animations.into_iter().map(|mut a| {
         a.channels.iter_mut().for_each(|c| c.node += node_base);
         a

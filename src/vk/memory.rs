@@ -83,6 +83,30 @@ impl Buffer {
         Ok(buf)
     }
 
+    /// Copies `data` into a device-local buffer (made by `with_data`) at
+    /// `offset` through a staging buffer, waiting for the copy.
+    pub fn upload(&self, ctx: &Context, offset: u64, data: &[u8]) -> Result<()> {
+        if data.is_empty() {
+            return Ok(());
+        }
+        anyhow::ensure!(offset + data.len() as u64 <= self.size, "upload past the end of a buffer");
+        let mut staging = Buffer::new(
+            ctx,
+            "upload (staging)",
+            data.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.write(0, data)?;
+        let r = ctx.one_shot("upload", |cmd| {
+            let region = [vk::BufferCopy::default().dst_offset(offset).size(data.len() as u64)];
+            unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, self.raw, &region) };
+            Ok(())
+        });
+        staging.destroy(ctx);
+        r
+    }
+
     /// Writes into a host-visible buffer.
     pub fn write(&mut self, offset: usize, data: &[u8]) -> Result<()> {
         let slice = self

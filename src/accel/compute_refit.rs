@@ -1,0 +1,145 @@
+//! GPU refit of the compute backend's skinned BVHs (glsl/anim/bvh_refit.comp):
+//! one workgroup per BVH, levels deepest first. The refit roots come back to
+//! the host, which rebuilds the small top level from them.
+
+use anyhow::Result;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::bvh::{Bvh, BvhNode, MAX_DEPTH};
+use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
+use crate::vk::pipeline::{compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization};
+use crate::vk::{memory_barrier, Buffer, Context};
+
+/// Mirrors `RefitJob` in glsl/anim/bvh_refit.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct RefitJob {
+    pub node_offset: u32,
+    pub prim_offset: u32,
+    pub first_index: u32,
+    pub vertex_offset: u32,
+    pub order_offset: u32,
+    pub level_offset: u32,
+    pub level_count: u32,
+    pub pad: u32,
+}
+
+pub struct ComputeRefit {
+    jobs: Buffer,
+    order: Buffer,
+    roots: Buffer,
+    job_list: Vec<RefitJob>,
+    set: DescriptorSet,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+}
+
+/// `order` entries a tree over `triangles` can need: every node plus the
+/// level boundaries of the deepest allowed tree.
+fn order_capacity(triangles: u32) -> u32 {
+    (2 * triangles).saturating_sub(1) + MAX_DEPTH as u32 + 2
+}
+
+impl ComputeRefit {
+    /// `bvhs`: per skinned slot, its BVH and where its nodes / triangle
+    /// order live in the shared node / prim buffers.
+    pub fn new(
+        ctx: &Context,
+        gpu: &GpuScene,
+        bvhs: &[(&Bvh, u32, u32)],
+        nodes: &Buffer,
+        prims: &Buffer,
+    ) -> Result<ComputeRefit> {
+        let mut job_list = Vec::new();
+        let mut order_len = 0u32;
+        for (&(_, node_offset, prim_offset), r) in bvhs.iter().zip(&gpu.skinned) {
+            let r: &PrimitiveRange = r;
+            job_list.push(RefitJob {
+                node_offset,
+                prim_offset,
+                first_index: r.first_index,
+                vertex_offset: r.vertex_offset,
+                order_offset: order_len,
+                ..Default::default()
+            });
+            order_len += order_capacity(r.index_count / 3);
+        }
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let host = |name: &str, bytes: u64, location| Buffer::new(ctx, name, bytes, storage, location);
+        let jobs = host("BVH refit jobs", (job_list.len() * 32) as u64, MemoryLocation::CpuToGpu)?;
+        let order = host("BVH refit level order", order_len as u64 * 4, MemoryLocation::CpuToGpu)?;
+        let roots = host(
+            "BVH refit roots",
+            (job_list.len() * std::mem::size_of::<BvhNode>()) as u64,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
+        let set = DescriptorSet::new(ctx, "BVH refit set", &[sb; 7])?;
+        let buffers = [nodes, prims, &gpu.vertices, &gpu.indices, &jobs, &order, &roots];
+        for (i, b) in buffers.iter().enumerate() {
+            set.write_buffer(ctx, i as u32, b.raw);
+        }
+        let layout = pipeline_layout(ctx, "BVH refit layout", &[set.layout], 0)?;
+        let pipeline = compute_pipeline(ctx, "anim/bvh_refit.comp", layout, &Specialization::new(&[]))?;
+        let mut refit = ComputeRefit { jobs, order, roots, job_list, set, layout, pipeline };
+        for (slot, (bvh, _, _)) in bvhs.iter().enumerate() {
+            refit.set_levels(slot, bvh)?;
+        }
+        Ok(refit)
+    }
+
+    /// Writes the level order of `slot`'s (new) tree. The GPU must be idle.
+    pub fn set_levels(&mut self, slot: usize, bvh: &Bvh) -> Result<()> {
+        let (order, bounds) = bvh.levels();
+        let job = &mut self.job_list[slot];
+        job.level_offset = job.order_offset + order.len() as u32;
+        job.level_count = bounds.len() as u32 - 1;
+        self.order.write(job.order_offset as usize * 4, bytemuck::cast_slice(&order))?;
+        self.order.write(job.level_offset as usize * 4, bytemuck::cast_slice(&bounds))?;
+        self.jobs.write(slot * 32, bytemuck::bytes_of(job))
+    }
+
+    /// Records the refit of every skinned BVH (after the skinning barrier)
+    /// and the barrier to the tracer and to the host's read of the roots.
+    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let d = &ctx.device;
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[self.set.set],
+                &[],
+            );
+            d.cmd_dispatch(cmd, self.job_list.len() as u32, 1, 1);
+        }
+        memory_barrier(
+            ctx,
+            cmd,
+            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::HOST,
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::HOST_READ,
+            ),
+        );
+    }
+
+    /// Root nodes of the last completed refit, by slot.
+    pub fn roots(&self) -> Result<Vec<BvhNode>> {
+        Ok(bytemuck::pod_collect_to_vec(self.roots.read()?))
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        unsafe {
+            ctx.device.destroy_pipeline(self.pipeline, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+        }
+        self.set.destroy(ctx);
+        for b in [&mut self.jobs, &mut self.order, &mut self.roots] {
+            b.destroy(ctx);
+        }
+    }
+}

@@ -1,0 +1,224 @@
+//! The skinning pass (glsl/anim/skinning.comp): once per frame, every
+//! skinned instance's bind-pose vertices are blended by its joint matrices
+//! into its range of the shared vertex buffer, which the G-buffer pass, the
+//! acceleration-structure refits and the compute tracer then read. It also
+//! measures each instance's deformed bounds for the BLAS rebuild policy.
+
+use anyhow::Result;
+use ash::vk;
+use glam::{Mat4, Vec3};
+use gpu_allocator::MemoryLocation;
+
+use super::gpu_scene::GpuScene;
+use crate::scene::{Aabb, Scene, Vertex};
+use crate::vk::pipeline::{compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization};
+use crate::vk::{memory_barrier, Buffer, Context};
+
+/// Mirrors `SkinVertex` in glsl/anim/skinning.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct SkinVertex {
+    vertex: Vertex,
+    joints: [u32; 4],
+    weights: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<SkinVertex>() == 80);
+
+/// Push constants of one dispatch (one skinned instance).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct Job {
+    src_offset: u32,
+    dst_offset: u32,
+    vertex_count: u32,
+    joint_offset: u32,
+    slot: u32,
+}
+
+pub struct Skinning {
+    jobs: Vec<Job>,
+    /// Per slot: (node, skin) whose joint matrices feed it.
+    sources: Vec<(usize, usize)>,
+    source: Buffer,
+    joints: Buffer,
+    bounds: Buffer,
+    set: DescriptorSet,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+}
+
+/// Encodes a float so that unsigned order is float order (as the shader does).
+fn orderable(f: f32) -> u32 {
+    let u = f.to_bits();
+    if u & 0x8000_0000 != 0 {
+        !u
+    } else {
+        u | 0x8000_0000
+    }
+}
+
+fn from_orderable(u: u32) -> f32 {
+    f32::from_bits(if u & 0x8000_0000 != 0 { u & 0x7fff_ffff } else { !u })
+}
+
+impl Skinning {
+    /// None when the scene has no skinned instance.
+    pub fn new(ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<Option<Skinning>> {
+        let skinned: Vec<_> = scene.instances.iter().filter(|i| i.skinned.is_some()).collect();
+        if skinned.is_empty() {
+            return Ok(None);
+        }
+        // Bind-pose data once per skinned primitive, shared by its instances.
+        let mut source_data: Vec<SkinVertex> = Vec::new();
+        let mut source_of: Vec<((usize, usize), u32)> = Vec::new();
+        let (mut jobs, mut sources, mut joint_count) = (Vec::new(), Vec::new(), 0u32);
+        for inst in skinned {
+            let slot = inst.skinned.unwrap();
+            let prim = &scene.meshes[inst.mesh].primitives[inst.primitive];
+            let (Some(w), Some(skin)) = (&prim.skin, scene.nodes[inst.node].skin) else { continue };
+            let key = (inst.mesh, inst.primitive);
+            let src_offset = match source_of.iter().find(|(k, _)| *k == key) {
+                Some((_, o)) => *o,
+                None => {
+                    let o = source_data.len() as u32;
+                    source_data.extend(
+                        prim.vertices
+                            .iter()
+                            .zip(w.joints.iter().zip(&w.weights))
+                            .map(|(v, (j, w))| SkinVertex { vertex: *v, joints: *j, weights: *w }),
+                    );
+                    source_of.push((key, o));
+                    o
+                }
+            };
+            let r = gpu.skinned[slot];
+            jobs.push(Job {
+                src_offset,
+                dst_offset: r.vertex_offset,
+                vertex_count: r.vertex_count,
+                joint_offset: joint_count,
+                slot: slot as u32,
+            });
+            sources.push((inst.node, skin));
+            joint_count += scene.skins[skin].joints.len() as u32;
+        }
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let source =
+            Buffer::with_data(ctx, "skinning bind pose", bytemuck::cast_slice(&source_data), storage)?;
+        let joints = Buffer::new(
+            ctx,
+            "skinning joint matrices",
+            joint_count as u64 * 64,
+            storage,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let bounds =
+            Buffer::new(ctx, "skinned bounds", jobs.len() as u64 * 24, storage, MemoryLocation::GpuToCpu)?;
+        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
+        let set = DescriptorSet::new(ctx, "skinning set", &[sb, sb, sb, sb])?;
+        for (i, b) in [source.raw, joints.raw, gpu.vertices.raw, bounds.raw].into_iter().enumerate() {
+            set.write_buffer(ctx, i as u32, b);
+        }
+        let layout =
+            pipeline_layout(ctx, "skinning layout", &[set.layout], std::mem::size_of::<Job>() as u32)?;
+        let pipeline = compute_pipeline(ctx, "anim/skinning.comp", layout, &Specialization::new(&[]))?;
+        log::info!(
+            "skinning: {} skinned instances, {} bind-pose vertices, {} joints",
+            jobs.len(),
+            source_data.len(),
+            joint_count
+        );
+        Ok(Some(Skinning { jobs, sources, source, joints, bounds, set, layout, pipeline }))
+    }
+
+    /// Writes this frame's joint matrices and resets the bounds accumulators.
+    /// The GPU must not be using them (the caller waited).
+    pub fn write(&mut self, scene: &Scene) -> Result<()> {
+        let world = scene.world_matrices();
+        let mut m: Vec<Mat4> = Vec::new();
+        for &(node, skin) in &self.sources {
+            m.extend(scene.joint_matrices(skin, node, &world));
+        }
+        self.joints.write(0, bytemuck::cast_slice(&m))?;
+        let (lo, hi) = (orderable(f32::INFINITY), orderable(f32::NEG_INFINITY));
+        let reset: Vec<u32> = (0..self.jobs.len()).flat_map(|_| [lo, lo, lo, hi, hi, hi]).collect();
+        self.bounds.write(0, bytemuck::cast_slice(&reset))
+    }
+
+    /// Records the dispatches plus a barrier making the vertices visible to
+    /// the acceleration-structure builds, the compute tracer and the
+    /// rasterizer's vertex pulling.
+    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let d = &ctx.device;
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[self.set.set],
+                &[],
+            );
+            for job in &self.jobs {
+                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL, 0, bytemuck::bytes_of(job));
+                d.cmd_dispatch(cmd, job.vertex_count.div_ceil(64), 1, 1);
+            }
+        }
+        let mut readers = vk::PipelineStageFlags2::COMPUTE_SHADER
+            | vk::PipelineStageFlags2::VERTEX_SHADER
+            | vk::PipelineStageFlags2::FRAGMENT_SHADER
+            | vk::PipelineStageFlags2::HOST;
+        if ctx.rt.acceleration_structure {
+            readers |= vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR;
+        }
+        if ctx.rt.ray_tracing_pipeline {
+            readers |= vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
+        }
+        memory_barrier(
+            ctx,
+            cmd,
+            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
+            (readers, vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::HOST_READ),
+        );
+    }
+
+    /// Deformed bounds of each slot from the last completed skinning pass.
+    pub fn bounds(&self) -> Result<Vec<Aabb>> {
+        let raw: Vec<u32> = bytemuck::pod_collect_to_vec(self.bounds.read()?);
+        Ok(raw
+            .chunks_exact(6)
+            .map(|b| Aabb {
+                min: Vec3::new(from_orderable(b[0]), from_orderable(b[1]), from_orderable(b[2])),
+                max: Vec3::new(from_orderable(b[3]), from_orderable(b[4]), from_orderable(b[5])),
+            })
+            .collect())
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        unsafe {
+            ctx.device.destroy_pipeline(self.pipeline, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+        }
+        self.set.destroy(ctx);
+        for b in [&mut self.source, &mut self.joints, &mut self.bounds] {
+            b.destroy(ctx);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn orderable_floats_sort_like_floats() {
+        let v = [-1e30f32, -2.5, -0.0, 0.0, 1e-30, 3.0, 1e30];
+        for w in v.windows(2) {
+            assert!(orderable(w[0]) <= orderable(w[1]), "{} vs {}", w[0], w[1]);
+        }
+        for f in v {
+            assert_eq!(from_orderable(orderable(f)).to_bits(), f.to_bits());
+        }
+    }
+}
