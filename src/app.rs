@@ -7,6 +7,7 @@ use anyhow::{bail, Context as _, Result};
 use ash::vk as avk;
 use glam::Vec3;
 
+use crate::accel::dynamic::RebuildPolicy;
 use crate::render::shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
 use crate::render::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
@@ -224,7 +225,7 @@ pub struct BenchReport {
 impl BenchReport {
     pub fn table(&self) -> String {
         let mut s = format!(
-            "scene {}  device {}  {}x{}  {} frames (GPU ms)\n{}\n{:<12} {:>9} {:>9} {:>9}\n",
+            "scene {}  device {}  {}x{}  {} frames (GPU ms)\n{}\n{:<24} {:>9} {:>9} {:>9}\n",
             self.scene.display(),
             self.device,
             self.width,
@@ -237,7 +238,7 @@ impl BenchReport {
             "max"
         );
         for p in self.passes.iter().chain(std::iter::once(&self.frame_total)) {
-            s.push_str(&format!("{:<12} {:>9.3} {:>9.3} {:>9.3}\n", p.name, p.min, p.median, p.max));
+            s.push_str(&format!("{:<24} {:>9.3} {:>9.3} {:>9.3}\n", p.name, p.min, p.median, p.max));
         }
         let [camera, shadow, secondary] = self.rays_first_frame;
         let total = (camera + shadow + secondary) as f64;
@@ -271,12 +272,35 @@ fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
 /// then renders `warmup` unmeasured frames and `frames` measured frames
 /// along the scene's camera path (or from its camera), all with one renderer
 /// and one scene upload, and reports per-pass GPU times.
+/// How a benchmark keeps the acceleration structures current when the
+/// scene animates.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum AccelUpdate {
+    /// Refit skinned structures, rebuilding by the default policy.
+    #[default]
+    Policy,
+    /// Refit skinned structures every frame, never rebuild.
+    Refit,
+    /// Rebuild skinned structures every frame (BUILD instead of UPDATE).
+    Rebuild,
+    /// Rebuild every acceleration structure from scratch every frame.
+    Full,
+}
+
+/// One measured configuration of a benchmark run.
+#[derive(Clone, Copy, Debug)]
+pub struct BenchVariant {
+    pub mode: Mode,
+    pub backend: Backend,
+    pub accel: AccelUpdate,
+}
+
 pub fn bench(
     ctx: &Context,
     job: &RenderJob,
     frames: usize,
     warmup: usize,
-    variants: &[(Mode, Backend)],
+    variants: &[BenchVariant],
 ) -> Result<Vec<BenchReport>> {
     let extent = job.extent()?;
     let (mut scene, anim) = load_posed(job)?;
@@ -284,8 +308,14 @@ pub fn bench(
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let mut reports = Vec::new();
     let result: Result<()> = (|| {
-        for &(mode, backend) in variants {
+        for &BenchVariant { mode, backend, accel } in variants {
             let settings = RenderSettings { mode, backend, ..job.settings };
+            renderer.rebuild_policy = match accel {
+                AccelUpdate::Policy => RebuildPolicy::default(),
+                AccelUpdate::Refit => RebuildPolicy::NEVER,
+                AccelUpdate::Rebuild | AccelUpdate::Full => RebuildPolicy::ALWAYS,
+            };
+            let mut counts = [0usize; 2];
             if ShadingConfig::resolve(ctx, SceneNeeds::of(&scene), mode, settings.effects, backend).is_err() {
                 log::warn!(
                     "bench: {mode:?} with backend {backend:?} is not available on this device, skipped"
@@ -306,8 +336,16 @@ pub fn bench(
                 if let Some(a) = anim {
                     // Fixed-step clock: deterministic frames.
                     scene.animate(a, job.time + i as f32 / job.fps.max(1e-3));
-                    renderer.update_scene(ctx, &scene)?;
+                    if accel == AccelUpdate::Full {
+                        renderer.rebuild_all_structures(ctx, &scene)?;
+                    } else {
+                        renderer.update_scene(ctx, &scene)?;
+                    }
                     update = renderer.update_timings.clone();
+                    if i >= warmup {
+                        counts[0] += renderer.update_counts[0];
+                        counts[1] += renderer.update_counts[1];
+                    }
                 }
                 let out = renderer.render(ctx, &scene, &camera, &settings)?;
                 if i < warmup {
@@ -327,7 +365,19 @@ pub fn bench(
             reports.push(BenchReport {
                 scene: job.scene.clone(),
                 device: ctx.caps.name.clone(),
-                config: renderer.shading_config().map(|c| c.describe()).unwrap_or_default(),
+                config: {
+                    let c = renderer.shading_config().map(|c| c.describe()).unwrap_or_default();
+                    match anim {
+                        Some(_) if accel == AccelUpdate::Full => {
+                            format!("{c}; AS update: Full (every structure rebuilt every frame)")
+                        }
+                        Some(_) => format!(
+                            "{c}; AS update: {accel:?} ({} refits, {} rebuilds of skinned structures)",
+                            counts[0], counts[1]
+                        ),
+                        None => c,
+                    }
+                },
                 width: job.width,
                 height: job.height,
                 frames,
@@ -348,7 +398,7 @@ pub fn bench_command(
     job: &RenderJob,
     frames: usize,
     warmup: usize,
-    variants: &[(Mode, Backend)],
+    variants: &[BenchVariant],
 ) -> Result<()> {
     let ctx = gpu.context()?;
     let reports = bench(&ctx, job, frames.max(1), warmup, variants)?;

@@ -9,7 +9,7 @@ use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
 
-use hybrid_rt::app::{self, CameraChoice, GpuOptions, RenderJob};
+use hybrid_rt::app::{self, AccelUpdate, CameraChoice, GpuOptions, RenderJob};
 use hybrid_rt::render::shading::{Backend, Effects, Mode};
 use hybrid_rt::render::{DebugView, RenderSettings};
 use hybrid_rt::viewer::{self, PresentMode, ViewerOptions};
@@ -74,6 +74,12 @@ enum Command {
         /// Measure every ray backend the device offers side by side.
         #[arg(long)]
         compare_backends: bool,
+        /// How animated frames update the acceleration structures.
+        #[arg(long, value_enum, default_value_t = AccelUpdate::Policy)]
+        accel_update: AccelUpdate,
+        /// Measure refit, rebuild and full rebuild side by side.
+        #[arg(long)]
+        compare_accel_updates: bool,
     },
     /// Open an interactive window (fly/orbit camera, debug views, screenshots).
     View {
@@ -199,15 +205,34 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Render { view, out, hdr_out }) => {
             app::render_command(&gpu, &view.job(), &out, hdr_out.as_deref())
         }
-        Some(Command::Bench { view, frames, warmup, compare_modes, compare_backends }) => {
+        Some(Command::Bench {
+            view,
+            frames,
+            warmup,
+            compare_modes,
+            compare_backends,
+            accel_update,
+            compare_accel_updates,
+        }) => {
             let modes = if compare_modes { vec![Mode::Hybrid, Mode::Rt] } else { vec![view.mode] };
             let backends = if compare_backends {
                 vec![Backend::Query, Backend::Pipeline, Backend::Compute]
             } else {
                 vec![view.backend]
             };
-            let variants: Vec<_> =
-                modes.iter().flat_map(|m| backends.iter().map(move |b| (*m, *b))).collect();
+            let updates = if compare_accel_updates {
+                vec![AccelUpdate::Refit, AccelUpdate::Rebuild, AccelUpdate::Full]
+            } else {
+                vec![accel_update]
+            };
+            let mut variants = Vec::new();
+            for &mode in &modes {
+                for &backend in &backends {
+                    for &accel in &updates {
+                        variants.push(app::BenchVariant { mode, backend, accel });
+                    }
+                }
+            }
             app::bench_command(&gpu, &view.job(), frames, warmup, &variants)
         }
         Some(Command::View { view, present_mode, frames, screenshot, test_resize }) => {

@@ -235,10 +235,12 @@ impl Renderer {
             s.write(scene)?;
         }
         let policy = self.rebuild_policy;
+        let t_rebuild = std::time::Instant::now();
         let bvh_updates = match &mut self.bvh {
             Some(b) => b.prepare_skinned(ctx, scene, &policy)?,
             None => Vec::new(),
         };
+        let cpu_rebuild_ms = t_rebuild.elapsed().as_secs_f64() * 1e3;
         let blas_updates: Vec<Update> = match self.accel.as_ref().and_then(|(a, _)| a.dynamic.as_ref()) {
             Some(d) => d.blases.iter().map(|b| b.state.next(&policy)).collect(),
             None => Vec::new(),
@@ -289,6 +291,9 @@ impl Renderer {
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
         self.update_timings = self.update_timer.results(ctx)?;
+        if bvh_updates.contains(&Update::Rebuild) {
+            self.update_timings.push(("bvh rebuild (CPU)", cpu_rebuild_ms));
+        }
 
         // Judge this frame's results for the next frame's rebuild decisions.
         let t0 = std::time::Instant::now();
@@ -310,6 +315,50 @@ impl Renderer {
             count(&blas_updates, Update::Refit) + count(&bvh_updates, Update::Refit),
             count(&blas_updates, Update::Rebuild) + count(&bvh_updates, Update::Rebuild),
         ];
+        Ok(())
+    }
+
+    /// Builds the acceleration structure `backend` traces, if missing.
+    fn build_structures(&mut self, ctx: &Context, scene: &Scene, backend: Option<Backend>) -> Result<()> {
+        match backend {
+            Some(Backend::Compute) if self.bvh.is_none() => {
+                self.bvh = Some(ComputeBvh::build(ctx, scene, &self.gpu)?);
+            }
+            Some(Backend::Query | Backend::Pipeline) if self.accel.is_none() => {
+                let accel = SceneAccel::build(ctx, scene, &self.gpu)?;
+                let set = DescriptorSet::new(
+                    ctx,
+                    "trace set (TLAS)",
+                    &[Binding::one(ash::vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)],
+                )?;
+                set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
+                self.accel = Some((accel, set));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// The baseline dynamic structures are measured against: skin, then
+    /// throw every acceleration structure away and build all of them again
+    /// (static BLASes included), as a renderer without refit and
+    /// instance-only updates would. `update_timings` gets "skinning" and the
+    /// rebuild's wall time.
+    pub fn rebuild_all_structures(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        self.update_scene(ctx, scene)?;
+        let skinning: Vec<_> =
+            self.update_timings.iter().filter(|(n, _)| *n == "skinning").copied().collect();
+        let t0 = std::time::Instant::now();
+        if let Some((mut a, mut set)) = self.accel.take() {
+            set.destroy(ctx);
+            a.destroy(ctx);
+        }
+        if let Some(mut b) = self.bvh.take() {
+            b.destroy(ctx);
+        }
+        self.build_structures(ctx, scene, self.shading_config().and_then(|c| c.backend))?;
+        self.update_timings = skinning;
+        self.update_timings.push(("full AS rebuild (wall)", t0.elapsed().as_secs_f64() * 1e3));
         Ok(())
     }
 
@@ -340,22 +389,7 @@ impl Renderer {
         if let Some((_, mut old)) = self.shading.take() {
             old.destroy(ctx);
         }
-        match config.backend {
-            Some(Backend::Compute) if self.bvh.is_none() => {
-                self.bvh = Some(ComputeBvh::build(ctx, scene, &self.gpu)?);
-            }
-            Some(Backend::Query | Backend::Pipeline) if self.accel.is_none() => {
-                let accel = SceneAccel::build(ctx, scene, &self.gpu)?;
-                let set = DescriptorSet::new(
-                    ctx,
-                    "trace set (TLAS)",
-                    &[Binding::one(ash::vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)],
-                )?;
-                set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
-                self.accel = Some((accel, set));
-            }
-            _ => {}
-        }
+        self.build_structures(ctx, scene, config.backend)?;
         let extra: Vec<_> = self.trace_set(&config).map(|s| s.layout).into_iter().collect();
         let name = match (config.backend, config.mode) {
             (None, _) => "lighting",

@@ -1400,7 +1400,8 @@ mod tests {
 
     #[test]
     fn skins_and_weights_are_imported() {
-        let scene = load(&shared("gltf/SimpleSkin/glTF/SimpleSkin.gltf")).unwrap();
+        let mut scene = load(&shared("gltf/SimpleSkin/glTF/SimpleSkin.gltf")).unwrap();
+        scene.update_world();
         assert_eq!(scene.skins.len(), 1);
         assert_eq!(scene.skins[0].joints, vec![1, 2]);
         assert_eq!(scene.nodes[0].skin, Some(0));
@@ -1416,7 +1417,8 @@ mod tests {
             "gltf/CesiumMan/glTF/CesiumMan.gltf",
             "gltf/RiggedFigure/glTF/RiggedFigure.gltf",
         ] {
-            let s = load(&shared(model)).unwrap();
+            let mut s = load(&shared(model)).unwrap();
+            s.update_world();
             assert!(s.instances.iter().any(|i| i.skinned.is_some()), "{model}: nothing skinned");
         }
     }
