@@ -207,7 +207,7 @@ fn info_reports_devices() {
 }
 
 /// Synchronization validation over every backend and over animated frames
-/// (instances moved, top level rebuilt between frames): no hazard reported.
+/// (rigid and skinned; refit, rebuild and full rebuild): no hazard reported.
 #[test]
 fn synchronization_validation_is_clean() {
     let d = tmp("syncval");
@@ -229,23 +229,26 @@ fn synchronization_validation_is_clean() {
             .unwrap();
         assert!(out.status.success(), "{backend}: {}", String::from_utf8_lossy(&out.stderr));
     }
-    let animated = common::shared_asset("gltf/BoxAnimated/glTF/BoxAnimated.gltf");
-    let out = bin()
-        .args([
-            "--sync-validation",
-            "bench",
-            "--width",
-            "96",
-            "--height",
-            "54",
-            "--frames",
-            "3",
-            "--warmup",
-            "0",
-        ])
-        .args(["--compare-backends", "--animation", "0", "--scene"])
-        .arg(&animated)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // Rigid (instances moved) and skinned (skinning -> refit / rebuild ->
+    // top level, every kind of update) animation.
+    for model in ["gltf/BoxAnimated/glTF/BoxAnimated.gltf", "gltf/CesiumMan/glTF/CesiumMan.gltf"] {
+        let out = bin()
+            .args([
+                "--sync-validation",
+                "bench",
+                "--width",
+                "96",
+                "--height",
+                "54",
+                "--frames",
+                "3",
+                "--warmup",
+                "0",
+            ])
+            .args(["--compare-backends", "--compare-accel-updates", "--animation", "0", "--scene"])
+            .arg(common::shared_asset(model))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{model}: {}", String::from_utf8_lossy(&out.stderr));
+    }
 }
