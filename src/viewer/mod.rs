@@ -534,7 +534,11 @@ impl Viewer {
     /// Reads the GPU pass times of the last submitted frame (its fence is done).
     fn collect_gpu_times(&mut self) -> Result<()> {
         if std::mem::take(&mut self.gpu_pending) {
-            let t = self.renderer.timer.results(&self.ctx)?;
+            let mut t = self.renderer.timer.results(&self.ctx)?;
+            // The scene update (skinning, refit, TLAS) of the frame, when it had one.
+            if self.animation.as_ref().is_some_and(|(_, _, paused)| !paused) {
+                t.extend(self.renderer.update_timings.iter().copied());
+            }
             self.stats.gpu(&t);
         }
         Ok(())
