@@ -405,6 +405,13 @@ pub fn bench_command(
     for r in &reports {
         println!("{}", r.table());
     }
+    if let Some(ms) = cpu_refit_ms(job)? {
+        println!(
+            "CPU alternative to the GPU skinning + BVH refit, measured for comparison (not used): \
+             skin + triangle boxes + refit of every skinned BVH on the host: {ms:.3} ms per frame \
+             (median of 10; the node upload would come on top)\n"
+        );
+    }
     if reports.len() > 1 {
         println!("side by side (median GPU ms per frame; ratio to the first row):");
         let base = reports[0].frame_total.median;
@@ -418,6 +425,36 @@ pub fn bench_command(
         }
     }
     check_validation(&ctx)
+}
+
+/// Host time of what the compute backend would do per frame without GPU
+/// skinning and refit: CPU skinning, triangle boxes and `Bvh::refit` of
+/// every skinned instance's tree. None without skinned instances.
+fn cpu_refit_ms(job: &RenderJob) -> Result<Option<f64>> {
+    use crate::accel::bvh::{triangle_aabbs, Bvh};
+    let (scene, _) = load_posed(job)?;
+    let world = scene.world_matrices();
+    let mut trees: Vec<(&crate::scene::Instance, Bvh)> = Vec::new();
+    for inst in &scene.instances {
+        let Some(posed) = scene.skinned_pose(inst, &world) else { continue };
+        let indices = &scene.meshes[inst.mesh].primitives[inst.primitive].indices;
+        trees.push((inst, Bvh::build(&triangle_aabbs(&posed, indices))));
+    }
+    if trees.is_empty() {
+        return Ok(None);
+    }
+    let mut times = Vec::new();
+    for _ in 0..10 {
+        let t0 = std::time::Instant::now();
+        for (inst, bvh) in &mut trees {
+            let posed = scene.skinned_pose(inst, &world).unwrap_or_default();
+            let indices = &scene.meshes[inst.mesh].primitives[inst.primitive].indices;
+            bvh.refit(&triangle_aabbs(&posed, indices));
+        }
+        times.push(t0.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(Some(times[times.len() / 2]))
 }
 
 /// Parses "x,y,z".

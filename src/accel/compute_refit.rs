@@ -8,7 +8,9 @@ use gpu_allocator::MemoryLocation;
 
 use super::bvh::{Bvh, BvhNode, MAX_DEPTH};
 use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
-use crate::vk::pipeline::{compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization};
+use crate::vk::pipeline::{
+    bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,
+};
 use crate::vk::{memory_barrier, Buffer, Context};
 
 /// Mirrors `RefitJob` in glsl/anim/bvh_refit.comp.
@@ -105,15 +107,7 @@ impl ComputeRefit {
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let d = &ctx.device;
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout,
-                0,
-                &[self.set.set],
-                &[],
-            );
+            bind_compute(ctx, cmd, self.pipeline, self.layout, &[self.set.set]);
             d.cmd_dispatch(cmd, self.job_list.len() as u32, 1, 1);
         }
         memory_barrier(

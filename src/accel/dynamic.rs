@@ -8,7 +8,7 @@ use anyhow::Result;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::{triangles, AccelStruct};
+use super::{blas_sizes, triangles, AccelStruct};
 use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
 use crate::scene::Aabb;
 use crate::vk::{Buffer, Context};
@@ -108,25 +108,10 @@ impl DynamicBlases {
     /// Creates and builds one BLAS per skinned slot (`gpu.skinned`), whose
     /// vertices must already hold a pose.
     pub fn new(ctx: &Context, gpu: &GpuScene, bounds: &[Aabb], align: u64) -> Result<DynamicBlases> {
-        let loader = ctx.accel.as_ref().expect("acceleration structures enabled");
         let mut blases = Vec::new();
         let mut scratch_size = 0u64;
         for (slot, r) in gpu.skinned.iter().enumerate() {
-            let geoms = [triangles(gpu, r)];
-            let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
-                .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
-                .flags(FLAGS)
-                .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-                .geometries(&geoms);
-            let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-            unsafe {
-                loader.get_acceleration_structure_build_sizes(
-                    vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                    &info,
-                    &[r.index_count / 3],
-                    &mut sizes,
-                )
-            };
+            let sizes = blas_sizes(ctx, gpu, r, FLAGS);
             let accel = AccelStruct::new(
                 ctx,
                 &format!("BLAS skinned slot {slot} (refit)"),

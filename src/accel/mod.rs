@@ -142,6 +142,32 @@ pub(crate) fn triangles<'a>(gpu: &GpuScene, r: &PrimitiveRange) -> vk::Accelerat
         .geometry(vk::AccelerationStructureGeometryDataKHR { triangles: tri })
 }
 
+/// Driver-reported sizes of a BLAS over one primitive range.
+pub(crate) fn blas_sizes(
+    ctx: &Context,
+    gpu: &GpuScene,
+    r: &PrimitiveRange,
+    flags: vk::BuildAccelerationStructureFlagsKHR,
+) -> vk::AccelerationStructureBuildSizesInfoKHR<'static> {
+    let loader = ctx.accel.as_ref().expect("acceleration structures enabled");
+    let geoms = [triangles(gpu, r)];
+    let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+        .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+        .flags(flags)
+        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+        .geometries(&geoms);
+    let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+    unsafe {
+        loader.get_acceleration_structure_build_sizes(
+            vk::AccelerationStructureBuildTypeKHR::DEVICE,
+            &info,
+            &[r.index_count / 3],
+            &mut sizes,
+        )
+    };
+    sizes
+}
+
 /// All acceleration structures of a scene.
 pub struct SceneAccel {
     /// Indexed by mesh, then primitive; None for empty primitives.
@@ -172,21 +198,7 @@ impl SceneAccel {
                     row.push(None);
                     continue;
                 }
-                let geoms = [triangles(gpu, r)];
-                let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
-                    .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
-                    .flags(flags)
-                    .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-                    .geometries(&geoms);
-                let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-                unsafe {
-                    loader.get_acceleration_structure_build_sizes(
-                        vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                        &info,
-                        &[r.index_count / 3],
-                        &mut sizes,
-                    )
-                };
+                let sizes = blas_sizes(ctx, gpu, r, flags);
                 let name = format!("BLAS '{}' #{p}", scene.meshes[m].name);
                 row.push(Some(AccelStruct::new(
                     ctx,

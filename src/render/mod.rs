@@ -246,13 +246,7 @@ impl Renderer {
             None => Vec::new(),
         };
         let cmd = self.update_cmd;
-        unsafe {
-            ctx.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
-            ctx.device.begin_command_buffer(
-                cmd,
-                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-            )?;
-        }
+        ctx.begin_commands(cmd)?;
         let timer = &mut self.update_timer;
         timer.begin_frame(ctx, cmd);
         // Uploads (rebuilt trees) and the previous frame's reads come first.
@@ -519,13 +513,7 @@ impl Renderer {
         self.prepare(ctx, scene, camera, settings)?;
         self.gpu.ray_counters.write(0, &[0u8; 16])?;
         let cmd = self.cmd;
-        unsafe {
-            ctx.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
-            ctx.device.begin_command_buffer(
-                cmd,
-                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-            )?;
-        }
+        ctx.begin_commands(cmd)?;
         self.record(ctx, cmd)?;
         let t = &self.targets;
         pass(ctx, &mut self.timer, cmd, "readback", |cmd| {

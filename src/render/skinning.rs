@@ -11,7 +11,9 @@ use gpu_allocator::MemoryLocation;
 
 use super::gpu_scene::GpuScene;
 use crate::scene::{Aabb, Scene, Vertex};
-use crate::vk::pipeline::{compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization};
+use crate::vk::pipeline::{
+    bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,
+};
 use crate::vk::{memory_barrier, Buffer, Context};
 
 /// Mirrors `SkinVertex` in glsl/anim/skinning.comp.
@@ -151,15 +153,7 @@ impl Skinning {
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let d = &ctx.device;
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout,
-                0,
-                &[self.set.set],
-                &[],
-            );
+            bind_compute(ctx, cmd, self.pipeline, self.layout, &[self.set.set]);
             for job in &self.jobs {
                 d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL, 0, bytemuck::bytes_of(job));
                 d.cmd_dispatch(cmd, job.vertex_count.div_ceil(64), 1, 1);

@@ -723,13 +723,7 @@ impl Viewer {
     /// for a screenshot), ending in PRESENT_SRC.
     fn record(&mut self, cmd: vk::CommandBuffer, index: u32, shot: Option<&Buffer>) -> Result<()> {
         let ctx = &self.ctx;
-        unsafe {
-            ctx.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
-            ctx.device.begin_command_buffer(
-                cmd,
-                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-            )?;
-        }
+        ctx.begin_commands(cmd)?;
         self.renderer.record(ctx, cmd)?;
         let image = self.presenter.images[index as usize];
         let dst = self.presenter.extent;

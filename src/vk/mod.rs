@@ -168,6 +168,18 @@ impl Context {
         Ok(cmd)
     }
 
+    /// Resets `cmd` and begins recording it for one submission.
+    pub fn begin_commands(&self, cmd: vk::CommandBuffer) -> Result<()> {
+        unsafe {
+            self.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
+            self.device.begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )?;
+        }
+        Ok(())
+    }
+
     /// Records `f` into a fresh command buffer, submits it and waits.
     pub fn one_shot<R>(&self, name: &str, f: impl FnOnce(vk::CommandBuffer) -> Result<R>) -> Result<R> {
         let cmd = self.allocate_command_buffer(name)?;

@@ -92,6 +92,20 @@ pub fn compute_pipeline(
     Ok(p)
 }
 
+/// Binds a compute pipeline and its descriptor sets (from set 0).
+pub fn bind_compute(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    pipeline: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    sets: &[vk::DescriptorSet],
+) {
+    unsafe {
+        ctx.device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
+        ctx.device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, layout, 0, sets, &[]);
+    }
+}
+
 /// One binding of a descriptor-set layout.
 #[derive(Clone, Copy)]
 pub struct Binding {
