@@ -21,4 +21,11 @@ bin=./target/debug/hybrid-rt
     --frames 5 --warmup 1 --compare-backends
   echo "## Ray backends side by side, default scene, 320x180 (hybrid)"
   $bin --log warn bench --width 320 --height 180 --frames 10 --warmup 2 --compare-backends
+  fox=../shared/assets/gltf/Fox/glTF/Fox.gltf
+  echo "## Skinned model (Fox, 'Run'), 320x180: skinning + refit vs rebuild vs full rebuild, every backend"
+  $bin --log warn bench --scene "$fox" --animation Run --width 320 --height 180 \
+    --frames 20 --warmup 2 --compare-backends --compare-accel-updates
+  echo "## Rebuild policy (refit; rebuild when the bounds' area grew past 1.5x), Fox 'Run', 60 frames"
+  $bin --log warn bench --scene "$fox" --animation Run --width 160 --height 90 \
+    --frames 60 --warmup 0 --compare-backends --accel-update policy
 } | tee "$out/$label.md"

@@ -405,11 +405,14 @@ pub fn bench_command(
     for r in &reports {
         println!("{}", r.table());
     }
-    if let Some(ms) = cpu_refit_ms(job)? {
+    if let Some(q) = refit_quality(job, frames.max(1) + warmup)? {
         println!(
-            "CPU alternative to the GPU skinning + BVH refit, measured for comparison (not used): \
-             skin + triangle boxes + refit of every skinned BVH on the host: {ms:.3} ms per frame \
-             (median of 10; the node upload would come on top)\n"
+            "refit quality over these frames (CPU trees, built at the first frame, refit after): \
+             SAH cost of the refit trees / fresh builds: worst {:.3}, last {:.3}; \
+             bounds area growth worst {:.2}x (the default policy rebuilds past 1.5x).\n\
+             CPU alternative to GPU skinning + BVH refit (not used): {:.3} ms per frame \
+             (skin + triangle boxes + refit on the host; the node upload would come on top)\n",
+            q.worst_sah_ratio, q.last_sah_ratio, q.worst_area_growth, q.cpu_refit_ms
         );
     }
     if reports.len() > 1 {
@@ -427,34 +430,72 @@ pub fn bench_command(
     check_validation(&ctx)
 }
 
-/// Host time of what the compute backend would do per frame without GPU
-/// skinning and refit: CPU skinning, triangle boxes and `Bvh::refit` of
-/// every skinned instance's tree. None without skinned instances.
-fn cpu_refit_ms(job: &RenderJob) -> Result<Option<f64>> {
+/// What refitting costs in tree quality, and what a CPU refit would cost in
+/// time, over the benchmark's own animation frames: every skinned
+/// instance's tree is built at the first frame and refit at each later one,
+/// and compared with a tree freshly built for that frame (SAH cost ratio)
+/// and the bounds' area growth the rebuild policy watches. None without
+/// skinned instances.
+pub struct RefitQuality {
+    /// Median host ms per frame of CPU skinning + triangle boxes + refit.
+    pub cpu_refit_ms: f64,
+    /// Worst and last SAH cost of the refit trees over fresh builds.
+    pub worst_sah_ratio: f64,
+    pub last_sah_ratio: f64,
+    /// Largest bounds-area growth over the first frame's.
+    pub worst_area_growth: f64,
+}
+
+fn refit_quality(job: &RenderJob, frames: usize) -> Result<Option<RefitQuality>> {
     use crate::accel::bvh::{triangle_aabbs, Bvh};
-    let (scene, _) = load_posed(job)?;
+    use crate::accel::dynamic::area;
+    let (mut scene, anim) = load_posed(job)?;
     let world = scene.world_matrices();
-    let mut trees: Vec<(&crate::scene::Instance, Bvh)> = Vec::new();
-    for inst in &scene.instances {
+    let mut trees: Vec<(usize, Bvh, f32)> = Vec::new();
+    for (i, inst) in scene.instances.iter().enumerate() {
         let Some(posed) = scene.skinned_pose(inst, &world) else { continue };
         let indices = &scene.meshes[inst.mesh].primitives[inst.primitive].indices;
-        trees.push((inst, Bvh::build(&triangle_aabbs(&posed, indices))));
+        let bvh = Bvh::build(&triangle_aabbs(&posed, indices));
+        let a = area(&bvh.root_bounds());
+        trees.push((i, bvh, a));
     }
     if trees.is_empty() {
         return Ok(None);
     }
-    let mut times = Vec::new();
-    for _ in 0..10 {
+    let (mut times, mut worst, mut last, mut growth) = (Vec::new(), 1.0f64, 1.0f64, 1.0f64);
+    for f in 1..frames.max(2) {
+        if let Some(a) = anim {
+            scene.animate(a, job.time + f as f32 / job.fps.max(1e-3));
+        }
+        let world = scene.world_matrices();
         let t0 = std::time::Instant::now();
-        for (inst, bvh) in &mut trees {
+        let mut boxes = Vec::new();
+        for (i, bvh, _) in &mut trees {
+            let inst = &scene.instances[*i];
             let posed = scene.skinned_pose(inst, &world).unwrap_or_default();
-            let indices = &scene.meshes[inst.mesh].primitives[inst.primitive].indices;
-            bvh.refit(&triangle_aabbs(&posed, indices));
+            let aabbs = triangle_aabbs(&posed, &scene.meshes[inst.mesh].primitives[inst.primitive].indices);
+            bvh.refit(&aabbs);
+            boxes.push(aabbs);
         }
         times.push(t0.elapsed().as_secs_f64() * 1e3);
+        let (mut refit_cost, mut fresh_cost) = (0.0f64, 0.0f64);
+        for ((_, bvh, a0), aabbs) in trees.iter().zip(&boxes) {
+            // SAH costs are normalised by the root area: weigh back by it.
+            let a = area(&bvh.root_bounds()) as f64;
+            refit_cost += bvh.sah_cost() as f64 * a;
+            fresh_cost += Bvh::build(aabbs).sah_cost() as f64 * a;
+            growth = growth.max(a / (*a0 as f64).max(1e-30));
+        }
+        last = refit_cost / fresh_cost.max(1e-30);
+        worst = worst.max(last);
     }
     times.sort_by(f64::total_cmp);
-    Ok(Some(times[times.len() / 2]))
+    Ok(Some(RefitQuality {
+        cpu_refit_ms: times[times.len() / 2],
+        worst_sah_ratio: worst,
+        last_sah_ratio: last,
+        worst_area_growth: growth,
+    }))
 }
 
 /// Parses "x,y,z".
