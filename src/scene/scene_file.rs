@@ -10,6 +10,7 @@ use glam::{EulerRot, Mat4, Quat, Vec3};
 use serde::Deserialize;
 use toml::Spanned;
 
+use super::animation::{Animation, AnimationChannel, Channel, Interpolation};
 use super::{
     gltf_import, obj, primitives, AlphaMode, Camera, CameraKey, Environment, HdrImage, Light, LightKind,
     Material, Mesh, Node, Object, ObjectProps, Primitive, Scene, Transform,
@@ -28,6 +29,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         text: &text,
         materials: HashMap::new(),
         default_material: None,
+        orbits: Vec::new(),
     };
     builder.build(file)?;
     Ok(builder.scene)
@@ -162,6 +164,47 @@ struct ObjectDef {
     casts_shadows: Option<bool>,
     relevance: Option<f32>,
     cost: Option<f32>,
+    orbit: Option<OrbitDef>,
+}
+
+/// `orbit = { center = [x, y, z], axis = [0, 1, 0], period = 8 }`: the
+/// object turns about the line through `center` along `axis`, one full
+/// turn per `period` seconds, starting from where its `translation` puts it.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OrbitDef {
+    center: Option<[f32; 3]>,
+    axis: Option<[f32; 3]>,
+    period: Option<f32>,
+}
+
+/// Name of the animation that holds every scene-file orbit. It has no `/`,
+/// so it never clashes with a merged glTF animation (named "object/name").
+pub const SCENE_ANIMATION: &str = "scene";
+
+/// Orbit keys per turn: 45 degrees apart, so the shortest-path slerp between
+/// neighbours is unambiguous, and about a fixed axis it is exact (constant
+/// angular speed, the true circle), not an approximation.
+const ORBIT_KEYS_PER_TURN: usize = 8;
+
+/// Guards against a tiny period making millions of keys.
+const MAX_ORBIT_TURNS: f32 = 1000.0;
+
+/// A validated `orbit`, before its pivot exists.
+struct OrbitSpec {
+    center: Vec3,
+    axis: Vec3,
+    period: f32,
+}
+
+/// An orbit whose pivot node is in the scene; it becomes one channel of the
+/// scene animation once every object (and so the longest period) is known.
+struct Orbit {
+    pivot: usize,
+    axis: Vec3,
+    period: f32,
+    /// "file:line: object 'name'", for errors found after all objects.
+    context: String,
 }
 
 // ---------------------------------------------------------------------------
@@ -174,6 +217,7 @@ struct Builder<'a> {
     text: &'a str,
     materials: HashMap<String, usize>,
     default_material: Option<usize>,
+    orbits: Vec<Orbit>,
 }
 
 impl Builder<'_> {
@@ -208,10 +252,41 @@ impl Builder<'_> {
             self.scene.lights.push(light);
         }
         for o in file.object {
-            let at = self.at(o.name.span().start);
-            let name = o.name.get_ref().clone();
-            self.add_object(o).with_context(|| format!("{at}: object '{name}'"))?;
+            let context = format!("{}: object '{}'", self.at(o.name.span().start), o.name.get_ref());
+            self.add_object(o, &context).with_context(|| context.clone())?;
         }
+        self.add_orbit_animation()
+    }
+
+    /// One animation, [`SCENE_ANIMATION`], with a rotation channel per
+    /// orbiting object's pivot. It loops at the longest period; every other
+    /// period must fit a whole number of times into it so that each orbit
+    /// closes seamlessly at the loop (the animation system loops whole
+    /// animations, not single channels).
+    fn add_orbit_animation(&mut self) -> Result<()> {
+        let Some(duration) = self.orbits.iter().map(|o| o.period).reduce(f32::max) else { return Ok(()) };
+        let mut channels = Vec::with_capacity(self.orbits.len());
+        for o in &self.orbits {
+            let ratio = duration / o.period;
+            let turns = ratio.round();
+            ensure!(
+                turns <= MAX_ORBIT_TURNS,
+                "{}: orbit.period {} s makes {turns} turns in the longest orbit period ({duration} s); \
+                 at most {MAX_ORBIT_TURNS} are allowed",
+                o.context,
+                o.period
+            );
+            ensure!(
+                (ratio - turns).abs() <= 1e-3 * turns,
+                "{}: orbit.period {} s does not divide the longest orbit period {duration} s: all orbits \
+                 share the '{SCENE_ANIMATION}' animation, which loops every {duration} s, so each must make \
+                 a whole number of turns in it",
+                o.context,
+                o.period
+            );
+            channels.push(orbit_channel(o.pivot, o.axis, turns as usize, duration));
+        }
+        self.scene.animations.push(Animation::new(SCENE_ANIMATION.into(), channels));
         Ok(())
     }
 
@@ -312,9 +387,11 @@ impl Builder<'_> {
         })
     }
 
-    fn add_object(&mut self, o: ObjectDef) -> Result<()> {
+    fn add_object(&mut self, o: ObjectDef, context: &str) -> Result<()> {
         let material = o.material.as_ref().map(|m| self.lookup_material(m)).transpose()?;
         let local = object_transform(&o)?;
+        // Checked before any model is loaded: a typo fails fast.
+        let orbit = o.orbit.as_ref().map(orbit_from_def).transpose()?;
         let props = ObjectProps {
             relevance: non_negative(o.relevance.unwrap_or(1.0), "relevance")?,
             cost: non_negative(o.cost.unwrap_or(1.0), "cost")?,
@@ -324,32 +401,38 @@ impl Builder<'_> {
         let name = o.name.get_ref().clone();
         let object = self.scene.objects.len();
         self.scene.objects.push(Object { name: name.clone(), props });
-        match (&o.gltf, &o.obj, o.primitive) {
+        let node = match (&o.gltf, &o.obj, o.primitive) {
             (Some(file), None, None) => {
                 check_no_shape_parameters(&o, "a glTF model")?;
                 let imported = gltf_import::load(&self.resolve(file))?;
                 self.scene.objects[object].props.material_override = material;
-                merge(&mut self.scene, imported, &name, local, object);
+                merge(&mut self.scene, imported, &name, local, object)
             }
             (None, Some(file), None) => {
                 check_no_shape_parameters(&o, "an OBJ model")?;
                 let mut mesh = obj::load_mesh(&self.resolve(file))?;
                 let material = material.unwrap_or_else(|| self.default_material());
                 mesh.primitives.iter_mut().for_each(|p| p.material = material);
-                self.add_mesh_node(mesh, &name, local, object);
+                self.add_mesh_node(mesh, &name, local, object)
             }
             (None, None, Some(kind)) => {
                 let mut primitive = procedural(&o, kind)?;
                 primitive.material = material.unwrap_or_else(|| self.default_material());
                 let mesh = Mesh { name: name.clone(), primitives: vec![primitive] };
-                self.add_mesh_node(mesh, &name, local, object);
+                self.add_mesh_node(mesh, &name, local, object)
             }
             _ => bail!("needs exactly one of `gltf`, `obj` or `primitive`"),
+        };
+        if let Some(spec) = orbit {
+            let pivot = self.add_pivot(node, spec.center, &name);
+            let (axis, period) = (spec.axis, spec.period);
+            self.orbits.push(Orbit { pivot, axis, period, context: context.to_string() });
         }
         Ok(())
     }
 
-    fn add_mesh_node(&mut self, mesh: Mesh, name: &str, local: Transform, object: usize) {
+    /// Adds a root node for `mesh`; returns its index.
+    fn add_mesh_node(&mut self, mesh: Mesh, name: &str, local: Transform, object: usize) -> usize {
         let node = self.scene.nodes.len();
         self.scene.nodes.push(Node {
             name: name.to_string(),
@@ -360,6 +443,55 @@ impl Builder<'_> {
         });
         self.scene.meshes.push(mesh);
         self.scene.roots.push(node);
+        node
+    }
+
+    /// Hangs the root node `node` under a new pivot at `center` that the
+    /// orbit animation turns. The node's transform becomes relative to the
+    /// pivot, so with the pivot unrotated (t = 0) the object stays exactly
+    /// where its `translation` put it.
+    fn add_pivot(&mut self, node: usize, center: Vec3, name: &str) -> usize {
+        let pivot = self.scene.nodes.len();
+        self.scene.nodes.push(Node {
+            name: format!("{name} (orbit pivot)"),
+            local: Transform { translation: center, ..Default::default() },
+            children: vec![node],
+            ..Default::default()
+        });
+        let child = &mut self.scene.nodes[node];
+        child.parent = Some(pivot);
+        child.local.translation -= center;
+        // The pivot takes the object's place among the roots.
+        for r in self.scene.roots.iter_mut().filter(|r| **r == node) {
+            *r = pivot;
+        }
+        pivot
+    }
+}
+
+fn orbit_from_def(o: &OrbitDef) -> Result<OrbitSpec> {
+    let center = finite3(o.center.context("orbit needs `center`")?, "orbit.center")?;
+    let axis = unit(o.axis.unwrap_or([0.0, 1.0, 0.0]), "orbit.axis")?;
+    let period = o.period.context("orbit needs `period` (seconds per turn)")?;
+    ensure!(period > 0.0 && period.is_finite(), "orbit.period must be positive and finite (got {period})");
+    Ok(OrbitSpec { center, axis, period })
+}
+
+/// LINEAR rotation keys for `turns` full turns about `axis` over `duration`
+/// seconds, at constant angular speed; the last key (at `duration`) equals
+/// the first, so the loop is seamless.
+fn orbit_channel(node: usize, axis: Vec3, turns: usize, duration: f32) -> AnimationChannel {
+    let n = ORBIT_KEYS_PER_TURN * turns;
+    let times = (0..=n).map(|k| duration * k as f32 / n as f32).collect();
+    // The angle within the turn, so rounding does not grow with the turn count.
+    let step = std::f32::consts::TAU / ORBIT_KEYS_PER_TURN as f32;
+    let rotations =
+        (0..=n).map(|k| Quat::from_axis_angle(axis, step * (k % ORBIT_KEYS_PER_TURN) as f32)).collect();
+    AnimationChannel {
+        node,
+        times,
+        interpolation: Interpolation::Linear,
+        values: Channel::Rotation(rotations),
     }
 }
 
@@ -510,9 +642,11 @@ fn procedural(o: &ObjectDef, kind: PrimitiveKind) -> Result<Primitive> {
 }
 
 /// Appends an imported glTF scene under a new root node carrying the
-/// object's transform. Every mesh node joins the one `object`, so the
-/// heuristics treat the model as a single object.
-fn merge(scene: &mut Scene, sub: Scene, name: &str, local: Transform, object: usize) {
+/// object's transform; returns the root. Every mesh node joins the one
+/// `object`, so the heuristics treat the model as a single object. The
+/// model's animations are renamed "object/animation": two objects loading
+/// the same file, and the scene-file animation, stay apart by name.
+fn merge(scene: &mut Scene, sub: Scene, name: &str, local: Transform, object: usize) -> usize {
     let (mesh_base, material_base, texture_base) =
         (scene.meshes.len(), scene.materials.len(), scene.textures.len());
     let (camera_base, skin_base) = (scene.cameras.len(), scene.skins.len());
@@ -563,9 +697,11 @@ fn merge(scene: &mut Scene, sub: Scene, name: &str, local: Transform, object: us
         k
     }));
     scene.animations.extend(sub.animations.into_iter().map(|mut a| {
+        a.name = format!("{name}/{}", a.name);
         a.channels.iter_mut().for_each(|c| c.node += node_base);
         a
     }));
+    root
 }
 
 fn place_light(mut l: Light, placement: &Mat4, node_base: usize) -> Light {
@@ -631,6 +767,7 @@ fn unit(v: [f32; 3], what: &str) -> Result<Vec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::animation::find_animation;
 
     /// Writes `text` as `name` in a scratch directory unique to one test.
     fn write(test: &str, name: &str, text: &str) -> PathBuf {
@@ -856,6 +993,7 @@ translation = [5, 0, 0]
         assert_eq!(scene.animations.len(), 1);
         let (merged, original) = (&scene.animations[0], &alone.animations[0]);
         assert_eq!(merged.duration, original.duration);
+        assert_eq!(merged.name, format!("box/{}", original.name));
         let root = scene.roots[1];
         for (m, o) in merged.channels.iter().zip(&original.channels) {
             assert_eq!(m.node, o.node + root + 1);
@@ -869,6 +1007,192 @@ translation = [5, 0, 0]
         assert_ne!(before, boxed(&scene));
         let plain: Vec<_> = scene.instances.iter().filter(|i| i.object == 0).map(|i| i.world).collect();
         assert_eq!(plain, vec![glam::Mat4::IDENTITY], "the animation moves only the merged glTF");
+    }
+
+    /// Two orbits: a rotated, scaled cube about +Y (8 s) and a sphere about
+    /// an oblique axis (4 s: two turns per loop of the scene animation).
+    const ORBITS: &str = r#"
+[[object]]
+name = "still"
+primitive = "plane"
+
+[[object]]
+name = "cube"
+primitive = "cube"
+translation = [3, 1, 0.5]
+rotation_deg = [0, 30, 0]
+scale = [1, 2, 1]
+orbit = { center = [1, 1, 0], period = 8.0 }
+
+[[object]]
+name = "ball"
+primitive = "sphere"
+translation = [0, 2, -2]
+orbit = { center = [0.5, 0, -1], axis = [1, 1, 0], period = 4.0 }
+"#;
+
+    /// World transform of the node holding `object`'s mesh.
+    fn object_world(scene: &Scene, object: usize) -> Mat4 {
+        let node = scene.nodes.iter().position(|n| n.object == Some(object)).expect("object has no node");
+        scene.world_matrices()[node]
+    }
+
+    fn assert_close(got: Vec3, expected: Vec3, what: &str) {
+        let error = (got - expected).length();
+        assert!(error <= 1e-4 * expected.length().max(1.0), "{what}: {got} vs {expected} (error {error})");
+    }
+
+    #[test]
+    fn orbits_follow_the_analytic_circle() {
+        let mut scene = Scene::load(&write("orbits", "scene.toml", ORBITS)).unwrap();
+        assert_eq!(scene.animations.len(), 1);
+        let anim = &scene.animations[0];
+        assert_eq!((anim.name.as_str(), anim.duration, anim.channels.len()), (SCENE_ANIMATION, 8.0, 2));
+        for c in &anim.channels {
+            c.check().unwrap();
+            assert_eq!(c.interpolation, Interpolation::Linear);
+            assert_eq!(scene.nodes[c.node].children.len(), 1, "channels target the pivots");
+        }
+        assert_eq!(scene.roots.len(), 3);
+        let index = find_animation(&scene, SCENE_ANIMATION).unwrap();
+
+        // (object, translation, centre, unit axis, period)
+        let orbits = [
+            (1, Vec3::new(3.0, 1.0, 0.5), Vec3::new(1.0, 1.0, 0.0), Vec3::Y, 8.0f32),
+            (
+                2,
+                Vec3::new(0.0, 2.0, -2.0),
+                Vec3::new(0.5, 0.0, -1.0),
+                Vec3::new(1.0, 1.0, 0.0).normalize(),
+                4.0,
+            ),
+        ];
+        // Before any animation the scene is posed as the file says.
+        let unmoved = Mat4::from_scale_rotation_translation(
+            Vec3::new(1.0, 2.0, 1.0),
+            Quat::from_rotation_y(30f32.to_radians()),
+            orbits[0].1,
+        );
+        assert!(object_world(&scene, 1).abs_diff_eq(unmoved, 1e-5), "{}", object_world(&scene, 1));
+        // As loaded (no animation applied yet).
+        let rests = orbits.map(|o| object_world(&scene, o.0));
+        for ((object, translation, center, axis, period), rest) in orbits.into_iter().zip(rests) {
+            // Quarter periods are keys; 0.3 and 1.55 periods lie between keys
+            // (slerp about a fixed axis stays on the circle) and in a later lap.
+            for fraction in [0.0f32, 0.25, 0.5, 0.75, 1.0, 0.3, 1.55] {
+                let t = fraction * period;
+                scene.animate(index, t);
+                let turn = Quat::from_axis_angle(axis, std::f32::consts::TAU * fraction);
+                let expected = center + turn * (translation - center);
+                let world = object_world(&scene, object);
+                assert_close(world.w_axis.truncate(), expected, &format!("object {object} at t = {t}"));
+                // The object turns with its orbit (like a moon showing one face).
+                let about_center =
+                    Mat4::from_translation(center) * Mat4::from_quat(turn) * Mat4::from_translation(-center);
+                assert!(world.abs_diff_eq(about_center * rest, 1e-4), "object {object} at t = {t}: {world}");
+            }
+        }
+        // The plane without an orbit never moves.
+        scene.animate(index, 3.0);
+        assert_eq!(object_world(&scene, 0), Mat4::IDENTITY);
+    }
+
+    #[test]
+    fn orbit_errors_name_file_object_and_key() {
+        let object = |orbit: &str| {
+            format!("[[object]]\nname = \"ball\"\nprimitive = \"sphere\"\norbit = {{ {orbit} }}\n")
+        };
+        let cases = [
+            ("center = [0, 0, 0], period = 0", "orbit.period must be positive and finite (got 0)"),
+            ("center = [0, 0, 0], period = -2", "orbit.period must be positive and finite (got -2)"),
+            ("center = [0, 0, 0], period = inf", "orbit.period must be positive and finite (got inf)"),
+            ("center = [0, 0, 0], period = nan", "orbit.period must be positive and finite (got NaN)"),
+            ("center = [0, 0, 0], axis = [0, 0, 0], period = 1", "orbit.axis must not be zero"),
+            ("center = [0, 0, 0], axis = [0, nan, 0], period = 1", "orbit.axis must be finite"),
+            ("center = [0, inf, 0], period = 1", "orbit.center must be finite"),
+            ("center = [0, 0, 0]", "orbit needs `period`"),
+            ("period = 1", "orbit needs `center`"),
+        ];
+        for (i, (orbit, expected)) in cases.iter().enumerate() {
+            let err = error_of(&format!("orbit-{i}"), &object(orbit));
+            assert!(
+                err.contains("scene.toml:2: object 'ball': ") && err.contains(expected),
+                "expected '{expected}' with file, line and object in: {err}"
+            );
+        }
+        // Unknown orbit keys are rejected by the parser, with their line.
+        let err = error_of("orbit-unknown", &object("center = [0, 0, 0], period = 1, phase_deg = 90"));
+        assert!(err.contains("scene.toml") && err.contains("line 4") && err.contains("phase_deg"), "{err}");
+        // Periods that do not divide the longest one cannot share its loop.
+        let text = format!(
+            "{}[[object]]\nname = \"odd\"\nprimitive = \"cube\"\norbit = {{ center = [0, 0, 0], period = 3 }}\n",
+            object("center = [0, 0, 0], period = 8")
+        );
+        let err = error_of("orbit-periods", &text);
+        assert!(
+            err.contains(
+                "scene.toml:6: object 'odd': orbit.period 3 s does not divide the longest orbit period 8 s"
+            ),
+            "{err}"
+        );
+        let text = format!(
+            "{}[[object]]\nname = \"fast\"\nprimitive = \"cube\"\norbit = {{ center = [0, 0, 0], period = 1e-3 }}\n",
+            object("center = [0, 0, 0], period = 8")
+        );
+        let err = error_of("orbit-fast", &text);
+        assert!(err.contains("object 'fast': orbit.period 0.001 s makes 8000 turns"), "{err}");
+    }
+
+    #[test]
+    fn orbits_beside_merged_gltf_animations() {
+        let box_path = shared("gltf/BoxAnimated/glTF/BoxAnimated.gltf");
+        let text = format!(
+            r#"
+[[object]]
+name = "box"
+gltf = "{box_path}"
+translation = [5, 0, 0]
+orbit = {{ center = [0, 0, 0], period = 6 }}
+
+[[object]]
+name = "ball"
+primitive = "sphere"
+translation = [0, 0, 2]
+orbit = {{ center = [0, 0, 0], axis = [1, 0, 0], period = 3 }}
+"#
+        );
+        let mut scene = Scene::load(&write("orbit-gltf", "scene.toml", &text)).unwrap();
+        let alone = Scene::load(Path::new(&box_path)).unwrap();
+        // The glTF's animations keep their indices; the orbits come after.
+        let names: Vec<&str> = scene.animations.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, [format!("box/{}", alone.animations[0].name).as_str(), SCENE_ANIMATION]);
+        assert_eq!(find_animation(&scene, SCENE_ANIMATION).unwrap(), 1);
+        assert_eq!(scene.animations[1].duration, 6.0);
+        let positions = |s: &Scene| {
+            let world = s.world_matrices();
+            s.instances.iter().map(|i| (i.object, world[i.node].w_axis.truncate())).collect::<Vec<_>>()
+        };
+        let rest = positions(&scene);
+
+        // The box's own animation moves only the box's parts, in place.
+        scene.animate(0, 1.3);
+        let boxed = positions(&scene);
+        assert!(rest.iter().zip(&boxed).any(|(a, b)| a.0 == 0 && a.1 != b.1));
+        assert!(rest.iter().zip(&boxed).all(|(a, b)| a.0 == 0 || a == b));
+
+        // Half the box's period: the whole model is across the centre (the
+        // merged root at -5), and the ball has made one full turn (period 3).
+        scene.animate(1, 3.0);
+        let box_root = scene.nodes.iter().position(|n| n.name == "box").unwrap();
+        assert_close(
+            scene.world_matrices()[box_root].w_axis.truncate(),
+            Vec3::new(-5.0, 0.0, 0.0),
+            "box root",
+        );
+        assert_close(object_world(&scene, 1).w_axis.truncate(), Vec3::new(0.0, 0.0, 2.0), "ball");
+        // A quarter of the ball's period about +X: +Z turns to -Y.
+        scene.animate(1, 0.75);
+        assert_close(object_world(&scene, 1).w_axis.truncate(), Vec3::new(0.0, -2.0, 0.0), "ball");
     }
 
     #[test]
@@ -949,6 +1273,8 @@ translation = [5, 0, 0]
             Scene::load(&write("doc-example", "scene.toml", &example)).unwrap_or_else(|e| panic!("{e:#}"));
         assert_eq!(scene.objects.len(), 3);
         assert_eq!(scene.lights.len(), 2);
+        let names: Vec<&str> = scene.animations.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, [SCENE_ANIMATION]);
     }
 
     fn shipped(name: &str) -> Scene {
@@ -976,6 +1302,83 @@ translation = [5, 0, 0]
         // Sponza is one object, plus 4 spheres.
         assert_eq!(scene.objects.len(), 5);
         assert!(scene.camera_path.len() >= 2);
+    }
+
+    /// Closest point to `p` on triangle `abc` (Ericson, Real-Time Collision
+    /// Detection, 5.1.5).
+    fn closest_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {
+        let (ab, ac, ap) = (b - a, c - a, p - a);
+        let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+        if d1 <= 0.0 && d2 <= 0.0 {
+            return a;
+        }
+        let (d3, d4) = (ab.dot(p - b), ac.dot(p - b));
+        if d3 >= 0.0 && d4 <= d3 {
+            return b;
+        }
+        let vc = d1 * d4 - d3 * d2;
+        if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+            return a + ab * (d1 / (d1 - d3));
+        }
+        let (d5, d6) = (ab.dot(p - c), ac.dot(p - c));
+        if d6 >= 0.0 && d5 <= d6 {
+            return c;
+        }
+        let vb = d5 * d2 - d1 * d6;
+        if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+            return a + ac * (d2 / (d2 - d6));
+        }
+        let va = d3 * d6 - d5 * d4;
+        if va <= 0.0 && d4 >= d3 && d5 >= d6 {
+            return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        }
+        let denom = 1.0 / (va + vb + vc);
+        a + ab * (vb * denom) + ac * (vc * denom)
+    }
+
+    #[test]
+    fn sponza_animated_spheres_roll_round_clear_of_the_model() {
+        const FLOOR: f32 = 3.98;
+        let mut scene = shipped("sponza_animated.toml");
+        assert_eq!(scene.objects.len(), 5);
+        let index = find_animation(&scene, SCENE_ANIMATION).unwrap();
+        let anim = &scene.animations[index];
+        assert_eq!((anim.duration, anim.channels.len()), (8.0, 4));
+
+        // Sponza's triangles around the ring, without the floor they roll on.
+        let mut triangles = Vec::new();
+        for inst in scene.instances.iter().filter(|i| i.object == 0) {
+            let p = &scene.meshes[inst.mesh].primitives[inst.primitive];
+            for t in p.indices.chunks_exact(3) {
+                let v =
+                    [0, 1, 2].map(|k| inst.world.transform_point3(p.vertices[t[k] as usize].position.into()));
+                let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+                let near =
+                    lo.cmplt(Vec3::new(3.5, 5.5, 2.0)).all() && hi.cmpgt(Vec3::new(-3.5, 3.9, -3.5)).all();
+                if near && hi.y > FLOOR + 0.005 {
+                    triangles.push(v);
+                }
+            }
+        }
+        assert!(triangles.len() > 1000, "only {} triangles near the ring", triangles.len());
+
+        let (mut clearance, mut gap) = (f32::INFINITY, f32::INFINITY);
+        for step in 0..64 {
+            scene.animate(index, 8.0 * step as f32 / 64.0);
+            let centers: Vec<Vec3> = (1..5).map(|o| object_world(&scene, o).w_axis.truncate()).collect();
+            for (i, &c) in centers.iter().enumerate() {
+                assert!((c.y - 0.6 - FLOOR).abs() < 1e-4, "sphere {i} leaves the floor: {c}");
+                for &t in &triangles {
+                    clearance = clearance.min((closest_on_triangle(c, t) - c).length() - 0.6);
+                }
+                for &d in &centers[i + 1..] {
+                    gap = gap.min((d - c).length() - 1.2);
+                }
+            }
+        }
+        eprintln!("sponza_animated: spheres stay {clearance:.3} m clear of the model, {gap:.3} m apart");
+        assert!(clearance > 0.25, "a sphere comes within {clearance} m of the model");
+        assert!(gap > 0.5, "spheres come within {gap} m of each other");
     }
 
     #[test]
