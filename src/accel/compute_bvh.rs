@@ -83,14 +83,18 @@ impl ComputeBvh {
         let mut nodes: Vec<BvhNode> = Vec::new();
         let mut prims: Vec<u32> = Vec::new();
         let mut triangles = 0;
+        // Primitives drawn only skinned (or not at all) get no static tree.
+        let used = scene.rigidly_instanced();
         let blas: Vec<Vec<Option<BlasRef>>> = scene
             .meshes
             .iter()
-            .map(|mesh| {
+            .zip(&used)
+            .map(|(mesh, used)| {
                 mesh.primitives
                     .iter()
-                    .map(|p| {
-                        if p.indices.len() < 3 {
+                    .zip(used)
+                    .map(|(p, used)| {
+                        if p.indices.len() < 3 || !used {
                             return None;
                         }
                         triangles += p.indices.len() / 3;

@@ -191,10 +191,12 @@ impl SceneAccel {
             | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION;
         let mut blases: Vec<Vec<Option<AccelStruct>>> = Vec::new();
         let mut jobs = Vec::new(); // (mesh, prim, scratch size)
+                                   // Primitives drawn only skinned (or not at all) get no static BLAS.
+        let used = scene.rigidly_instanced();
         for (m, prims) in gpu.ranges.iter().enumerate() {
             let mut row = Vec::new();
             for (p, r) in prims.iter().enumerate() {
-                if r.index_count < 3 {
+                if r.index_count < 3 || !used[m][p] {
                     row.push(None);
                     continue;
                 }

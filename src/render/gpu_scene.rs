@@ -11,6 +11,7 @@ use gpu_allocator::MemoryLocation;
 use super::gpu_types::*;
 use crate::scene::tangents::bounds_of;
 use crate::scene::{Aabb, AlphaMode, Filter, Instance, LightKind, SamplerDesc, Scene, TextureRef, Wrap};
+use crate::vk::memory::TextureDesc;
 use crate::vk::pipeline::{Binding, DescriptorSet};
 use crate::vk::{Buffer, Context, Image};
 
@@ -65,21 +66,21 @@ impl GpuScene {
         let (vertices, indices, ranges, skinned, skinned_bounds) = upload_geometry(ctx, scene)?;
 
         let mut samplers = Vec::new();
-        let mut textures = Vec::with_capacity(scene.textures.len());
-        for (i, t) in scene.textures.iter().enumerate() {
-            let format = if t.srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM };
-            let name = format!("texture {i} '{}'", t.name);
-            textures.push(
-                Image::texture(
-                    ctx,
-                    &name,
-                    format,
-                    vk::Extent2D { width: t.width, height: t.height },
-                    &t.rgba8,
-                    t.sampler.mipmaps,
-                )
-                .with_context(|| format!("uploading {name}"))?,
-            );
+        let descs: Vec<TextureDesc> = scene
+            .textures
+            .iter()
+            .enumerate()
+            .map(|(i, t)| TextureDesc {
+                name: format!("texture {i} '{}'", t.name),
+                format: if t.srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM },
+                extent: vk::Extent2D { width: t.width, height: t.height },
+                texels: &t.rgba8,
+                mipmaps: t.sampler.mipmaps,
+            })
+            .collect();
+        let textures =
+            Image::textures(ctx, &descs).with_context(|| format!("uploading {} textures", descs.len()))?;
+        for t in &scene.textures {
             if !samplers.iter().any(|(d, _)| *d == t.sampler) {
                 samplers.push((t.sampler, create_sampler(ctx, &t.sampler)?));
             }

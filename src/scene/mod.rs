@@ -467,6 +467,16 @@ impl Scene {
         }
     }
 
+    /// Per mesh, per primitive: whether some rigid (not skinned) instance
+    /// draws it, i.e. whether it needs a static acceleration structure.
+    pub fn rigidly_instanced(&self) -> Vec<Vec<bool>> {
+        let mut used: Vec<Vec<bool>> = self.meshes.iter().map(|m| vec![false; m.primitives.len()]).collect();
+        for i in self.instances.iter().filter(|i| i.skinned.is_none()) {
+            used[i.mesh][i.primitive] = true;
+        }
+        used
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.instances.iter().map(|i| self.meshes[i.mesh].primitives[i.primitive].indices.len() / 3).sum()
     }

@@ -133,6 +133,15 @@ impl Buffer {
     }
 }
 
+/// One texture for [`Image::textures`]: tightly packed texels of `format`.
+pub struct TextureDesc<'a> {
+    pub name: String,
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+    pub texels: &'a [u8],
+    pub mipmaps: bool,
+}
+
 pub struct Image {
     pub raw: vk::Image,
     pub view: vk::ImageView,
@@ -214,35 +223,77 @@ impl Image {
         texels: &[u8],
         mipmaps: bool,
     ) -> Result<Image> {
-        let levels = if mipmaps { 32 - extent.width.max(extent.height).max(1).leading_zeros() } else { 1 };
-        let img = Image::new_2d(
-            ctx,
-            name,
-            format,
-            extent,
-            levels,
-            vk::ImageUsageFlags::SAMPLED
+        let desc = TextureDesc { name: name.to_string(), format, extent, texels, mipmaps };
+        Ok(Image::textures(ctx, &[desc])?.pop().unwrap())
+    }
+
+    /// Several textures (as [`Image::texture`]) uploaded through shared
+    /// staging buffers, one submission per ~64 MiB of texels rather than one
+    /// per texture.
+    pub fn textures(ctx: &Context, descs: &[TextureDesc]) -> Result<Vec<Image>> {
+        const BATCH_BYTES: usize = 64 << 20;
+        let mut images = Vec::with_capacity(descs.len());
+        let mut start = 0;
+        while start < descs.len() {
+            // Take textures until the batch is full (at least one).
+            let mut end = start + 1;
+            let mut bytes = descs[start].texels.len();
+            while end < descs.len() && bytes + descs[end].texels.len() <= BATCH_BYTES {
+                bytes += descs[end].texels.len();
+                end += 1;
+            }
+            images.extend(Image::upload_batch(ctx, &descs[start..end])?);
+            start = end;
+        }
+        Ok(images)
+    }
+
+    fn upload_batch(ctx: &Context, descs: &[TextureDesc]) -> Result<Vec<Image>> {
+        let mut images = Vec::with_capacity(descs.len());
+        let mut offsets = Vec::with_capacity(descs.len());
+        let mut size = 0u64;
+        for d in descs {
+            let e = d.extent;
+            let levels = if d.mipmaps { 32 - e.width.max(e.height).max(1).leading_zeros() } else { 1 };
+            let usage = vk::ImageUsageFlags::SAMPLED
                 | vk::ImageUsageFlags::TRANSFER_DST
-                | vk::ImageUsageFlags::TRANSFER_SRC,
-        )?;
+                | vk::ImageUsageFlags::TRANSFER_SRC;
+            images.push(Image::new_2d(ctx, &d.name, d.format, e, levels, usage)?);
+            // Buffer-to-image copies want offsets aligned to the texel size (4).
+            offsets.push(size);
+            size += (d.texels.len() as u64).div_ceil(16) * 16;
+        }
         let mut staging = Buffer::new(
             ctx,
-            &format!("{name} (staging)"),
-            texels.len() as u64,
+            &format!("{} texture(s) (staging)", descs.len()),
+            size,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        staging.write(0, texels)?;
-        ctx.one_shot(&format!("upload {name}"), |cmd| {
-            img.record_upload(ctx, cmd, staging.raw);
-            Ok(())
-        })?;
+        let r = (|| {
+            for (d, &o) in descs.iter().zip(&offsets) {
+                staging.write(o as usize, d.texels)?;
+            }
+            ctx.one_shot(&format!("upload {} texture(s)", descs.len()), |cmd| {
+                for (img, &o) in images.iter().zip(&offsets) {
+                    img.record_upload(ctx, cmd, staging.raw, o);
+                }
+                Ok(())
+            })
+        })();
         staging.destroy(ctx);
-        Ok(img)
+        if let Err(e) = r {
+            for mut img in images {
+                img.destroy(ctx);
+            }
+            return Err(e);
+        }
+        Ok(images)
     }
 
-    /// Copies level 0 from `src`, blits the mip chain, leaves it shader-readable.
-    pub fn record_upload(&self, ctx: &Context, cmd: vk::CommandBuffer, src: vk::Buffer) {
+    /// Copies level 0 from `src` at `offset`, blits the mip chain, leaves it
+    /// shader-readable.
+    pub fn record_upload(&self, ctx: &Context, cmd: vk::CommandBuffer, src: vk::Buffer, offset: u64) {
         let d = &ctx.device;
         let transfer = (vk::PipelineStageFlags2::TRANSFER, vk::AccessFlags2::TRANSFER_WRITE);
         image_barrier(
@@ -256,6 +307,7 @@ impl Image {
             transfer,
         );
         let copy = [vk::BufferImageCopy::default()
+            .buffer_offset(offset)
             .image_subresource(
                 vk::ImageSubresourceLayers::default().aspect_mask(self.aspect).mip_level(0).layer_count(1),
             )
