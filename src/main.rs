@@ -151,9 +151,10 @@ struct ViewArgs {
     /// Animation time in seconds (render: the frame's time; bench: the start).
     #[arg(long, default_value_t = 0.0)]
     time: f32,
-    /// Fixed animation step of `bench`: frame i is at time + i / fps.
-    #[arg(long, default_value_t = 30.0)]
-    fps: f32,
+    /// Fixed animation step: frame i is at time + i / fps (bench: 30 when
+    /// not given; view: wall-clock playback when not given).
+    #[arg(long)]
+    fps: Option<f32>,
 }
 
 impl ViewArgs {
@@ -184,7 +185,7 @@ impl ViewArgs {
             },
             animation: self.animation.clone(),
             time: self.time,
-            fps: self.fps,
+            fps: self.fps.unwrap_or(30.0),
         }
     }
 }
@@ -237,7 +238,15 @@ fn run(cli: Cli) -> Result<()> {
         }
         Some(Command::View { view, present_mode, frames, screenshot, test_resize }) => {
             let event_loop = viewer::open_display()?;
-            let opts = ViewerOptions { gpu, job: view.job(), present_mode, frames, screenshot, test_resize };
+            let opts = ViewerOptions {
+                gpu,
+                job: view.job(),
+                present_mode,
+                frames,
+                fixed_fps: view.fps,
+                screenshot,
+                test_resize,
+            };
             viewer::run(event_loop, opts)
         }
         None => default_command(gpu),
@@ -268,6 +277,7 @@ fn default_command(gpu: GpuOptions) -> Result<()> {
         job: job.clone(),
         present_mode: PresentMode::Fifo,
         frames: None,
+        fixed_fps: None,
         screenshot: None,
         test_resize: false,
     };

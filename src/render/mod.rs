@@ -84,6 +84,14 @@ pub struct FrameOutput {
     pub ray_counts: [u32; 3],
 }
 
+/// What one scene update refits or rebuilds, decided on the host before
+/// its commands are recorded.
+struct UpdatePlan {
+    blas: Vec<Update>,
+    bvh: Vec<Update>,
+    cpu_rebuild_ms: f64,
+}
+
 pub struct Renderer {
     pub gpu: GpuScene,
     pub targets: Targets,
@@ -109,6 +117,9 @@ pub struct Renderer {
     pub update_timings: Vec<(&'static str, f64)>,
     /// Skinned structures refit / rebuilt by the last `update_scene`.
     pub update_counts: [usize; 2],
+    /// An update recorded into a frame by `record_scene_update`, awaiting
+    /// `finish_scene_update`.
+    pending_update: Option<UpdatePlan>,
     readback_ldr: Buffer,
     readback_hdr: Buffer,
     frame_index: u32,
@@ -170,6 +181,7 @@ impl Renderer {
             update_timer: GpuTimer::new(ctx, 8)?,
             update_timings: Vec::new(),
             update_counts: [0; 2],
+            pending_update: None,
             gpu,
             targets,
             gbuffer,
@@ -212,7 +224,59 @@ impl Renderer {
     /// level. Static per-mesh structures are untouched. Call only when
     /// something moved (so a still scene rebuilds nothing), with the GPU
     /// idle; it waits for its own work. Pass times land in `update_timings`.
+    /// The viewer uses `record_scene_update` instead, which needs no wait.
     pub fn update_scene(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        let plan = self.plan_update(ctx, scene)?;
+        let cmd = self.update_cmd;
+        ctx.begin_commands(cmd)?;
+        self.record_update(ctx, cmd, scene, &plan)?;
+        unsafe { ctx.device.end_command_buffer(cmd)? };
+        ctx.submit_and_wait(cmd)?;
+        self.finish_update(ctx, scene, plan)
+    }
+
+    /// Whether `record_scene_update` can put the scene update into the
+    /// frame's own command buffer: true for the hardware backends, whose
+    /// TLAS is built on the GPU; false for the compute BVH, whose top level
+    /// the host builds from the refit roots between refit and tracing.
+    /// Valid after `prepare` (which picks the backend).
+    pub fn can_record_update(&self) -> bool {
+        self.bvh.is_none()
+    }
+
+    /// `update_scene` without its own submission: records skinning -> BLAS
+    /// refit -> TLAS build at the start of `cmd` (before `record`), so a
+    /// frame is one submission and the host never waits for the update.
+    /// Needs `can_record_update()`, a GPU done with the previous frame, and
+    /// `finish_scene_update` once `cmd` has completed.
+    pub fn record_scene_update(
+        &mut self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        scene: &Scene,
+    ) -> Result<()> {
+        anyhow::ensure!(self.can_record_update(), "the compute BVH's scene update needs its own submission");
+        let plan = self.plan_update(ctx, scene)?;
+        self.record_update(ctx, cmd, scene, &plan)?;
+        if self.pending_update.replace(plan).is_some() {
+            log::debug!("a recorded scene update was never finished; its statistics are lost");
+        }
+        Ok(())
+    }
+
+    /// The host side of a recorded update, once its command buffer is done:
+    /// pass times, refit / rebuild counts and the rebuild policy's view of
+    /// the deformed bounds. Does nothing when no update is pending.
+    pub fn finish_scene_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        match self.pending_update.take() {
+            Some(plan) => self.finish_update(ctx, scene, plan),
+            None => Ok(()),
+        }
+    }
+
+    /// Host work before an update is recorded: moved transforms and lights,
+    /// joint matrices, and which skinned structures refit or rebuild.
+    fn plan_update(&mut self, ctx: &Context, scene: &Scene) -> Result<UpdatePlan> {
         self.gpu.update_dynamic(scene)?;
         // Keep only the structures the current backend traces: refitting the
         // other kind every frame would be wasted work (it is rebuilt if the
@@ -236,17 +300,26 @@ impl Renderer {
         }
         let policy = self.rebuild_policy;
         let t_rebuild = std::time::Instant::now();
-        let bvh_updates = match &mut self.bvh {
+        let bvh = match &mut self.bvh {
             Some(b) => b.prepare_skinned(ctx, scene, &policy)?,
             None => Vec::new(),
         };
         let cpu_rebuild_ms = t_rebuild.elapsed().as_secs_f64() * 1e3;
-        let blas_updates: Vec<Update> = match self.accel.as_ref().and_then(|(a, _)| a.dynamic.as_ref()) {
+        let blas = match self.accel.as_ref().and_then(|(a, _)| a.dynamic.as_ref()) {
             Some(d) => d.blases.iter().map(|b| b.state.next(&policy)).collect(),
             None => Vec::new(),
         };
-        let cmd = self.update_cmd;
-        ctx.begin_commands(cmd)?;
+        Ok(UpdatePlan { blas, bvh, cpu_rebuild_ms })
+    }
+
+    /// The update's GPU work, timed by `update_timer`.
+    fn record_update(
+        &mut self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        scene: &Scene,
+        plan: &UpdatePlan,
+    ) -> Result<()> {
         let timer = &mut self.update_timer;
         timer.begin_frame(ctx, cmd);
         // Uploads (rebuilt trees) and the previous frame's reads come first.
@@ -263,16 +336,18 @@ impl Renderer {
                 Ok(())
             })?;
         }
-        if let Some((accel, _)) = &mut self.accel {
-            if !blas_updates.is_empty() {
-                let name =
-                    if blas_updates.contains(&Update::Rebuild) { "blas rebuild" } else { "blas refit" };
+        if let Some((accel, set)) = &mut self.accel {
+            if !plan.blas.is_empty() {
+                let name = if plan.blas.contains(&Update::Rebuild) { "blas rebuild" } else { "blas refit" };
                 pass(ctx, timer, cmd, name, |cmd| {
-                    accel.record_dynamic(ctx, cmd, &self.gpu, &blas_updates);
+                    accel.record_dynamic(ctx, cmd, &self.gpu, &plan.blas);
                     Ok(())
                 })?;
             }
             pass(ctx, timer, cmd, "tlas build", |cmd| accel.record_tlas(ctx, cmd, scene))?;
+            // A TLAS that had to grow is a new object; nothing recorded so
+            // far binds the set, so rewriting it here is allowed.
+            set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
         }
         if let Some(bvh) = &self.bvh {
             if bvh.skinned_count() > 0 {
@@ -282,32 +357,33 @@ impl Renderer {
                 })?;
             }
         }
-        unsafe { ctx.device.end_command_buffer(cmd)? };
-        ctx.submit_and_wait(cmd)?;
-        self.update_timings = self.update_timer.results(ctx)?;
-        if bvh_updates.contains(&Update::Rebuild) {
-            self.update_timings.push(("bvh rebuild (CPU)", cpu_rebuild_ms));
-        }
+        Ok(())
+    }
 
+    /// Host work after the update's commands completed.
+    fn finish_update(&mut self, ctx: &Context, scene: &Scene, plan: UpdatePlan) -> Result<()> {
+        let policy = self.rebuild_policy;
+        self.update_timings = self.update_timer.results(ctx)?;
+        if plan.bvh.contains(&Update::Rebuild) {
+            self.update_timings.push(("bvh rebuild (CPU)", plan.cpu_rebuild_ms));
+        }
         // Judge this frame's results for the next frame's rebuild decisions.
         let t0 = std::time::Instant::now();
-        if let Some((accel, set)) = &mut self.accel {
-            // A TLAS that had to grow is a new object.
-            set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
+        if let Some((accel, _)) = &mut self.accel {
             if let (Some(d), Some(s)) = (&mut accel.dynamic, &self.skinning) {
-                for ((b, bounds), u) in d.blases.iter_mut().zip(s.bounds()?).zip(&blas_updates) {
+                for ((b, bounds), u) in d.blases.iter_mut().zip(s.bounds()?).zip(&plan.blas) {
                     b.state.done(*u, &bounds, &policy);
                 }
             }
         }
         if let Some(bvh) = &mut self.bvh {
-            bvh.finish_refit(scene, &bvh_updates, &policy)?;
+            bvh.finish_refit(scene, &plan.bvh, &policy)?;
+            self.update_timings.push(("top level (CPU)", t0.elapsed().as_secs_f64() * 1e3));
         }
-        self.update_timings.push(("top level (CPU)", t0.elapsed().as_secs_f64() * 1e3));
         let count = |u: &[Update], k: Update| u.iter().filter(|x| **x == k).count();
         self.update_counts = [
-            count(&blas_updates, Update::Refit) + count(&bvh_updates, Update::Refit),
-            count(&blas_updates, Update::Rebuild) + count(&bvh_updates, Update::Rebuild),
+            count(&plan.blas, Update::Refit) + count(&plan.bvh, Update::Refit),
+            count(&plan.blas, Update::Rebuild) + count(&plan.bvh, Update::Rebuild),
         ];
         Ok(())
     }

@@ -66,6 +66,9 @@ pub struct ViewerOptions {
     pub present_mode: PresentMode,
     /// Exit after presenting this many frames.
     pub frames: Option<u64>,
+    /// Advance the animation by 1 / fps per frame instead of by wall-clock
+    /// time: frame i shows time + i / fps, like `render` and `bench`.
+    pub fixed_fps: Option<f32>,
     /// With `frames`: PNG of the last frame. Without: where P / F12 write.
     pub screenshot: Option<PathBuf>,
     /// Automation for tests: resize the window twice, minimize and restore,
@@ -215,6 +218,7 @@ struct Viewer {
     modifiers: ModifiersState,
     requested: vk::Extent2D,
     frames: Option<u64>,
+    fixed_fps: Option<f32>,
     screenshot: Option<PathBuf>,
     final_wait: Option<Instant>,
     resize_test: Option<ResizeTest>,
@@ -305,6 +309,7 @@ impl Viewer {
             modifiers: ModifiersState::empty(),
             requested,
             frames: opts.frames,
+            fixed_fps: opts.fixed_fps.filter(|f| *f > 0.0),
             screenshot: opts.screenshot.clone(),
             final_wait: None,
             resize_test: opts.test_resize.then(|| ResizeTest::new(requested)),
@@ -639,25 +644,37 @@ impl Viewer {
         let prev = self.slots[(s + FRAMES_IN_FLIGHT - 1) % FRAMES_IN_FLIGHT].fence;
         unsafe { dev.wait_for_fences(&[prev], true, u64::MAX) }
             .context("waiting for a frame (device lost?)")?;
+        self.renderer.finish_scene_update(&self.ctx, &self.scene)?;
         self.collect_gpu_times()?;
         self.finish_screenshot()?;
 
         self.controller.update(dt);
         if let Some((i, clock, paused)) = &mut self.animation {
             if !*paused {
-                // Wall-clock playback in the viewer (headless runs use a fixed step).
-                *clock += dt;
+                // Wall-clock playback unless a fixed step was asked for (the
+                // first frame shows the start time).
+                *clock += match self.fixed_fps {
+                    Some(fps) if self.presented > 0 => 1.0 / fps,
+                    Some(_) => 0.0,
+                    None => dt,
+                };
                 self.scene_dirty = true;
             }
             if self.scene_dirty {
                 self.scene.animate(*i, *clock);
             }
         }
-        if std::mem::take(&mut self.scene_dirty) {
-            self.renderer.update_scene(&self.ctx, &self.scene)?;
-        }
         let camera = self.controller.camera();
         self.renderer.prepare(&self.ctx, &self.scene, &camera, &self.settings)?;
+        // The hardware backends' update (skinning, refit, TLAS) goes into
+        // this frame's command buffer; the compute BVH's needs the host
+        // between refit and tracing, so it is submitted and waited for here.
+        let update_in_frame = std::mem::take(&mut self.scene_dirty) && {
+            if !self.renderer.can_record_update() {
+                self.renderer.update_scene(&self.ctx, &self.scene)?;
+            }
+            self.renderer.can_record_update()
+        };
 
         let last = self.is_final_frame()?;
         let shot_path =
@@ -675,7 +692,7 @@ impl Viewer {
             }
             None => None,
         };
-        let recorded = self.record(cmd, index, shot_buffer.as_ref());
+        let recorded = self.record(cmd, index, update_in_frame, shot_buffer.as_ref());
         if let (Some(buffer), Some(path)) = (shot_buffer, shot_path) {
             self.shot = Some(PendingShot { buffer, extent: self.renderer.extent(), path });
         }
@@ -711,6 +728,7 @@ impl Viewer {
         }
         if last {
             unsafe { self.ctx.device.device_wait_idle() }.context("vkDeviceWaitIdle")?;
+            self.renderer.finish_scene_update(&self.ctx, &self.scene)?;
             self.collect_gpu_times()?;
             self.finish_screenshot()?;
             return Ok(Flow::Exit);
@@ -718,12 +736,21 @@ impl Viewer {
         Ok(Flow::Continue)
     }
 
-    /// The frame's commands: the renderer's passes, then the blit of the
-    /// tone-mapped image into swapchain image `index` (and a readback copy
-    /// for a screenshot), ending in PRESENT_SRC.
-    fn record(&mut self, cmd: vk::CommandBuffer, index: u32, shot: Option<&Buffer>) -> Result<()> {
+    /// The frame's commands: the scene update when `update`, the renderer's
+    /// passes, then the blit of the tone-mapped image into swapchain image
+    /// `index` (and a readback copy for a screenshot), ending in PRESENT_SRC.
+    fn record(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        index: u32,
+        update: bool,
+        shot: Option<&Buffer>,
+    ) -> Result<()> {
         let ctx = &self.ctx;
         ctx.begin_commands(cmd)?;
+        if update {
+            self.renderer.record_scene_update(ctx, cmd, &self.scene)?;
+        }
         self.renderer.record(ctx, cmd)?;
         let image = self.presenter.images[index as usize];
         let dst = self.presenter.extent;
