@@ -5,6 +5,7 @@
 mod common;
 
 use std::fs::File;
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
@@ -16,42 +17,41 @@ struct Xvfb {
 }
 
 impl Xvfb {
+    /// Xvfb picks the free display itself (`-displayfd`, lock files created
+    /// with O_EXCL) and reports it once it accepts connections. Choosing the
+    /// number here raced: two tests in one process probed the same number, the
+    /// loser's socket check saw the winner's socket, and its viewer died when
+    /// the other test shut that server down.
     fn start() -> Xvfb {
-        let first = 100 + std::process::id() % 800;
-        for display in first..first + 50 {
-            let socket = PathBuf::from(format!("/tmp/.X11-unix/X{display}"));
-            let lock = PathBuf::from(format!("/tmp/.X{display}-lock"));
-            if socket.exists() || lock.exists() {
-                continue;
+        let mut child = match Command::new("Xvfb")
+            .args(["-displayfd", "1", "-screen", "0", "1024x768x24", "-nolisten", "tcp"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+        {
+            Ok(c) => c,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => panic!(
+                "Xvfb not found on PATH: the viewer test needs it (Debian: apt-get install xvfb, \
+                 or run bash .ci/setup-debian.sh)"
+            ),
+            Err(e) => panic!("cannot start Xvfb: {e}"),
+        };
+        let stdout = child.stdout.take().expect("piped stdout");
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            let _ = BufReader::new(stdout).read_line(&mut line);
+            let _ = tx.send(line);
+        });
+        let line = rx.recv_timeout(Duration::from_secs(30)).unwrap_or_default();
+        match line.trim().parse::<u32>() {
+            Ok(display) => Xvfb { child, display },
+            Err(_) => {
+                let _ = child.kill();
+                let status = child.wait();
+                panic!("Xvfb did not report a display within 30 s (got {line:?}, exit {status:?})");
             }
-            let child = match Command::new("Xvfb")
-                .arg(format!(":{display}"))
-                .args(["-screen", "0", "1024x768x24", "-nolisten", "tcp"])
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-            {
-                Ok(c) => c,
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => panic!(
-                    "Xvfb not found on PATH: the viewer test needs it (Debian: apt-get install xvfb, \
-                     or run bash .ci/setup-debian.sh)"
-                ),
-                Err(e) => panic!("cannot start Xvfb: {e}"),
-            };
-            let mut x = Xvfb { child, display };
-            let deadline = Instant::now() + Duration::from_secs(15);
-            while Instant::now() < deadline {
-                if socket.exists() {
-                    return x;
-                }
-                if let Ok(Some(_)) = x.child.try_wait() {
-                    break; // lost a race for this display number: try the next
-                }
-                std::thread::sleep(Duration::from_millis(50));
-            }
-            drop(x);
         }
-        panic!("could not start Xvfb on any display :{first}..:{}", first + 50);
     }
 }
 
