@@ -49,7 +49,7 @@ impl Xvfb {
             Err(_) => {
                 let _ = child.kill();
                 let status = child.wait();
-                panic!("Xvfb did not report a display within 30 s (got {line:?}, exit {status:?})");
+                panic!("Xvfb reported no display (exited, or 30 s passed): got {line:?}, exit {status:?}");
             }
         }
     }
@@ -73,6 +73,30 @@ impl Drop for Xvfb {
         let _ = self.child.wait();
         let _ = std::fs::remove_file(format!("/tmp/.X11-unix/X{}", self.display));
         let _ = std::fs::remove_file(format!("/tmp/.X{}-lock", self.display));
+    }
+}
+
+/// The harness itself: servers started at the same moment by parallel tests
+/// get distinct displays and all stay up (the stop-9 CI failure was two tests
+/// sharing one server).
+#[test]
+fn xvfb_servers_started_together_are_distinct() {
+    let servers: Vec<Xvfb> = std::thread::scope(|s| {
+        (0..3)
+            .map(|_| s.spawn(Xvfb::start))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .map(|h| h.join().unwrap())
+            .collect()
+    });
+    let mut displays: Vec<u32> = servers.iter().map(|x| x.display).collect();
+    displays.sort_unstable();
+    displays.dedup();
+    assert_eq!(displays.len(), servers.len(), "shared displays: {displays:?}");
+    std::thread::sleep(Duration::from_millis(500));
+    for mut x in servers {
+        let display = x.display;
+        assert!(matches!(x.child.try_wait(), Ok(None)), "Xvfb :{display} exited after start");
     }
 }
 
