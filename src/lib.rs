@@ -1,11 +1,16 @@
 //! Hybrid rasterization + ray-tracing renderer on Vulkan (ash).
 //!
-//! Data flow of a frame (see DESIGN.md): `scene` (CPU) -> `render::gpu_scene`
-//! (one copy of the geometry on the GPU) -> G-buffer -> deferred lighting ->
-//! tone map -> PNG / present. `vk` holds the Vulkan plumbing every pass uses.
+//! Data flow of a frame (see DESIGN.md): `scene` (CPU) -> `gpu` (one copy of
+//! the geometry on the GPU) -> `accel` (acceleration structures) -> `render`
+//! (the frame's passes: G-buffer or primary rays, direct, specular,
+//! composite, tone map) -> PNG / present. `vk` holds the Vulkan plumbing.
+//!
+//! Layers, lowest first: `vk`, `scene` (no GPU code), `gpu`, `accel`,
+//! `render`, then `app` and `viewer`. A layer imports only the ones below.
 
 pub mod accel;
 pub mod app;
+pub mod gpu;
 pub mod metrics;
 pub mod render;
 pub mod scene;

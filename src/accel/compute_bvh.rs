@@ -13,7 +13,7 @@ use super::bvh::{triangle_aabbs, Bvh, BvhNode};
 use super::compute_refit::ComputeRefit;
 use super::dynamic::{RebuildPolicy, RefitState, Update};
 use super::{instance_mask, instance_opaque};
-use crate::render::gpu_scene::GpuScene;
+use crate::gpu::scene::GpuScene;
 use crate::scene::{Aabb, Instance, Scene};
 use crate::vk::pipeline::{Binding, DescriptorSet};
 use crate::vk::{Buffer, Context};

@@ -7,7 +7,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::bvh::{Bvh, BvhNode, MAX_DEPTH};
-use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
+use crate::gpu::scene::{GpuScene, PrimitiveRange};
 use crate::vk::pipeline::{
     bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,
 };

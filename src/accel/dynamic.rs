@@ -9,7 +9,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::{blas_sizes, triangles, AccelStruct};
-use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
+use crate::gpu::scene::{GpuScene, PrimitiveRange};
 use crate::scene::Aabb;
 use crate::vk::{Buffer, Context};
 

@@ -14,7 +14,7 @@ pub mod watertight;
 
 use dynamic::{DynamicBlases, Update};
 
-use crate::render::gpu_scene::{GpuScene, PrimitiveRange};
+use crate::gpu::scene::{GpuScene, PrimitiveRange};
 use crate::scene::{AlphaMode, Instance, Scene};
 use crate::vk::{memory_barrier, Buffer, Context};
 

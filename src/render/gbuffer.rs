@@ -6,7 +6,7 @@
 use anyhow::{Context as _, Result};
 use ash::vk;
 
-use super::gpu_scene::GpuScene;
+use crate::gpu::scene::GpuScene;
 use super::targets::{Targets, DEPTH_FORMAT, GBUFFER_FORMATS};
 use crate::scene::AlphaMode;
 use crate::vk::pipeline::{pipeline_layout, shader_module, Specialization};

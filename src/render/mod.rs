@@ -3,8 +3,6 @@
 
 pub mod compute_pass;
 pub mod gbuffer;
-pub mod gpu_scene;
-pub mod gpu_types;
 pub mod output;
 pub mod shading;
 pub mod skinning;
@@ -24,8 +22,8 @@ use crate::vk::timer::{pass, GpuTimer};
 use crate::vk::{image_barrier, Buffer, Context};
 use compute_pass::{ComputePass, Input};
 use gbuffer::GBufferPass;
-use gpu_scene::GpuScene;
-use gpu_types::GpuFrame;
+use crate::gpu::GpuScene;
+use crate::gpu::types::GpuFrame;
 use shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;

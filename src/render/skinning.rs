@@ -9,7 +9,7 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
-use super::gpu_scene::GpuScene;
+use crate::gpu::scene::GpuScene;
 use crate::scene::{Aabb, Scene, Vertex};
 use crate::vk::pipeline::{
     bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,

@@ -8,7 +8,7 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
-use super::gpu_types::*;
+use super::types::*;
 use crate::scene::tangents::bounds_of;
 use crate::scene::{Aabb, AlphaMode, Filter, Instance, LightKind, SamplerDesc, Scene, TextureRef, Wrap};
 use crate::vk::memory::TextureDesc;

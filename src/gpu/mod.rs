@@ -1,0 +1,9 @@
+//! The scene's one copy on the GPU (descriptor set 0: geometry, materials,
+//! instances, lights, textures, environment) and the host/shader shared
+//! types. Sits between `vk` and the layers that use the GPU scene (`accel`,
+//! `render`): it imports only `vk` and `scene`.
+
+pub mod scene;
+pub mod types;
+
+pub use scene::{Draw, GpuScene, PrimitiveRange};
