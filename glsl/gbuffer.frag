@@ -5,7 +5,7 @@
 #define MAT_SAMPLE(index, uv, fallback) sample_tex(index, uv, fallback)
 #include "common/material.glsl"
 
-layout(constant_id = 0) const bool ALPHA_TEST = false;
+layout(constant_id = SPEC_ALPHA_TEST) const bool ALPHA_TEST = false;
 
 layout(location = 0) in vec3 v_normal;
 layout(location = 1) in vec4 v_tangent;

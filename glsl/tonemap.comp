@@ -1,10 +1,11 @@
 #version 460
-// Exposure + Reinhard on luminance, then sRGB encoding into an 8-bit target.
+// Pass `tonemap`: exposure + Reinhard on luminance, then sRGB encoding into
+// the 8-bit output.
 #include "common/scene.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(set = 1, binding = 0, rgba16f) uniform readonly image2D hdr_in;
-layout(set = 1, binding = 1, rgba8) uniform writeonly image2D ldr_out;
+layout(set = SET_PASS, binding = TONEMAP_IN, rgba32f) uniform readonly image2D hdr_in;
+layout(set = SET_PASS, binding = TONEMAP_OUT, rgba8) uniform writeonly image2D ldr_out;
 
 vec3 linear_to_srgb(vec3 c) {
     c = clamp(c, 0.0, 1.0);

@@ -316,7 +316,7 @@ pub fn bench(
                 AccelUpdate::Rebuild | AccelUpdate::Full => RebuildPolicy::ALWAYS,
             };
             let mut counts = [0usize; 2];
-            if ShadingConfig::resolve(ctx, SceneNeeds::of(&scene), mode, settings.effects, backend).is_err() {
+            if ShadingConfig::resolve(ctx, SceneNeeds::of(&scene), &settings).is_err() {
                 log::warn!(
                     "bench: {mode:?} with backend {backend:?} is not available on this device, skipped"
                 );

@@ -1,4 +1,5 @@
-// Environment lookup shared by the background and (later) ray misses.
+// Environment lookup: the background where camera rays miss and the
+// radiance of reflection / refraction rays that miss.
 #ifndef ENV_GLSL
 #define ENV_GLSL
 #include "scene.glsl"

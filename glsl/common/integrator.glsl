@@ -1,8 +1,8 @@
 // The one shading path. What is computed at a surface (direct light with
 // shadow rays, emission, ambient, mirror reflection, refraction) lives
 // here; how a ray finds its hit is the traversal include chosen by the
-// variant (trace/query.glsl, ...). Without one (TRACE_NONE) this is the plain
-// deferred shading of the foundation: no ray is traced.
+// variant (trace/query.glsl, ...). Without one (TRACE_NONE) no ray is
+// traced. The passes (direct, specular, composite) each use a part of it.
 #ifndef INTEGRATOR_GLSL
 #define INTEGRATOR_GLSL
 #include "scene.glsl"
@@ -10,21 +10,22 @@
 #include "brdf.glsl"
 #include "lights.glsl"
 #include "offset.glsl"
+#include "trace.glsl"
 
 // Specialization constants: effects the scene does not need are compiled out.
-layout(constant_id = 1) const bool SHADOWS = false;
-layout(constant_id = 2) const bool REFLECTIONS = false;
-layout(constant_id = 3) const bool REFRACTIONS = false;
-layout(constant_id = 4) const uint MAX_DEPTH = 8u;
-layout(constant_id = 5) const float MIN_WEIGHT = 0.01;
-layout(constant_id = 6) const bool COUNT_RAYS = false;
+layout(constant_id = SPEC_SHADOWS) const bool SHADOWS = false;
+layout(constant_id = SPEC_REFLECTIONS) const bool REFLECTIONS = false;
+layout(constant_id = SPEC_REFRACTIONS) const bool REFRACTIONS = false;
+layout(constant_id = SPEC_MAX_DEPTH) const uint MAX_DEPTH = 8u;
+layout(constant_id = SPEC_MIN_WEIGHT) const float MIN_WEIGHT = 0.01;
+layout(constant_id = SPEC_COUNT_RAYS) const bool COUNT_RAYS = false;
 
 void count_ray(uint kind) {
     if (COUNT_RAYS) atomicAdd(ray_counts[kind], 1u);
 }
 
-// Surfaces at most this rough are traced as mirrors (glossy-as-mirror).
-const float MIRROR_ROUGHNESS = 0.35;
+// MIRROR_ROUGHNESS (generated/shared.glsl): surfaces at most this rough
+// are traced as mirrors (glossy-as-mirror).
 const float RAY_TMAX = 1e30;
 
 #ifdef TRACE_NONE
@@ -64,7 +65,7 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
             } else {
                 vec3 o = offset_ray(s.position, light_side ? gn : -gn);
                 float tmax = light.type == LIGHT_DIRECTIONAL ? RAY_TMAX : ls.distance * (1.0 - 1e-4);
-                count_ray(1u);
+                count_ray(RAY_KIND_SHADOW);
                 contrib *= trace_shadow(o, ls.l, tmax);
             }
         }
@@ -93,43 +94,64 @@ void push_branch(vec3 o, vec3 d, vec3 w, uint depth) {
     }
 }
 
-// Radiance leaving `s` towards v, times `w`; pushes the reflection and
-// refraction branches it spawns.
-vec3 shade(Surface s, vec3 v, vec3 gn, bool back_face, vec3 w, uint depth) {
-    // Keep the shading normal on the viewer's side (normal maps at grazing angles).
+// Keeps the shading normal on the viewer's side (normal maps at grazing
+// angles); returns n.v.
+float face_viewer(inout Surface s, vec3 v) {
     float nv = dot(s.normal, v);
     if (nv < 1e-4) {
         s.normal = normalize(s.normal + v * (1e-4 - nv));
         nv = dot(s.normal, v);
     }
-    bool can_branch = depth < MAX_DEPTH;
-    float tm = s.transmission * (1.0 - s.metallic);
-    bool mirror = REFLECTIONS && can_branch && s.roughness <= MIRROR_ROUGHNESS;
-    bool refract_on = REFRACTIONS && can_branch && tm > 0.0;
+    return nv;
+}
 
+// Whether `s` spawns a mirror reflection at `depth`.
+bool is_mirror(Surface s, uint depth) {
+    return REFLECTIONS && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
+}
+
+// Constant environment light on `s` (the ambient term). A mirror's specular
+// share comes from its traced reflection instead.
+vec3 ambient_light(Surface s, bool mirror) {
     vec3 f0 = surface_f0(s);
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
-    vec3 ambient = frame.env_ambient * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
-    vec3 c = s.emissive + direct_light(s, v, gn) + ambient;
+    return frame.env_ambient * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
+}
 
-    if (mirror || refract_on) {
-        // Dielectric interface for the transmissive part; Schlick for the rest.
-        float eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
-        float fr = fresnel_dielectric(nv, eta);
-        vec3 kr = f_schlick(f0, nv);
-        if (mirror || fr >= 1.0) {
-            vec3 rw = kr * (1.0 - tm) + vec3(fr * tm);
-            if (!mirror) rw = vec3(fr * tm);  // total internal reflection only
-            vec3 rd = reflect(-v, s.normal);
-            if (dot(rd, gn) <= 0.0) rd = reflect(-v, gn);  // stay above the surface
-            push_branch(offset_ray(s.position, gn), rd, w * rw, depth + 1u);
-        }
-        if (refract_on && fr < 1.0) {
-            vec3 td = refract(-v, s.normal, eta);
-            if (dot(td, gn) >= 0.0) td = refract(-v, gn, eta);
-            push_branch(offset_ray(s.position, -gn), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u);
-        }
+// Pushes the reflection and refraction branches `s` spawns (weight `w`,
+// at `depth`); `nv` from face_viewer.
+void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w, uint depth) {
+    bool can_branch = depth < MAX_DEPTH;
+    float tm = s.transmission * (1.0 - s.metallic);
+    bool mirror = is_mirror(s, depth);
+    bool refract_on = REFRACTIONS && can_branch && tm > 0.0;
+    if (!mirror && !refract_on) return;
+    // Dielectric interface for the transmissive part; Schlick for the rest.
+    vec3 f0 = surface_f0(s);
+    float eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
+    float fr = fresnel_dielectric(nv, eta);
+    vec3 kr = f_schlick(f0, nv);
+    if (mirror || fr >= 1.0) {
+        vec3 rw = kr * (1.0 - tm) + vec3(fr * tm);
+        if (!mirror) rw = vec3(fr * tm);  // total internal reflection only
+        vec3 rd = reflect(-v, s.normal);
+        if (dot(rd, gn) <= 0.0) rd = reflect(-v, gn);  // stay above the surface
+        push_branch(offset_ray(s.position, gn), rd, w * rw, depth + 1u);
     }
+    if (refract_on && fr < 1.0) {
+        vec3 td = refract(-v, s.normal, eta);
+        if (dot(td, gn) >= 0.0) td = refract(-v, gn, eta);
+        push_branch(offset_ray(s.position, -gn), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u);
+    }
+}
+
+// Radiance leaving a secondary hit `s` towards v, times `w`; pushes the
+// branches it spawns. The primary hit is split over the direct, specular
+// and composite passes instead, which compute the same terms.
+vec3 shade(Surface s, vec3 v, vec3 gn, bool back_face, vec3 w, uint depth) {
+    float nv = face_viewer(s, v);
+    vec3 c = s.emissive + direct_light(s, v, gn) + ambient_light(s, is_mirror(s, depth));
+    push_branches(s, v, nv, gn, back_face, w, depth);
     return w * c;
 }
 
@@ -140,7 +162,7 @@ vec3 trace_branches() {
         g_sp--;
         Branch b = g_stack[g_sp];
         RayHit h;
-        count_ray(2u);
+        count_ray(RAY_KIND_SECONDARY);
         if (trace_closest(b.origin, b.dir, RAY_TMAX, h)) {
             vec3 gn;
             bool back_face;

@@ -1,10 +1,11 @@
-// Host/shader shared structs. Mirrored by src/render/gpu_types.rs with
-// compile-time size asserts; all blocks use scalar layout.
+// Host/shader shared structs. Mirrored by src/gpu/types.rs with
+// compile-time size asserts (strides: generated/shared.glsl); all blocks use scalar layout.
 #ifndef TYPES_GLSL
 #define TYPES_GLSL
 
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_nonuniform_qualifier : require
+#include "generated/shared.glsl"
 
 struct Vertex {
     vec3 position;
@@ -12,13 +13,6 @@ struct Vertex {
     vec2 uv;
     vec4 tangent;
 };
-
-#define ALPHA_OPAQUE 0u
-#define ALPHA_MASK 1u
-#define ALPHA_BLEND 2u
-
-#define MAT_DOUBLE_SIDED 1u
-#define MAT_CASTS_SHADOWS 2u
 
 struct Material {
     vec4 base_color;
@@ -42,8 +36,6 @@ struct Material {
     uint pad1;
 };
 
-#define INST_CASTS_SHADOWS 1u
-
 struct Instance {
     mat4 world;
     mat4 normal_matrix;
@@ -57,11 +49,6 @@ struct Instance {
     uint pad1;
 };
 
-#define LIGHT_DIRECTIONAL 0u
-#define LIGHT_POINT 1u
-#define LIGHT_SPOT 2u
-#define LIGHT_CASTS_SHADOWS 1u
-
 struct Light {
     vec3 position;
     uint type;
@@ -74,13 +61,6 @@ struct Light {
     float pad0;
     float pad1;
 };
-
-#define DEBUG_NONE 0u
-#define DEBUG_ALBEDO 1u
-#define DEBUG_NORMAL 2u
-#define DEBUG_DEPTH 3u
-#define DEBUG_MATERIAL 4u
-#define DEBUG_OBJECT 5u
 
 struct Frame {
     mat4 view;

@@ -11,7 +11,5 @@ struct TracePayload {
     uint hit;            // 1 = something was hit (for shadow rays: blocked)
     vec3 transmittance;  // shadow rays: product over transmissive crossings
 };
-// Hit groups in the shader binding table (stride 2 per geometry).
-#define HIT_GROUP_VISIBLE 0u
-#define HIT_GROUP_SHADOW 1u
+// Hit groups: HIT_GROUP_* in generated/shared.glsl.
 #endif

@@ -25,14 +25,12 @@ struct BvhInstance {
     uint opaque;
 };
 
-layout(set = 2, binding = 0, scalar) readonly buffer BlasNodes { BvhNode blas_nodes[]; };
-layout(set = 2, binding = 1, scalar) readonly buffer BlasPrims { uint blas_prims[]; };
-layout(set = 2, binding = 2, scalar) readonly buffer TlasNodes { BvhNode tlas_nodes[]; };
-layout(set = 2, binding = 3, scalar) readonly buffer TlasPrims { uint tlas_prims[]; };
-layout(set = 2, binding = 4, scalar) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
+layout(set = SET_TRACE, binding = BVH_BLAS_NODES, scalar) readonly buffer BlasNodes { BvhNode blas_nodes[]; };
+layout(set = SET_TRACE, binding = BVH_BLAS_PRIMS, scalar) readonly buffer BlasPrims { uint blas_prims[]; };
+layout(set = SET_TRACE, binding = BVH_TLAS_NODES, scalar) readonly buffer TlasNodes { BvhNode tlas_nodes[]; };
+layout(set = SET_TRACE, binding = BVH_TLAS_PRIMS, scalar) readonly buffer TlasPrims { uint tlas_prims[]; };
+layout(set = SET_TRACE, binding = BVH_INSTANCES, scalar) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 
-const uint MASK_VISIBLE = 0x01u;
-const uint MASK_SHADOW = 0x02u;
 #define BVH_STACK 32
 
 // Slab test; inv_d may hold +-inf for zero direction components. A NaN

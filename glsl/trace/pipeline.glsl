@@ -6,15 +6,13 @@
 #include "../common/hit.glsl"
 #include "../rt/payload.glsl"
 
-layout(set = 2, binding = 0) uniform accelerationStructureEXT tlas;
+layout(set = SET_TRACE, binding = TRACE_TLAS) uniform accelerationStructureEXT tlas;
 layout(location = 0) rayPayloadEXT TracePayload payload;
 
-const uint MASK_VISIBLE = 0x01u;
-const uint MASK_SHADOW = 0x02u;
 
 bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
     payload.hit = 0u;
-    traceRayEXT(tlas, gl_RayFlagsNoneEXT, MASK_VISIBLE, HIT_GROUP_VISIBLE, 2u, 0u, o, 0.0, d, tmax, 0);
+    traceRayEXT(tlas, gl_RayFlagsNoneEXT, MASK_VISIBLE, HIT_GROUP_VISIBLE, HIT_GROUP_STRIDE, 0u, o, 0.0, d, tmax, 0);
     hit = RayHit(payload.instance, payload.primitive, payload.bary, payload.t);
     return payload.hit != 0u;
 }
@@ -25,7 +23,7 @@ vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
     payload.hit = 1u;
     payload.transmittance = vec3(1.0);
     uint flags = gl_RayFlagsTerminateOnFirstHitEXT | gl_RayFlagsSkipClosestHitShaderEXT;
-    traceRayEXT(tlas, flags, MASK_SHADOW, HIT_GROUP_SHADOW, 2u, 0u, o, 0.0, d, tmax, 0);
+    traceRayEXT(tlas, flags, MASK_SHADOW, HIT_GROUP_SHADOW, HIT_GROUP_STRIDE, 0u, o, 0.0, d, tmax, 0);
     return payload.hit != 0u ? vec3(0.0) : payload.transmittance;
 }
 

@@ -6,10 +6,8 @@
 #extension GL_EXT_ray_query : require
 #include "../common/hit.glsl"
 
-layout(set = 2, binding = 0) uniform accelerationStructureEXT tlas;
+layout(set = SET_TRACE, binding = TRACE_TLAS) uniform accelerationStructureEXT tlas;
 
-const uint MASK_VISIBLE = 0x01u;
-const uint MASK_SHADOW = 0x02u;
 
 bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
     rayQueryEXT q;

@@ -19,8 +19,8 @@ use crate::scene::{AlphaMode, Instance, Scene};
 use crate::vk::{memory_barrier, Buffer, Context};
 
 /// TLAS instance mask bits: what kind of ray may hit an instance.
-pub const MASK_VISIBLE: u8 = 0x01;
-pub const MASK_SHADOW: u8 = 0x02;
+pub const MASK_VISIBLE: u8 = crate::gpu::shared::MASK_VISIBLE as u8;
+pub const MASK_SHADOW: u8 = crate::gpu::shared::MASK_SHADOW as u8;
 
 /// Whether every hit on `inst` is final (no alpha test, no transmission):
 /// such instances skip any-hit processing in every backend.

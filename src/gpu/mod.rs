@@ -4,6 +4,7 @@
 //! `render`): it imports only `vk` and `scene`.
 
 pub mod scene;
+pub mod shared;
 pub mod types;
 
 pub use scene::{Draw, GpuScene, PrimitiveRange};

@@ -8,6 +8,10 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
+use super::shared::{
+    SCENE_ENV_MAP, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS, SCENE_MATERIALS,
+    SCENE_RAY_COUNTERS, SCENE_TEXTURES, SCENE_VERTICES,
+};
 use super::types::*;
 use crate::scene::tangents::bounds_of;
 use crate::scene::{Aabb, AlphaMode, Filter, Instance, LightKind, SamplerDesc, Scene, TextureRef, Wrap};
@@ -137,34 +141,34 @@ impl GpuScene {
 
         let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let set = DescriptorSet::new(
-            ctx,
-            "scene set",
-            &[
-                Binding::one(vk::DescriptorType::UNIFORM_BUFFER),
-                Binding::one(storage),
-                Binding::one(storage),
-                Binding::one(storage),
-                Binding::one(storage),
-                Binding::one(storage),
-                Binding::one(sampled),
-                Binding::one(storage),
-                // Bindless textures: variable-count, so the last binding.
-                Binding { ty: sampled, count: textures.len().max(1) as u32, bindless: true },
-            ],
-        )?;
-        set.write_buffer(ctx, 0, frame.raw);
-        set.write_buffer(ctx, 1, vertices.raw);
-        set.write_buffer(ctx, 2, indices.raw);
-        set.write_buffer(ctx, 3, materials.raw);
-        set.write_buffer(ctx, 4, instances.raw);
-        set.write_buffer(ctx, 5, lights.raw);
-        set.write_buffer(ctx, 7, ray_counters.raw);
+        // In binding order (shared_values.rs: SCENE_*), checked below.
+        let layout = [
+            (SCENE_FRAME, Binding::one(vk::DescriptorType::UNIFORM_BUFFER)),
+            (SCENE_VERTICES, Binding::one(storage)),
+            (SCENE_INDICES, Binding::one(storage)),
+            (SCENE_MATERIALS, Binding::one(storage)),
+            (SCENE_INSTANCES, Binding::one(storage)),
+            (SCENE_LIGHTS, Binding::one(storage)),
+            (SCENE_ENV_MAP, Binding::one(sampled)),
+            (SCENE_RAY_COUNTERS, Binding::one(storage)),
+            // Bindless textures: variable-count, so the last binding.
+            (SCENE_TEXTURES, Binding { ty: sampled, count: textures.len().max(1) as u32, bindless: true }),
+        ];
+        debug_assert!(layout.iter().enumerate().all(|(i, (b, _))| i as u32 == *b));
+        let bindings: Vec<Binding> = layout.iter().map(|(_, b)| *b).collect();
+        let set = DescriptorSet::new(ctx, "scene set", &bindings)?;
+        set.write_buffer(ctx, SCENE_FRAME, frame.raw);
+        set.write_buffer(ctx, SCENE_VERTICES, vertices.raw);
+        set.write_buffer(ctx, SCENE_INDICES, indices.raw);
+        set.write_buffer(ctx, SCENE_MATERIALS, materials.raw);
+        set.write_buffer(ctx, SCENE_INSTANCES, instances.raw);
+        set.write_buffer(ctx, SCENE_LIGHTS, lights.raw);
+        set.write_buffer(ctx, SCENE_RAY_COUNTERS, ray_counters.raw);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        set.write_image(ctx, 6, 0, env_map.view, env_sampler, read);
+        set.write_image(ctx, SCENE_ENV_MAP, 0, env_map.view, env_sampler, read);
         for (i, (img, tex)) in textures.iter().zip(&scene.textures).enumerate() {
             let s = samplers.iter().find(|(d, _)| *d == tex.sampler).map(|(_, s)| *s).unwrap();
-            set.write_image(ctx, 8, i as u32, img.view, s, read);
+            set.write_image(ctx, SCENE_TEXTURES, i as u32, img.view, s, read);
         }
 
         let draws = build_draws(scene, &ranges, &skinned);

@@ -1,18 +1,16 @@
-//! Rust mirrors of `glsl/common/types.glsl` (scalar block layout). The size
-//! asserts keep the two from drifting; change both together.
+//! Rust mirrors of `glsl/common/types.glsl` (scalar block layout). The
+//! sizes are asserted against the strides in `shared_values.rs`, which the
+//! shaders' layout is tested against (tests/shared_layout.rs).
 
 use bytemuck::{Pod, Zeroable};
 
-pub const ALPHA_OPAQUE: u32 = 0;
-pub const ALPHA_MASK: u32 = 1;
-pub const ALPHA_BLEND: u32 = 2;
-pub const MAT_DOUBLE_SIDED: u32 = 1;
-pub const MAT_CASTS_SHADOWS: u32 = 2;
-pub const INST_CASTS_SHADOWS: u32 = 1;
-pub const LIGHT_DIRECTIONAL: u32 = 0;
-pub const LIGHT_POINT: u32 = 1;
-pub const LIGHT_SPOT: u32 = 2;
-pub const LIGHT_CASTS_SHADOWS: u32 = 1;
+pub use super::shared::{
+    ALPHA_BLEND, ALPHA_MASK, ALPHA_OPAQUE, INST_CASTS_SHADOWS, LIGHT_CASTS_SHADOWS, LIGHT_DIRECTIONAL,
+    LIGHT_POINT, LIGHT_SPOT, MAT_CASTS_SHADOWS, MAT_DOUBLE_SIDED,
+};
+use super::shared::{INSTANCE_STRIDE, LIGHT_STRIDE, MATERIAL_STRIDE, VERTEX_STRIDE};
+
+const _: () = assert!(std::mem::size_of::<crate::scene::Vertex>() == VERTEX_STRIDE as usize);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -36,7 +34,7 @@ pub struct GpuMaterial {
     pub tex_transmission: i32,
     pub pad: [u32; 2],
 }
-const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 96);
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == MATERIAL_STRIDE as usize);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -51,7 +49,7 @@ pub struct GpuInstance {
     pub flags: u32,
     pub pad: [u32; 2],
 }
-const _: () = assert!(std::mem::size_of::<GpuInstance>() == 160);
+const _: () = assert!(std::mem::size_of::<GpuInstance>() == INSTANCE_STRIDE as usize);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -66,7 +64,7 @@ pub struct GpuLight {
     pub flags: u32,
     pub pad: [f32; 2],
 }
-const _: () = assert!(std::mem::size_of::<GpuLight>() == 64);
+const _: () = assert!(std::mem::size_of::<GpuLight>() == LIGHT_STRIDE as usize);
 
 pub const DEBUG_NONE: u32 = 0;
 

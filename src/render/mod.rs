@@ -1,32 +1,34 @@
-//! Frame orchestration. One frame reads top to bottom like the data flow in
-//! DESIGN.md: G-buffer -> deferred lighting -> tone map (-> readback or present).
+//! The renderer: owns the GPU scene, the tracer, the frame's passes and
+//! their targets, and records frames. The frame itself is the pass list in
+//! `passes::FRAME`, recorded through the pass layer (`frame.rs`), which
+//! derives barriers, labels and timestamps from what each pass declares.
 
-pub mod compute_pass;
-pub mod gbuffer;
+pub mod frame;
+pub mod kernel;
 pub mod output;
+pub mod passes;
 pub mod shading;
 pub mod skinning;
 pub mod targets;
+pub mod tracer;
 
 use anyhow::{Context as _, Result};
 use ash::vk;
 use glam::Mat4;
 use gpu_allocator::MemoryLocation;
 
-use crate::accel::compute_bvh::ComputeBvh;
-use crate::accel::dynamic::{RebuildPolicy, Update};
-use crate::accel::SceneAccel;
-use crate::scene::{Camera, Scene};
-use crate::vk::pipeline::{Binding, DescriptorSet, Specialization};
-use crate::vk::timer::{pass, GpuTimer};
-use crate::vk::{image_barrier, Buffer, Context};
-use compute_pass::{ComputePass, Input};
-use gbuffer::GBufferPass;
-use crate::gpu::GpuScene;
+use crate::accel::dynamic::RebuildPolicy;
 use crate::gpu::types::GpuFrame;
+use crate::gpu::GpuScene;
+use crate::scene::{Camera, Scene};
+use crate::vk::timer::GpuTimer;
+use crate::vk::{Buffer, Context};
+use frame::{Access, Recorder, SharedBuffer, Use};
+use passes::{composite::HDR, tonemap::LDR, Cx, Init, Pass, FRAME};
 use shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;
+use tracer::Tracer;
 
 /// G-buffer debug views (also selectable in the viewer).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -42,7 +44,15 @@ pub enum DebugView {
 
 impl DebugView {
     fn code(self) -> u32 {
-        self as u32
+        use crate::gpu::shared::*;
+        match self {
+            DebugView::None => DEBUG_NONE,
+            DebugView::Albedo => DEBUG_ALBEDO,
+            DebugView::Normal => DEBUG_NORMAL,
+            DebugView::Depth => DEBUG_DEPTH,
+            DebugView::Material => DEBUG_MATERIAL,
+            DebugView::Object => DEBUG_OBJECT,
+        }
     }
 }
 
@@ -82,26 +92,26 @@ pub struct FrameOutput {
     pub ray_counts: [u32; 3],
 }
 
-/// What one scene update refits or rebuilds, decided on the host before
-/// its commands are recorded.
-struct UpdatePlan {
-    blas: Vec<Update>,
-    bvh: Vec<Update>,
-    cpu_rebuild_ms: f64,
+/// A pass of the current frame with what it declared.
+struct Recorded {
+    name: &'static str,
+    uses: Vec<Use>,
+    pass: Box<dyn Pass>,
 }
+
+/// The readback and the viewer's blit copy these out of the frame.
+const OUTPUTS: [Use; 2] = [Use::image(&LDR, Access::TransferRead), Use::image(&HDR, Access::TransferRead)];
 
 pub struct Renderer {
     pub gpu: GpuScene,
-    pub targets: Targets,
-    gbuffer: GBufferPass,
-    /// The shading/integrator pass and the variant it was built for.
-    shading: Option<(ShadingConfig, ComputePass)>,
-    tonemap: ComputePass,
+    targets: Targets,
+    extent: vk::Extent2D,
     needs: SceneNeeds,
-    /// Built on first use by a tracing variant.
-    accel: Option<(SceneAccel, DescriptorSet)>,
-    /// The compute backend's BVH, built on first use.
-    bvh: Option<ComputeBvh>,
+    /// The configuration the passes were built for.
+    config: Option<ShadingConfig>,
+    passes: Vec<Recorded>,
+    /// Built on first use by a configuration that traces rays.
+    tracer: Option<Box<dyn Tracer>>,
     pub timer: GpuTimer,
     cmd: vk::CommandBuffer,
     /// Skinning of skinned instances, if the scene has any.
@@ -110,66 +120,30 @@ pub struct Renderer {
     pub rebuild_policy: RebuildPolicy,
     update_cmd: vk::CommandBuffer,
     update_timer: GpuTimer,
-    /// GPU ms per pass of the last `update_scene` (plus the host's
-    /// top-level work), for benchmarks.
+    /// GPU ms per pass of the last scene update (plus the host's share),
+    /// for benchmarks and the viewer.
     pub update_timings: Vec<(&'static str, f64)>,
-    /// Skinned structures refit / rebuilt by the last `update_scene`.
+    /// Skinned structures refit / rebuilt by the last scene update.
     pub update_counts: [usize; 2],
     /// An update recorded into a frame by `record_scene_update`, awaiting
     /// `finish_scene_update`.
-    pending_update: Option<UpdatePlan>,
+    pending_update: bool,
     readback_ldr: Buffer,
     readback_hdr: Buffer,
     frame_index: u32,
 }
 
-fn lighting_inputs(t: &Targets) -> Vec<Input> {
-    let mut v: Vec<Input> = t.gbuffer.iter().map(|i| Input::Sampled(i.view)).collect();
-    v.push(Input::Sampled(t.depth.view));
-    v.push(Input::Storage(t.hdr.view));
-    v
-}
-
-fn tonemap_inputs(t: &Targets) -> Vec<Input> {
-    vec![Input::Storage(t.hdr.view), Input::Storage(t.ldr.view)]
-}
-
 fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
     let px = extent.width as u64 * extent.height as u64;
-    let ldr = Buffer::new(
-        ctx,
-        "readback ldr",
-        px * 4,
-        vk::BufferUsageFlags::TRANSFER_DST,
-        MemoryLocation::GpuToCpu,
-    )?;
-    let hdr = Buffer::new(
-        ctx,
-        "readback hdr",
-        px * 16,
-        vk::BufferUsageFlags::TRANSFER_DST,
-        MemoryLocation::GpuToCpu,
-    )?;
-    Ok((ldr, hdr))
+    let buffer = |name, bytes| {
+        Buffer::new(ctx, name, px * bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)
+    };
+    Ok((buffer("readback ldr", 4)?, buffer("readback hdr", 16)?))
 }
 
 impl Renderer {
     pub fn new(ctx: &Context, scene: &Scene, extent: vk::Extent2D) -> Result<Renderer> {
         let gpu = GpuScene::upload(ctx, scene)?;
-        let targets = Targets::new(ctx, extent)?;
-        let gbuffer = GBufferPass::new(ctx, gpu.set.layout)?;
-        let no_spec = Specialization::new(&[]);
-        let tonemap = ComputePass::new(
-            ctx,
-            "tonemap",
-            "tonemap.comp",
-            gpu.set.layout,
-            &tonemap_inputs(&targets),
-            &[],
-            &no_spec,
-        )?;
-        let timer = GpuTimer::new(ctx, 16)?;
-        let cmd = ctx.allocate_command_buffer("frame")?;
         let (readback_ldr, readback_hdr) = readback_buffers(ctx, extent)?;
         let skinning = Skinning::new(ctx, scene, &gpu)?;
         Ok(Renderer {
@@ -179,17 +153,16 @@ impl Renderer {
             update_timer: GpuTimer::new(ctx, 8)?,
             update_timings: Vec::new(),
             update_counts: [0; 2],
-            pending_update: None,
+            pending_update: false,
             gpu,
-            targets,
-            gbuffer,
-            shading: None,
-            tonemap,
+            targets: Targets::new(ctx, extent, &[])?,
+            extent,
             needs: SceneNeeds::of(scene),
-            accel: None,
-            bvh: None,
-            timer,
-            cmd,
+            config: None,
+            passes: Vec::new(),
+            tracer: None,
+            timer: GpuTimer::new(ctx, 16)?,
+            cmd: ctx.allocate_command_buffer("frame")?,
             readback_ldr,
             readback_hdr,
             frame_index: 0,
@@ -197,212 +170,131 @@ impl Renderer {
     }
 
     pub fn extent(&self) -> vk::Extent2D {
-        self.targets.extent
+        self.extent
+    }
+
+    /// The targets of the current frame (after `prepare`).
+    pub fn targets(&self) -> &Targets {
+        &self.targets
     }
 
     /// Recreates the per-resolution targets (the caller has waited for idle).
     pub fn resize(&mut self, ctx: &Context, extent: vk::Extent2D) -> Result<()> {
-        self.targets.destroy(ctx);
         self.readback_ldr.destroy(ctx);
         self.readback_hdr.destroy(ctx);
-        self.targets = Targets::new(ctx, extent)?;
         (self.readback_ldr, self.readback_hdr) = readback_buffers(ctx, extent)?;
-        if let Some((_, pass)) = &self.shading {
-            pass.bind(ctx, &lighting_inputs(&self.targets));
+        self.extent = extent;
+        let uses: Vec<Use> = self.passes.iter().flat_map(|p| p.uses.iter().copied()).collect();
+        self.allocate_targets(ctx, &uses)?;
+        for p in &self.passes {
+            p.pass.bind(ctx, &self.targets);
         }
-        self.tonemap.bind(ctx, &tonemap_inputs(&self.targets));
+        Ok(())
+    }
+
+    /// Allocates exactly the targets `uses` (the passes' declarations) name.
+    fn allocate_targets(&mut self, ctx: &Context, uses: &[Use]) -> Result<()> {
+        self.targets.destroy(ctx);
+        let all: Vec<Use> = uses.iter().copied().chain(OUTPUTS).collect();
+        self.targets = Targets::new(ctx, self.extent, &all)?;
         Ok(())
     }
 
     /// Brings the GPU copies of everything that can move up to date with
-    /// `scene` (already posed by `Scene::animate`): instance transforms and
-    /// lights, then in one submission skinning -> skinned BLAS refit (or
-    /// rebuild, per `rebuild_policy`) -> TLAS build, or for the compute
-    /// backend skinning -> BVH refit, after which the host rebuilds the top
-    /// level. Static per-mesh structures are untouched. Call only when
-    /// something moved (so a still scene rebuilds nothing), with the GPU
-    /// idle; it waits for its own work. Pass times land in `update_timings`.
-    /// The viewer uses `record_scene_update` instead, which needs no wait.
+    /// `scene` (already posed by `Scene::animate`) in its own submission,
+    /// waiting for it: instance transforms and lights, then skinning and
+    /// the tracer's update (skinned BLAS refit or rebuild per
+    /// `rebuild_policy`, TLAS; or the compute BVH's refit and top level).
+    /// Static per-mesh structures are untouched. Call only when something
+    /// moved (so a still scene rebuilds nothing). Pass times land in
+    /// `update_timings`. The viewer uses `record_scene_update` instead.
     pub fn update_scene(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
-        let plan = self.plan_update(ctx, scene)?;
+        self.plan_update(ctx, scene)?;
         let cmd = self.update_cmd;
         ctx.begin_commands(cmd)?;
-        self.record_update(ctx, cmd, scene, &plan)?;
+        self.record_update(ctx, cmd, scene)?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
-        self.finish_update(ctx, scene, plan)
+        self.finish_update(ctx, scene)
     }
 
     /// Whether `record_scene_update` can put the scene update into the
-    /// frame's own command buffer: true for the hardware backends, whose
-    /// TLAS is built on the GPU; false for the compute BVH, whose top level
-    /// the host builds from the refit roots between refit and tracing.
-    /// Valid after `prepare` (which picks the backend).
+    /// frame's own command buffer (the tracer needs no host step between its
+    /// update and the tracing passes). Valid after `prepare`.
     pub fn can_record_update(&self) -> bool {
-        self.bvh.is_none()
+        self.tracer.as_ref().is_none_or(|t| t.updates_in_frame())
     }
 
-    /// `update_scene` without its own submission: records skinning -> BLAS
-    /// refit -> TLAS build at the start of `cmd` (before `record`), so a
-    /// frame is one submission and the host never waits for the update.
-    /// Needs `can_record_update()`, a GPU done with the previous frame, and
-    /// `finish_scene_update` once `cmd` has completed.
+    /// `update_scene` without its own submission: records the update at the
+    /// start of `cmd` (before `record`), so a frame is one submission and
+    /// the host never waits for the update. Needs `can_record_update()`, a
+    /// GPU done with the previous frame, and `finish_scene_update` once
+    /// `cmd` has completed.
     pub fn record_scene_update(
         &mut self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         scene: &Scene,
     ) -> Result<()> {
-        anyhow::ensure!(self.can_record_update(), "the compute BVH's scene update needs its own submission");
-        let plan = self.plan_update(ctx, scene)?;
-        self.record_update(ctx, cmd, scene, &plan)?;
-        if self.pending_update.replace(plan).is_some() {
+        anyhow::ensure!(self.can_record_update(), "this tracer's scene update needs its own submission");
+        self.plan_update(ctx, scene)?;
+        self.record_update(ctx, cmd, scene)?;
+        if std::mem::replace(&mut self.pending_update, true) {
             log::debug!("a recorded scene update was never finished; its statistics are lost");
         }
         Ok(())
     }
 
-    /// The host side of a recorded update, once its command buffer is done:
-    /// pass times, refit / rebuild counts and the rebuild policy's view of
-    /// the deformed bounds. Does nothing when no update is pending.
+    /// The host side of a recorded update, once its command buffer is done.
+    /// Does nothing when no update is pending.
     pub fn finish_scene_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
-        match self.pending_update.take() {
-            Some(plan) => self.finish_update(ctx, scene, plan),
-            None => Ok(()),
+        if std::mem::take(&mut self.pending_update) {
+            self.finish_update(ctx, scene)?;
         }
+        Ok(())
     }
 
     /// Host work before an update is recorded: moved transforms and lights,
-    /// joint matrices, and which skinned structures refit or rebuild.
-    fn plan_update(&mut self, ctx: &Context, scene: &Scene) -> Result<UpdatePlan> {
+    /// joint matrices, and the tracer's refit / rebuild decisions.
+    fn plan_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         self.gpu.update_dynamic(scene)?;
-        // Keep only the structures the current backend traces: refitting the
-        // other kind every frame would be wasted work (it is rebuilt if the
-        // backend changes back).
-        match self.shading_config().and_then(|c| c.backend) {
-            Some(Backend::Compute) => {
-                if let Some((mut a, mut set)) = self.accel.take() {
-                    set.destroy(ctx);
-                    a.destroy(ctx);
-                }
-            }
-            Some(Backend::Query | Backend::Pipeline) => {
-                if let Some(mut b) = self.bvh.take() {
-                    b.destroy(ctx);
-                }
-            }
-            _ => {}
-        }
         if let Some(s) = &mut self.skinning {
             s.write(scene)?;
         }
-        let policy = self.rebuild_policy;
-        let t_rebuild = std::time::Instant::now();
-        let bvh = match &mut self.bvh {
-            Some(b) => b.prepare_skinned(ctx, scene, &policy)?,
-            None => Vec::new(),
-        };
-        let cpu_rebuild_ms = t_rebuild.elapsed().as_secs_f64() * 1e3;
-        let blas = match self.accel.as_ref().and_then(|(a, _)| a.dynamic.as_ref()) {
-            Some(d) => d.blases.iter().map(|b| b.state.next(&policy)).collect(),
-            None => Vec::new(),
-        };
-        Ok(UpdatePlan { blas, bvh, cpu_rebuild_ms })
+        if let Some(t) = &mut self.tracer {
+            t.prepare_update(ctx, scene, &self.gpu, &self.rebuild_policy)?;
+        }
+        Ok(())
     }
 
-    /// The update's GPU work, timed by `update_timer`.
-    fn record_update(
-        &mut self,
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
-        scene: &Scene,
-        plan: &UpdatePlan,
-    ) -> Result<()> {
-        let timer = &mut self.update_timer;
-        timer.begin_frame(ctx, cmd);
-        // Uploads (rebuilt trees) and the previous frame's reads come first.
-        let all = vk::PipelineStageFlags2::ALL_COMMANDS;
-        crate::vk::memory_barrier(
-            ctx,
-            cmd,
-            (all, vk::AccessFlags2::MEMORY_WRITE | vk::AccessFlags2::MEMORY_READ),
-            (all, vk::AccessFlags2::MEMORY_WRITE | vk::AccessFlags2::MEMORY_READ),
-        );
+    /// The update's GPU passes, timed by `update_timer`.
+    fn record_update(&mut self, ctx: &Context, cmd: vk::CommandBuffer, scene: &Scene) -> Result<()> {
+        let mut rec = Recorder::new(ctx, cmd, &mut self.update_timer, None);
         if let Some(s) = &self.skinning {
-            pass(ctx, timer, cmd, "skinning", |cmd| {
+            let uses = [Use::buffer(SharedBuffer::Geometry, Access::ShaderWrite)];
+            rec.pass("skinning", vk::PipelineStageFlags2::COMPUTE_SHADER, &uses, |cmd| {
                 s.record(ctx, cmd);
                 Ok(())
             })?;
         }
-        if let Some((accel, set)) = &mut self.accel {
-            if !plan.blas.is_empty() {
-                let name = if plan.blas.contains(&Update::Rebuild) { "blas rebuild" } else { "blas refit" };
-                pass(ctx, timer, cmd, name, |cmd| {
-                    accel.record_dynamic(ctx, cmd, &self.gpu, &plan.blas);
-                    Ok(())
-                })?;
-            }
-            pass(ctx, timer, cmd, "tlas build", |cmd| accel.record_tlas(ctx, cmd, scene))?;
-            // A TLAS that had to grow is a new object; nothing recorded so
-            // far binds the set, so rewriting it here is allowed.
-            set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
-        }
-        if let Some(bvh) = &self.bvh {
-            if bvh.skinned_count() > 0 {
-                pass(ctx, timer, cmd, "bvh refit", |cmd| {
-                    bvh.record_refit(ctx, cmd);
-                    Ok(())
-                })?;
-            }
+        if let Some(t) = &mut self.tracer {
+            t.record_update(&mut rec, scene, &self.gpu)?;
         }
         Ok(())
     }
 
     /// Host work after the update's commands completed.
-    fn finish_update(&mut self, ctx: &Context, scene: &Scene, plan: UpdatePlan) -> Result<()> {
-        let policy = self.rebuild_policy;
+    fn finish_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         self.update_timings = self.update_timer.results(ctx)?;
-        if plan.bvh.contains(&Update::Rebuild) {
-            self.update_timings.push(("bvh rebuild (CPU)", plan.cpu_rebuild_ms));
-        }
-        // Judge this frame's results for the next frame's rebuild decisions.
-        let t0 = std::time::Instant::now();
-        if let Some((accel, _)) = &mut self.accel {
-            if let (Some(d), Some(s)) = (&mut accel.dynamic, &self.skinning) {
-                for ((b, bounds), u) in d.blases.iter_mut().zip(s.bounds()?).zip(&plan.blas) {
-                    b.state.done(*u, &bounds, &policy);
-                }
-            }
-        }
-        if let Some(bvh) = &mut self.bvh {
-            bvh.finish_refit(scene, &plan.bvh, &policy)?;
-            self.update_timings.push(("top level (CPU)", t0.elapsed().as_secs_f64() * 1e3));
-        }
-        let count = |u: &[Update], k: Update| u.iter().filter(|x| **x == k).count();
-        self.update_counts = [
-            count(&plan.blas, Update::Refit) + count(&plan.bvh, Update::Refit),
-            count(&plan.blas, Update::Rebuild) + count(&plan.bvh, Update::Rebuild),
-        ];
-        Ok(())
-    }
-
-    /// Builds the acceleration structure `backend` traces, if missing.
-    fn build_structures(&mut self, ctx: &Context, scene: &Scene, backend: Option<Backend>) -> Result<()> {
-        match backend {
-            Some(Backend::Compute) if self.bvh.is_none() => {
-                self.bvh = Some(ComputeBvh::build(ctx, scene, &self.gpu)?);
-            }
-            Some(Backend::Query | Backend::Pipeline) if self.accel.is_none() => {
-                let accel = SceneAccel::build(ctx, scene, &self.gpu)?;
-                let set = DescriptorSet::new(
-                    ctx,
-                    "trace set (TLAS)",
-                    &[Binding::one(ash::vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)],
-                )?;
-                set.write_acceleration_structure(ctx, 0, accel.tlas.raw);
-                self.accel = Some((accel, set));
-            }
-            _ => {}
+        let bounds = match &self.skinning {
+            Some(s) => s.bounds()?,
+            None => Vec::new(),
+        };
+        self.update_counts = [0; 2];
+        if let Some(t) = &mut self.tracer {
+            let (counts, host) = t.finish_update(ctx, scene, &bounds, &self.rebuild_policy)?;
+            self.update_timings.extend(host);
+            self.update_counts = [counts.refits, counts.rebuilds];
         }
         Ok(())
     }
@@ -417,69 +309,85 @@ impl Renderer {
         let skinning: Vec<_> =
             self.update_timings.iter().filter(|(n, _)| *n == "skinning").copied().collect();
         let t0 = std::time::Instant::now();
-        if let Some((mut a, mut set)) = self.accel.take() {
-            set.destroy(ctx);
-            a.destroy(ctx);
+        if let Some(mut old) = self.tracer.take() {
+            let backend = old.backend();
+            old.destroy(ctx);
+            // The passes keep their pipelines: the new tracer's set layout is
+            // defined identically.
+            self.tracer = Some(tracer::create(ctx, backend, scene, &self.gpu)?);
         }
-        if let Some(mut b) = self.bvh.take() {
-            b.destroy(ctx);
-        }
-        self.build_structures(ctx, scene, self.shading_config().and_then(|c| c.backend))?;
         self.update_timings = skinning;
         self.update_timings.push(("full AS rebuild (wall)", t0.elapsed().as_secs_f64() * 1e3));
         Ok(())
     }
 
-    /// The shading variant in use (after `prepare`).
+    /// The configuration of the current frame (after `prepare`).
     pub fn shading_config(&self) -> Option<ShadingConfig> {
-        self.shading.as_ref().map(|(c, _)| *c)
+        self.config
     }
 
-    /// The descriptor set (set 2) of the traversal `config` uses, if any.
-    fn trace_set(&self, config: &ShadingConfig) -> Option<&DescriptorSet> {
-        match config.backend {
-            Some(Backend::Compute) => self.bvh.as_ref().map(|b| &b.set),
-            Some(_) => self.accel.as_ref().map(|(_, s)| s),
-            None => None,
-        }
+    /// Names of the passes the current frame records, in order.
+    pub fn pass_names(&self) -> Vec<&'static str> {
+        self.passes.iter().map(|p| p.name).collect()
     }
 
-    /// Makes the shading pass match `settings` (rebuilding it, and building
-    /// the acceleration structures on first need). Waits for the GPU when it
-    /// has to rebuild.
-    fn ensure_shading(&mut self, ctx: &Context, scene: &Scene, settings: &RenderSettings) -> Result<()> {
-        let config =
-            ShadingConfig::resolve(ctx, self.needs, settings.mode, settings.effects, settings.backend)?;
-        if self.shading.as_ref().is_some_and(|(c, _)| *c == config) {
+    /// Makes the frame's passes, tracer and targets match `settings`. Waits
+    /// for the GPU when it has to rebuild.
+    fn ensure_frame(&mut self, ctx: &Context, scene: &Scene, settings: &RenderSettings) -> Result<()> {
+        let config = ShadingConfig::resolve(ctx, self.needs, settings)?;
+        if self.config == Some(config) {
             return Ok(());
         }
         unsafe { ctx.device.device_wait_idle()? };
-        if let Some((_, mut old)) = self.shading.take() {
-            old.destroy(ctx);
+        for mut p in self.passes.drain(..) {
+            p.pass.destroy(ctx);
         }
-        self.build_structures(ctx, scene, config.backend)?;
-        let extra: Vec<_> = self.trace_set(&config).map(|s| s.layout).into_iter().collect();
-        let name = match (config.backend, config.mode) {
-            (None, _) => "lighting",
-            (Some(_), Mode::Rt) => "rt",
-            (Some(_), Mode::Hybrid) => "shade+trace",
-        };
-        let spec = Specialization::new(&config.specialization());
-        let pass = ComputePass::new(
-            ctx,
-            name,
-            config.shader(),
-            self.gpu.set.layout,
-            &lighting_inputs(&self.targets),
-            &extra,
-            &spec,
-        )?;
-        log::info!("shading: {} ({})", config.describe(), config.backend_reason(ctx, settings.backend));
-        self.shading = Some((config, pass));
+        self.config = None;
+        if self.tracer.as_ref().map(|t| t.backend()) != config.backend {
+            if let Some(mut t) = self.tracer.take() {
+                t.destroy(ctx);
+            }
+            if let Some(b) = config.backend {
+                self.tracer = Some(tracer::create(ctx, b, scene, &self.gpu)?);
+            }
+        }
+        let mut left_out = Vec::new();
+        let mut chosen = Vec::new();
+        for desc in FRAME {
+            match (desc.skip)(&config) {
+                Some(why) => left_out.push(format!("{}: {why}", desc.name)),
+                None => chosen.push(desc),
+            }
+        }
+        // Targets first (passes bind them), from what the passes declare.
+        self.passes = Vec::new();
+        let uses: Vec<Vec<Use>> = chosen.iter().map(|d| (d.uses)(&config)).collect();
+        self.allocate_targets(ctx, &uses.iter().flatten().copied().collect::<Vec<_>>())?;
+        for (desc, uses) in chosen.into_iter().zip(uses) {
+            let init = Init {
+                ctx,
+                config: &config,
+                gpu: &self.gpu,
+                targets: &self.targets,
+                tracer: self.tracer.as_deref(),
+            };
+            let pass = (desc.create)(&init).with_context(|| format!("creating pass {}", desc.name))?;
+            self.passes.push(Recorded { name: desc.name, uses, pass });
+        }
+        log::info!("frame: {} ({})", config.describe(), config.backend_reason(ctx, settings.backend));
+        log::info!("frame: passes {}", self.pass_names().join(" -> "));
+        if !left_out.is_empty() {
+            log::info!("frame: left out {}", left_out.join("; "));
+        }
+        let described = self.targets.describe();
+        let bytes: u32 = described.iter().map(|(_, b)| b).sum();
+        let list: Vec<String> = described.iter().map(|(n, b)| format!("{n} ({b} B)")).collect();
+        log::info!("frame: targets {} = {bytes} bytes/pixel", list.join(", "));
+        self.config = Some(config);
         Ok(())
     }
 
-    /// Fills the frame uniforms for `camera` and selects the shading variant.
+    /// Fills the frame uniforms for `camera` and builds the frame's passes.
     pub fn prepare(
         &mut self,
         ctx: &Context,
@@ -487,8 +395,8 @@ impl Renderer {
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<()> {
-        self.ensure_shading(ctx, scene, settings)?;
-        let e = self.targets.extent;
+        self.ensure_frame(ctx, scene, settings)?;
+        let e = self.extent;
         let aspect = e.width as f32 / e.height.max(1) as f32;
         let view = camera.view();
         let proj = camera.projection(aspect);
@@ -517,61 +425,30 @@ impl Renderer {
         self.gpu.write_frame(&frame)
     }
 
-    /// Records every pass of one frame; the tone-mapped result is left in
-    /// `targets.ldr` in GENERAL layout for the caller (readback or present).
+    /// Records every pass of one frame; the tone-mapped result is in the
+    /// `tonemap::LDR` target for the caller (readback or present).
     pub fn record(&mut self, ctx: &Context, cmd: vk::CommandBuffer) -> Result<()> {
-        self.timer.begin_frame(ctx, cmd);
-        let (gpu, t) = (&self.gpu, &self.targets);
-        let (config, shading) = self.shading.as_ref().context("prepare() must run before record()")?;
-        if config.mode == Mode::Hybrid {
-            pass(ctx, &mut self.timer, cmd, "gbuffer", |cmd| {
-                self.gbuffer.record(ctx, cmd, gpu, t);
+        self.record_with(ctx, cmd, |_, _| Ok(()))
+    }
+
+    /// `record`, then `tail` with the same recorder (so its passes' barriers
+    /// follow from the frame's): the readback, the viewer's blit.
+    pub fn record_with(
+        &mut self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        tail: impl FnOnce(&mut Recorder, &Targets) -> Result<()>,
+    ) -> Result<()> {
+        anyhow::ensure!(self.config.is_some(), "prepare() must run before record()");
+        let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
+        let cx = Cx { ctx, gpu: &self.gpu, targets: &self.targets, tracer: self.tracer.as_deref() };
+        for p in &self.passes {
+            rec.pass(p.name, p.pass.stage(), &p.uses, |cmd| {
+                p.pass.record(&cx, cmd);
                 Ok(())
             })?;
         }
-        let trace_sets: Vec<_> = self.trace_set(config).map(|s| s.set).into_iter().collect();
-        pass(ctx, &mut self.timer, cmd, shading.name, |cmd| {
-            image_barrier(
-                ctx,
-                cmd,
-                t.hdr.raw,
-                t.hdr.aspect,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::GENERAL,
-                (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ),
-                (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
-            );
-            shading.dispatch(ctx, cmd, gpu.set.set, &trace_sets, t.extent);
-            Ok(())
-        })?;
-        pass(ctx, &mut self.timer, cmd, "tonemap", |cmd| {
-            let compute_write =
-                (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE);
-            let compute_read =
-                (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ);
-            image_barrier(
-                ctx,
-                cmd,
-                t.hdr.raw,
-                t.hdr.aspect,
-                vk::ImageLayout::GENERAL,
-                vk::ImageLayout::GENERAL,
-                compute_write,
-                compute_read,
-            );
-            image_barrier(
-                ctx,
-                cmd,
-                t.ldr.raw,
-                t.ldr.aspect,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::GENERAL,
-                (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ),
-                compute_write,
-            );
-            self.tonemap.dispatch(ctx, cmd, gpu.set.set, &[], t.extent);
-            Ok(())
-        })?;
+        tail(&mut rec, &self.targets)?;
         self.frame_index = self.frame_index.wrapping_add(1);
         Ok(())
     }
@@ -588,44 +465,38 @@ impl Renderer {
         self.gpu.ray_counters.write(0, &[0u8; 16])?;
         let cmd = self.cmd;
         ctx.begin_commands(cmd)?;
-        self.record(ctx, cmd)?;
-        let t = &self.targets;
-        pass(ctx, &mut self.timer, cmd, "readback", |cmd| {
-            let from = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE);
-            let to = (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_READ);
-            for (img, buf) in [(&t.ldr, &self.readback_ldr), (&t.hdr, &self.readback_hdr)] {
-                image_barrier(
+        let (ldr_buf, hdr_buf) = (self.readback_ldr.raw, self.readback_hdr.raw);
+        self.record_with(ctx, cmd, |rec, t| {
+            rec.pass("readback", vk::PipelineStageFlags2::NONE, &OUTPUTS, |cmd| {
+                for (desc, buf) in [(&LDR, ldr_buf), (&HDR, hdr_buf)] {
+                    let img = t.get(desc).context("output target missing")?;
+                    let region = [vk::BufferImageCopy::default()
+                        .image_subresource(
+                            vk::ImageSubresourceLayers::default().aspect_mask(img.aspect).layer_count(1),
+                        )
+                        .image_extent(vk::Extent3D {
+                            width: t.extent.width,
+                            height: t.extent.height,
+                            depth: 1,
+                        })];
+                    unsafe {
+                        ctx.device.cmd_copy_image_to_buffer(
+                            cmd,
+                            img.raw,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            buf,
+                            &region,
+                        )
+                    };
+                }
+                crate::vk::memory_barrier(
                     ctx,
                     cmd,
-                    img.raw,
-                    img.aspect,
-                    vk::ImageLayout::GENERAL,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    from,
-                    to,
+                    (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+                    (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
                 );
-                let region = [vk::BufferImageCopy::default()
-                    .image_subresource(
-                        vk::ImageSubresourceLayers::default().aspect_mask(img.aspect).layer_count(1),
-                    )
-                    .image_extent(vk::Extent3D { width: t.extent.width, height: t.extent.height, depth: 1 })];
-                unsafe {
-                    ctx.device.cmd_copy_image_to_buffer(
-                        cmd,
-                        img.raw,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        buf.raw,
-                        &region,
-                    )
-                };
-            }
-            crate::vk::memory_barrier(
-                ctx,
-                cmd,
-                (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
-                (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
-            );
-            Ok(())
+                Ok(())
+            })
         })?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
@@ -634,7 +505,8 @@ impl Renderer {
         let hdr = bytemuck::pod_collect_to_vec::<u8, f32>(self.readback_hdr.read()?);
         let counts: Vec<u32> = bytemuck::pod_collect_to_vec(self.gpu.ray_counters.read()?);
         let ray_counts = [counts[0], counts[1], counts[2]];
-        Ok(FrameOutput { width: t.extent.width, height: t.extent.height, ldr, hdr, timings, ray_counts })
+        let e = self.extent;
+        Ok(FrameOutput { width: e.width, height: e.height, ldr, hdr, timings, ray_counts })
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
@@ -649,18 +521,12 @@ impl Renderer {
         self.readback_ldr.destroy(ctx);
         self.readback_hdr.destroy(ctx);
         self.timer.destroy(ctx);
-        self.tonemap.destroy(ctx);
-        if let Some((_, mut p)) = self.shading.take() {
-            p.destroy(ctx);
+        for mut p in self.passes.drain(..) {
+            p.pass.destroy(ctx);
         }
-        if let Some(mut b) = self.bvh.take() {
-            b.destroy(ctx);
+        if let Some(mut t) = self.tracer.take() {
+            t.destroy(ctx);
         }
-        if let Some((mut a, mut set)) = self.accel.take() {
-            set.destroy(ctx);
-            a.destroy(ctx);
-        }
-        self.gbuffer.destroy(ctx);
         self.targets.destroy(ctx);
         self.gpu.destroy(ctx);
     }

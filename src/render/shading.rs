@@ -1,16 +1,18 @@
-//! Which shading variant a frame runs: the render mode, the secondary
-//! effects the scene actually needs (and the user did not switch off), and
-//! the ray backend. Effects nobody needs are compiled out through
-//! specialization constants; with none at all, no ray is traced and no
-//! acceleration structure is built.
+//! What a frame runs: the render mode, the secondary effects the scene
+//! actually needs (and the user did not switch off), the ray backend and
+//! whether a debug view replaces the lighting. The passes decide from this
+//! whether they are recorded (render/passes); effects nobody needs are
+//! compiled out through specialization constants; with none at all, no ray
+//! is traced and no acceleration structure is built.
 
 use anyhow::{bail, Result};
 
+pub use crate::gpu::shared::MIRROR_ROUGHNESS;
+use crate::gpu::shared::{
+    SPEC_COUNT_RAYS, SPEC_MAX_DEPTH, SPEC_MIN_WEIGHT, SPEC_REFLECTIONS, SPEC_REFRACTIONS, SPEC_SHADOWS,
+};
 use crate::scene::{LightKind, Scene};
 use crate::vk::Context;
-
-/// Surfaces at most this rough get mirror reflections (glsl/common/integrator.glsl).
-pub const MIRROR_ROUGHNESS: f32 = 0.35;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Mode {
@@ -23,7 +25,8 @@ pub enum Mode {
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Backend {
-    /// Ray query where supported, else the compute BVH tracer.
+    /// Ray query where supported, else the ray-tracing pipeline, else the
+    /// compute BVH tracer.
     #[default]
     Auto,
     /// VK_KHR_ray_query.
@@ -106,23 +109,34 @@ fn light_is_on(l: &crate::scene::Light) -> bool {
     l.intensity > 0.0 && l.color.max_element() > 0.0 && cone_open
 }
 
-/// The resolved variant of the shading pass.
+/// The resolved configuration of a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadingConfig {
     pub mode: Mode,
+    /// The effects that run: wanted and needed.
     pub effects: Effects,
     /// None: no ray is traced (deferred shading only).
     pub backend: Option<Backend>,
+    /// A G-buffer debug view replaces the lighting.
+    pub debug_view: bool,
+    /// What the scene contains that the effects need.
+    pub needs: SceneNeeds,
 }
 
 impl ShadingConfig {
     pub fn resolve(
         ctx: &Context,
         needs: SceneNeeds,
-        mode: Mode,
-        wanted: Effects,
-        backend: Backend,
+        settings: &crate::render::RenderSettings,
     ) -> Result<Self> {
+        let debug_view = settings.debug_view != crate::render::DebugView::None;
+        let (mode, backend) = (settings.mode, settings.backend);
+        // A debug view traces no secondary rays.
+        let wanted = if debug_view {
+            Effects { shadows: false, reflections: false, refractions: false, ..settings.effects }
+        } else {
+            settings.effects
+        };
         let effects = Effects {
             shadows: wanted.shadows && needs.shadows,
             reflections: wanted.reflections && needs.reflections,
@@ -146,24 +160,13 @@ impl ShadingConfig {
                 b => b,
             })
         };
-        Ok(ShadingConfig { mode, effects, backend })
-    }
-
-    pub fn shader(&self) -> &'static str {
-        match (self.backend, self.mode) {
-            (None, _) => "lighting.comp",
-            (Some(Backend::Compute), Mode::Hybrid) => "lighting_compute",
-            (Some(Backend::Compute), Mode::Rt) => "rt_compute",
-            (Some(Backend::Pipeline), Mode::Hybrid) => "lighting.rgen",
-            (Some(Backend::Pipeline), Mode::Rt) => "rt_pipeline",
-            (Some(_), Mode::Hybrid) => "lighting_query",
-            (Some(_), Mode::Rt) => "rt_query",
-        }
+        Ok(ShadingConfig { mode, effects, backend, debug_view, needs })
     }
 
     /// Why this backend (for the log).
     pub fn backend_reason(&self, ctx: &Context, requested: Backend) -> &'static str {
         match (self.backend, requested) {
+            (None, _) if self.debug_view => "a debug view traces no rays",
             (None, _) => "no secondary effect needs rays",
             (Some(_), Backend::Auto) if ctx.rt.ray_query => "auto: the device supports ray queries",
             (Some(_), Backend::Auto) if ctx.rt.ray_tracing_pipeline => {
@@ -179,12 +182,12 @@ impl ShadingConfig {
         let e = &self.effects;
         let on = self.backend.is_some();
         vec![
-            (1, (on && e.shadows) as u32),
-            (2, (on && e.reflections) as u32),
-            (3, (on && e.refractions) as u32),
-            (4, e.max_depth),
-            (5, e.min_weight.to_bits()),
-            (6, (on && e.count_rays) as u32),
+            (SPEC_SHADOWS, (on && e.shadows) as u32),
+            (SPEC_REFLECTIONS, (on && e.reflections) as u32),
+            (SPEC_REFRACTIONS, (on && e.refractions) as u32),
+            (SPEC_MAX_DEPTH, e.max_depth),
+            (SPEC_MIN_WEIGHT, e.min_weight.to_bits()),
+            (SPEC_COUNT_RAYS, (on && e.count_rays) as u32),
         ]
     }
 

@@ -147,9 +147,9 @@ impl Skinning {
         self.bounds.write(0, bytemuck::cast_slice(&reset))
     }
 
-    /// Records the dispatches plus a barrier making the vertices visible to
-    /// the acceleration-structure builds, the compute tracer and the
-    /// rasterizer's vertex pulling.
+    /// Records the dispatches. The pass layer orders the vertex writes
+    /// before their readers (declared `Geometry` uses); the barrier here
+    /// only makes the bounds visible to the host once the frame is done.
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let d = &ctx.device;
         unsafe {
@@ -159,21 +159,11 @@ impl Skinning {
                 d.cmd_dispatch(cmd, job.vertex_count.div_ceil(64), 1, 1);
             }
         }
-        let mut readers = vk::PipelineStageFlags2::COMPUTE_SHADER
-            | vk::PipelineStageFlags2::VERTEX_SHADER
-            | vk::PipelineStageFlags2::FRAGMENT_SHADER
-            | vk::PipelineStageFlags2::HOST;
-        if ctx.rt.acceleration_structure {
-            readers |= vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR;
-        }
-        if ctx.rt.ray_tracing_pipeline {
-            readers |= vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
-        }
         memory_barrier(
             ctx,
             cmd,
             (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
-            (readers, vk::AccessFlags2::SHADER_READ | vk::AccessFlags2::HOST_READ),
+            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
         );
     }
 

@@ -1,68 +1,114 @@
-//! Per-resolution render targets: the G-buffer (MRT + reversed-Z depth), the
-//! linear HDR radiance image and the tone-mapped 8-bit output.
+//! Per-resolution render targets. Each is described once (`TargetDesc`,
+//! next to the pass that writes it); the frame allocates exactly the
+//! targets its recorded passes use, with the usage flags their declared
+//! accesses need.
 
 use anyhow::Result;
 use ash::vk;
 
+use super::frame::{Access, Resource, Use};
 use crate::vk::{Context, Image};
 
-/// G-buffer formats, in attachment order (matches gbuffer.frag's outputs).
-pub const GBUFFER_FORMATS: [(vk::Format, &str); 5] = [
-    (vk::Format::R8G8B8A8_SRGB, "gbuffer albedo+occlusion"),
-    (vk::Format::R16G16B16A16_SFLOAT, "gbuffer normal+roughness"),
-    (vk::Format::R8G8B8A8_UNORM, "gbuffer metallic+transmission+ior"),
-    (vk::Format::R16G16B16A16_SFLOAT, "gbuffer emissive"),
-    (vk::Format::R32G32_UINT, "gbuffer hit (instance, primitive)"),
-];
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
-pub const HDR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-pub const LDR_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+/// A render target: name (debug name, identity), format, and for an sRGB
+/// target that a compute pass writes, the UNORM format of its storage view.
+#[derive(Debug, PartialEq, Eq)]
+pub struct TargetDesc {
+    pub name: &'static str,
+    pub format: vk::Format,
+    pub storage_format: Option<vk::Format>,
+}
+
+impl TargetDesc {
+    pub const fn new(name: &'static str, format: vk::Format) -> TargetDesc {
+        TargetDesc { name, format, storage_format: None }
+    }
+}
+
+/// One allocated target.
+pub struct Target {
+    pub desc: &'static TargetDesc,
+    pub image: Image,
+    /// View for storage access (a UNORM view of an sRGB image), else `image.view`.
+    pub storage_view: vk::ImageView,
+}
+
+impl std::ops::Deref for Target {
+    type Target = Image;
+    fn deref(&self) -> &Image {
+        &self.image
+    }
+}
 
 pub struct Targets {
     pub extent: vk::Extent2D,
-    pub gbuffer: Vec<Image>,
-    pub depth: Image,
-    pub hdr: Image,
-    pub ldr: Image,
+    targets: Vec<Target>,
+}
+
+fn usage(access: Access) -> vk::ImageUsageFlags {
+    use vk::ImageUsageFlags as U;
+    match access {
+        Access::Sampled => U::SAMPLED,
+        Access::StorageRead | Access::StorageWrite => U::STORAGE,
+        Access::ColorAttachment => U::COLOR_ATTACHMENT,
+        Access::DepthAttachment => U::DEPTH_STENCIL_ATTACHMENT,
+        Access::TransferRead => U::TRANSFER_SRC,
+        _ => U::empty(),
+    }
 }
 
 impl Targets {
-    pub fn new(ctx: &Context, extent: vk::Extent2D) -> Result<Targets> {
-        let color = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
-        let gbuffer = GBUFFER_FORMATS
-            .iter()
-            .map(|(f, name)| Image::new_2d(ctx, name, *f, extent, 1, color))
-            .collect::<Result<Vec<_>>>()?;
-        let depth = Image::new_2d(
-            ctx,
-            "gbuffer depth (reversed-Z)",
-            DEPTH_FORMAT,
-            extent,
-            1,
-            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
-        )?;
-        let hdr = Image::new_2d(
-            ctx,
-            "hdr radiance",
-            HDR_FORMAT,
-            extent,
-            1,
-            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-        )?;
-        let ldr = Image::new_2d(
-            ctx,
-            "tonemapped output",
-            LDR_FORMAT,
-            extent,
-            1,
-            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-        )?;
-        Ok(Targets { extent, gbuffer, depth, hdr, ldr })
+    /// Allocates every image that `uses` name, once each.
+    pub fn new(ctx: &Context, extent: vk::Extent2D, uses: &[Use]) -> Result<Targets> {
+        let mut wanted: Vec<(&'static TargetDesc, vk::ImageUsageFlags)> = Vec::new();
+        for u in uses {
+            let Resource::Image(t) = u.resource else { continue };
+            match wanted.iter_mut().find(|(d, _)| d.name == t.name) {
+                Some((_, flags)) => *flags |= usage(u.access),
+                None => wanted.push((t, usage(u.access))),
+            }
+        }
+        let mut targets = Vec::new();
+        for (desc, usage) in wanted {
+            let storage = usage.contains(vk::ImageUsageFlags::STORAGE);
+            let target = match desc.storage_format.filter(|_| storage) {
+                Some(view_format) => {
+                    let image =
+                        Image::new_2d_mutable(ctx, desc.name, desc.format, view_format, extent, usage)?;
+                    let view = image.extra_view.expect("mutable image has a storage view");
+                    Target { desc, image, storage_view: view }
+                }
+                None => {
+                    let image = Image::new_2d(ctx, desc.name, desc.format, extent, 1, usage)?;
+                    Target { desc, storage_view: image.view, image }
+                }
+            };
+            targets.push(target);
+        }
+        Ok(Targets { extent, targets })
+    }
+
+    pub fn get(&self, desc: &TargetDesc) -> Option<&Target> {
+        self.targets.iter().find(|t| t.desc.name == desc.name)
+    }
+
+    /// Names and bytes per pixel of the allocated targets.
+    pub fn describe(&self) -> Vec<(&'static str, u32)> {
+        self.targets.iter().map(|t| (t.desc.name, bytes_per_pixel(t.desc.format))).collect()
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
-        for i in self.gbuffer.iter_mut().chain([&mut self.depth, &mut self.hdr, &mut self.ldr]) {
-            i.destroy(ctx);
+        for t in &mut self.targets {
+            t.image.destroy(ctx);
         }
+        self.targets.clear();
+    }
+}
+
+pub fn bytes_per_pixel(f: vk::Format) -> u32 {
+    match f {
+        vk::Format::R8G8B8A8_SRGB | vk::Format::R8G8B8A8_UNORM | vk::Format::D32_SFLOAT => 4,
+        vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_UINT => 8,
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        _ => 0,
     }
 }

@@ -34,10 +34,11 @@ use winit::keyboard::{KeyCode, ModifiersState, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use crate::app::{CameraChoice, GpuOptions, RenderJob};
+use crate::render::frame::{Access, Use};
+use crate::render::passes::tonemap::LDR;
 use crate::render::shading::Mode;
 use crate::render::{DebugView, FrameOutput, RenderSettings, Renderer};
 use crate::scene::Scene;
-use crate::vk::timer::pass;
 use crate::vk::{image_barrier, memory_barrier, Buffer, Context, ContextOptions};
 use camera_controller::{digit, CameraController};
 use stats::FrameStats;
@@ -751,87 +752,79 @@ impl Viewer {
         if update {
             self.renderer.record_scene_update(ctx, cmd, &self.scene)?;
         }
-        self.renderer.record(ctx, cmd)?;
         let image = self.presenter.images[index as usize];
         let dst = self.presenter.extent;
-        let (timer, t) = (&mut self.renderer.timer, &self.renderer.targets);
-        pass(ctx, timer, cmd, "present blit", |cmd| {
-            let src = t.extent;
-            image_barrier(
-                ctx,
-                cmd,
-                t.ldr.raw,
-                t.ldr.aspect,
-                vk::ImageLayout::GENERAL,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
-                (
-                    vk::PipelineStageFlags2::BLIT | vk::PipelineStageFlags2::COPY,
-                    vk::AccessFlags2::TRANSFER_READ,
-                ),
-            );
-            // Waits for the image-available semaphore (its wait stage is BLIT).
-            image_barrier(
-                ctx,
-                cmd,
-                image,
-                vk::ImageAspectFlags::COLOR,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::NONE),
-                (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::TRANSFER_WRITE),
-            );
-            let layers =
-                vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1);
-            let corner = |e: vk::Extent2D| vk::Offset3D { x: e.width as i32, y: e.height as i32, z: 1 };
-            let region = [vk::ImageBlit::default()
-                .src_subresource(layers)
-                .src_offsets([vk::Offset3D::default(), corner(src)])
-                .dst_subresource(layers)
-                .dst_offsets([vk::Offset3D::default(), corner(dst)])];
-            let filter = if src == dst { vk::Filter::NEAREST } else { vk::Filter::LINEAR };
-            unsafe {
-                ctx.device.cmd_blit_image(
-                    cmd,
-                    t.ldr.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    image,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &region,
-                    filter,
-                )
-            };
-            if let Some(buf) = shot {
-                let copy = [vk::BufferImageCopy::default()
-                    .image_subresource(layers)
-                    .image_extent(vk::Extent3D { width: src.width, height: src.height, depth: 1 })];
-                unsafe {
-                    ctx.device.cmd_copy_image_to_buffer(
-                        cmd,
-                        t.ldr.raw,
-                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                        buf.raw,
-                        &copy,
-                    )
-                };
-                memory_barrier(
+        let uses = [Use::image(&LDR, Access::TransferRead)];
+        self.renderer.record_with(ctx, cmd, |rec, t| {
+            let ldr = t.get(&LDR).context("no tone-mapped output")?;
+            rec.pass("present blit", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
+                let src = t.extent;
+                // The swapchain image is outside the frame's targets: its
+                // barriers are written here. Waits for the image-available
+                // semaphore (its wait stage is BLIT).
+                image_barrier(
                     ctx,
                     cmd,
-                    (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
-                    (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+                    image,
+                    vk::ImageAspectFlags::COLOR,
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::NONE),
+                    (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::TRANSFER_WRITE),
                 );
-            }
-            image_barrier(
-                ctx,
-                cmd,
-                image,
-                vk::ImageAspectFlags::COLOR,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::ImageLayout::PRESENT_SRC_KHR,
-                (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::TRANSFER_WRITE),
-                (vk::PipelineStageFlags2::BOTTOM_OF_PIPE, vk::AccessFlags2::NONE),
-            );
-            Ok(())
+                let layers = vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1);
+                let corner = |e: vk::Extent2D| vk::Offset3D { x: e.width as i32, y: e.height as i32, z: 1 };
+                let region = [vk::ImageBlit::default()
+                    .src_subresource(layers)
+                    .src_offsets([vk::Offset3D::default(), corner(src)])
+                    .dst_subresource(layers)
+                    .dst_offsets([vk::Offset3D::default(), corner(dst)])];
+                let filter = if src == dst { vk::Filter::NEAREST } else { vk::Filter::LINEAR };
+                unsafe {
+                    ctx.device.cmd_blit_image(
+                        cmd,
+                        ldr.raw,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &region,
+                        filter,
+                    )
+                };
+                if let Some(buf) = shot {
+                    let copy = [vk::BufferImageCopy::default()
+                        .image_subresource(layers)
+                        .image_extent(vk::Extent3D { width: src.width, height: src.height, depth: 1 })];
+                    unsafe {
+                        ctx.device.cmd_copy_image_to_buffer(
+                            cmd,
+                            ldr.raw,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            buf.raw,
+                            &copy,
+                        )
+                    };
+                    memory_barrier(
+                        ctx,
+                        cmd,
+                        (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+                        (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+                    );
+                }
+                image_barrier(
+                    ctx,
+                    cmd,
+                    image,
+                    vk::ImageAspectFlags::COLOR,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::ImageLayout::PRESENT_SRC_KHR,
+                    (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::TRANSFER_WRITE),
+                    (vk::PipelineStageFlags2::BOTTOM_OF_PIPE, vk::AccessFlags2::NONE),
+                );
+                Ok(())
+            })
         })?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         Ok(())

@@ -126,23 +126,31 @@ pub struct DescriptorSet {
     pub layout: vk::DescriptorSetLayout,
     pub pool: vk::DescriptorPool,
     pub set: vk::DescriptorSet,
-    bindings: Vec<Binding>,
+    bindings: Vec<(u32, Binding)>,
 }
 
 impl DescriptorSet {
+    /// Bindings numbered 0, 1, 2, ... in order.
     pub fn new(ctx: &Context, name: &str, bindings: &[Binding]) -> Result<DescriptorSet> {
+        let numbered: Vec<(u32, Binding)> =
+            bindings.iter().enumerate().map(|(i, b)| (i as u32, *b)).collect();
+        Self::numbered(ctx, name, &numbered)
+    }
+
+    /// Bindings with explicit numbers (gaps allowed; a bindless one last).
+    pub fn numbered(ctx: &Context, name: &str, numbered: &[(u32, Binding)]) -> Result<DescriptorSet> {
         let stages = vk::ShaderStageFlags::ALL;
-        let raw: Vec<_> = bindings
+        let raw: Vec<_> = numbered
             .iter()
-            .enumerate()
             .map(|(i, b)| {
                 vk::DescriptorSetLayoutBinding::default()
-                    .binding(i as u32)
+                    .binding(*i)
                     .descriptor_type(b.ty)
                     .descriptor_count(b.count.max(1))
                     .stage_flags(stages)
             })
             .collect();
+        let bindings: Vec<Binding> = numbered.iter().map(|(_, b)| *b).collect();
         let flags: Vec<_> = bindings
             .iter()
             .map(|b| {
@@ -183,7 +191,13 @@ impl DescriptorSet {
         }
         let set = unsafe { ctx.device.allocate_descriptor_sets(&alloc)? }[0];
         ctx.name(set, name);
-        Ok(DescriptorSet { layout, pool, set, bindings: bindings.to_vec() })
+        Ok(DescriptorSet { layout, pool, set, bindings: numbered.to_vec() })
+    }
+
+    fn binding_type(&self, binding: u32) -> vk::DescriptorType {
+        self.bindings.iter().find(|(i, _)| *i == binding).map(|(_, b)| b.ty).unwrap_or_else(|| {
+            panic!("descriptor set has no binding {binding}") // a programming error, not input
+        })
     }
 
     pub fn write_buffer(&self, ctx: &Context, binding: u32, buffer: vk::Buffer) {
@@ -191,7 +205,7 @@ impl DescriptorSet {
         let w = vk::WriteDescriptorSet::default()
             .dst_set(self.set)
             .dst_binding(binding)
-            .descriptor_type(self.bindings[binding as usize].ty)
+            .descriptor_type(self.binding_type(binding))
             .buffer_info(&info);
         unsafe { ctx.device.update_descriptor_sets(&[w], &[]) };
     }
@@ -211,7 +225,7 @@ impl DescriptorSet {
             .dst_set(self.set)
             .dst_binding(binding)
             .dst_array_element(element)
-            .descriptor_type(self.bindings[binding as usize].ty)
+            .descriptor_type(self.binding_type(binding))
             .image_info(&info);
         unsafe { ctx.device.update_descriptor_sets(&[w], &[]) };
     }

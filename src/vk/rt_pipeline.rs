@@ -1,8 +1,7 @@
-//! Ray-tracing pipeline (VK_KHR_ray_tracing_pipeline) for the full-screen
-//! integrator: one ray-generation shader, one miss shader and two triangle
-//! hit groups (visibility: closest + any hit; shadow: any hit only), with a
+//! Ray-tracing pipeline (VK_KHR_ray_tracing_pipeline): one ray-generation
+//! shader, the miss shaders and triangle hit groups its caller names, and a
 //! shader binding table laid out from the driver's handle size and
-//! alignments.
+//! alignments (regions in that order: raygen, miss, hit).
 
 use anyhow::{Context as _, Result};
 use ash::{khr, vk};
@@ -11,10 +10,13 @@ use gpu_allocator::MemoryLocation;
 use super::pipeline::{shader_module, Specialization};
 use super::{Buffer, Context};
 
-pub const CLOSEST_HIT: &str = "rt/closest.rchit";
-pub const VISIBLE_ANY_HIT: &str = "rt/visible.rahit";
-pub const SHADOW_ANY_HIT: &str = "rt/shadow.rahit";
-pub const MISS: &str = "rt/miss.rmiss";
+/// The shaders of a pipeline, by name in the build's shader table.
+pub struct RtShaders<'a> {
+    pub raygen: &'a str,
+    pub miss: &'a [&'a str],
+    /// Triangle hit groups in SBT order: (closest hit, any hit).
+    pub hit_groups: &'a [(Option<&'a str>, Option<&'a str>)],
+}
 
 pub struct RtPipeline {
     pub pipeline: vk::Pipeline,
@@ -28,9 +30,9 @@ fn align_up(x: u64, a: u64) -> u64 {
 }
 
 impl RtPipeline {
-    pub fn new(
+    pub fn new<'a>(
         ctx: &Context,
-        raygen: &str,
+        shaders: &RtShaders<'a>,
         layout: vk::PipelineLayout,
         spec: &Specialization,
     ) -> Result<RtPipeline> {
@@ -39,29 +41,9 @@ impl RtPipeline {
         let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut props);
         unsafe { ctx.instance.raw.get_physical_device_properties2(ctx.physical_device, &mut p2) };
 
-        let names = [raygen, MISS, CLOSEST_HIT, VISIBLE_ANY_HIT, SHADOW_ANY_HIT];
-        let modules = names.iter().map(|n| shader_module(ctx, n)).collect::<Result<Vec<_>>>()?;
-        let spec_info = spec.info();
-        let stage_flags = [
-            vk::ShaderStageFlags::RAYGEN_KHR,
-            vk::ShaderStageFlags::MISS_KHR,
-            vk::ShaderStageFlags::CLOSEST_HIT_KHR,
-            vk::ShaderStageFlags::ANY_HIT_KHR,
-            vk::ShaderStageFlags::ANY_HIT_KHR,
-        ];
-        let stages: Vec<_> = modules
-            .iter()
-            .zip(stage_flags)
-            .enumerate()
-            .map(|(i, (m, f))| {
-                let s = vk::PipelineShaderStageCreateInfo::default().stage(f).module(*m).name(c"main");
-                if i == 0 {
-                    s.specialization_info(&spec_info)
-                } else {
-                    s
-                }
-            })
-            .collect();
+        // Stage list: raygen, misses, then each hit group's shaders.
+        let mut names = vec![(shaders.raygen, vk::ShaderStageFlags::RAYGEN_KHR)];
+        names.extend(shaders.miss.iter().map(|m| (*m, vk::ShaderStageFlags::MISS_KHR)));
         let unused = vk::SHADER_UNUSED_KHR;
         let general = |i: u32| {
             vk::RayTracingShaderGroupCreateInfoKHR::default()
@@ -71,16 +53,42 @@ impl RtPipeline {
                 .any_hit_shader(unused)
                 .intersection_shader(unused)
         };
-        let hit = |closest: u32, any: u32| {
-            vk::RayTracingShaderGroupCreateInfoKHR::default()
-                .ty(vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP)
-                .general_shader(unused)
-                .closest_hit_shader(closest)
-                .any_hit_shader(any)
-                .intersection_shader(unused)
-        };
-        // Group order = SBT order: raygen, miss, hit (visible), hit (shadow).
-        let groups = [general(0), general(1), hit(2, 3), hit(unused, 4)];
+        let mut groups = vec![general(0)];
+        groups.extend((0..shaders.miss.len() as u32).map(|i| general(1 + i)));
+        for (closest, any) in shaders.hit_groups {
+            let mut index = |name: &Option<&'a str>, stage| match name {
+                Some(n) => {
+                    names.push((*n, stage));
+                    names.len() as u32 - 1
+                }
+                None => unused,
+            };
+            let c = index(closest, vk::ShaderStageFlags::CLOSEST_HIT_KHR);
+            let a = index(any, vk::ShaderStageFlags::ANY_HIT_KHR);
+            groups.push(
+                vk::RayTracingShaderGroupCreateInfoKHR::default()
+                    .ty(vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP)
+                    .general_shader(unused)
+                    .closest_hit_shader(c)
+                    .any_hit_shader(a)
+                    .intersection_shader(unused),
+            );
+        }
+        let modules = names.iter().map(|(n, _)| shader_module(ctx, n)).collect::<Result<Vec<_>>>()?;
+        let spec_info = spec.info();
+        let stages: Vec<_> = modules
+            .iter()
+            .zip(&names)
+            .enumerate()
+            .map(|(i, (m, (_, f)))| {
+                let s = vk::PipelineShaderStageCreateInfo::default().stage(*f).module(*m).name(c"main");
+                if i == 0 {
+                    s.specialization_info(&spec_info)
+                } else {
+                    s
+                }
+            })
+            .collect();
         let info = [vk::RayTracingPipelineCreateInfoKHR::default()
             .stages(&stages)
             .groups(&groups)
@@ -98,7 +106,7 @@ impl RtPipeline {
             unsafe { ctx.device.destroy_shader_module(m, None) };
         }
         let pipeline = r.map_err(|(_, e)| e).context("create ray-tracing pipeline")?[0];
-        ctx.name(pipeline, raygen);
+        ctx.name(pipeline, shaders.raygen);
 
         // Shader binding table: each region starts at the base alignment,
         // records are the handle size rounded up to the handle alignment.
@@ -113,11 +121,12 @@ impl RtPipeline {
                 groups.len() * handle as usize,
             )?
         };
+        let (n_miss, n_hit) = (shaders.miss.len() as u64, shaders.hit_groups.len() as u64);
         let raygen_size = align_up(stride, base);
         let miss_off = raygen_size;
-        let miss_size = align_up(stride, base);
+        let miss_size = align_up(n_miss * stride, base);
         let hit_off = miss_off + miss_size;
-        let hit_size = align_up(2 * stride, base);
+        let hit_size = align_up(n_hit * stride, base);
         let total = hit_off + hit_size;
         let mut data = vec![0u8; total as usize];
         let copy = |data: &mut Vec<u8>, group: usize, at: u64| {
@@ -125,9 +134,12 @@ impl RtPipeline {
             data[at as usize..(at + handle) as usize].copy_from_slice(h);
         };
         copy(&mut data, 0, 0);
-        copy(&mut data, 1, miss_off);
-        copy(&mut data, 2, hit_off);
-        copy(&mut data, 3, hit_off + stride);
+        for i in 0..n_miss {
+            copy(&mut data, 1 + i as usize, miss_off + i * stride);
+        }
+        for i in 0..n_hit {
+            copy(&mut data, (1 + n_miss + i) as usize, hit_off + i * stride);
+        }
         // Extra room so the table's start can be moved to the base alignment.
         let mut sbt = Buffer::new(
             ctx,
@@ -145,8 +157,8 @@ impl RtPipeline {
         };
         let regions = [
             region(0, raygen_size, raygen_size), // raygen: stride must equal size
-            region(miss_off, stride, stride),
-            region(hit_off, stride, 2 * stride),
+            region(miss_off, stride, n_miss * stride),
+            region(hit_off, stride, n_hit * stride),
             vk::StridedDeviceAddressRegionKHR::default(),
         ];
         Ok(RtPipeline { pipeline, sbt, regions })

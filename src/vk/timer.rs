@@ -1,5 +1,5 @@
-//! Per-pass GPU timing with timestamp queries, and the `Pass` scope that
-//! labels and times every pass automatically.
+//! Per-pass GPU timing with timestamp queries (the pass layer,
+//! render/frame.rs, opens and closes a slot around every pass).
 
 use anyhow::Result;
 use ash::vk;
@@ -89,32 +89,26 @@ impl GpuTimer {
     }
 }
 
-/// Records one pass: debug label + timestamps around `f`. Every pass of a
-/// frame goes through here, so captures and timings never miss one.
-pub fn pass<R>(
-    ctx: &Context,
-    timer: &mut GpuTimer,
-    cmd: vk::CommandBuffer,
-    name: &'static str,
-    f: impl FnOnce(vk::CommandBuffer) -> Result<R>,
-) -> Result<R> {
-    let slot = timer.names.len() as u32;
-    let timed = slot < timer.capacity;
-    ctx.begin_label(cmd, name, label_color(name));
-    if timed {
-        timer.names.push(name);
-        timer.write(ctx, cmd, 2 * slot, vk::PipelineStageFlags2::TOP_OF_PIPE);
+impl GpuTimer {
+    /// Starts timing pass `name`; returns its slot, or None when the pool is full.
+    pub fn begin(&mut self, ctx: &Context, cmd: vk::CommandBuffer, name: &'static str) -> Option<u32> {
+        let slot = self.names.len() as u32;
+        if slot >= self.capacity {
+            return None;
+        }
+        self.names.push(name);
+        self.write(ctx, cmd, 2 * slot, vk::PipelineStageFlags2::TOP_OF_PIPE);
+        Some(slot)
     }
-    let r = f(cmd);
-    if timed {
-        timer.write(ctx, cmd, 2 * slot + 1, vk::PipelineStageFlags2::BOTTOM_OF_PIPE);
+
+    /// Ends the timing of `slot` once the work recorded before has finished.
+    pub fn end(&mut self, ctx: &Context, cmd: vk::CommandBuffer, slot: u32) {
+        self.write(ctx, cmd, 2 * slot + 1, vk::PipelineStageFlags2::BOTTOM_OF_PIPE);
     }
-    ctx.end_label(cmd);
-    r
 }
 
 /// A stable colour per pass name so captures are easy to scan.
-fn label_color(name: &str) -> [f32; 4] {
+pub fn label_color(name: &str) -> [f32; 4] {
     let h = name.bytes().fold(2166136261u32, |h, b| (h ^ b as u32).wrapping_mul(16777619));
     [(h & 0xff) as f32 / 255.0, ((h >> 8) & 0xff) as f32 / 255.0, ((h >> 16) & 0xff) as f32 / 255.0, 1.0]
 }

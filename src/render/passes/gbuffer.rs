@@ -1,16 +1,68 @@
-//! G-buffer pass: rasterizes every instance into the MRT targets with a
-//! reversed-Z depth buffer (clear 0, GREATER). Alpha-masked materials use a
-//! pipeline variant with the alpha test specialised in; opaque ones keep
-//! early depth testing.
+//! Pass `gbuffer`: rasterizes every instance into the MRT targets with a
+//! reversed-Z depth buffer (clear 0, GREATER), and stores each pixel's
+//! (instance + 1, primitive) so later passes reconstruct the exact primary
+//! hit. Alpha-masked materials use a pipeline variant with the alpha test
+//! specialised in; opaque ones keep early depth testing.
 
 use anyhow::{Context as _, Result};
 use ash::vk;
 
-use crate::gpu::scene::GpuScene;
-use super::targets::{Targets, DEPTH_FORMAT, GBUFFER_FORMATS};
+use super::fullscreen::Io;
+use super::{Cx, Init, Pass, PassDesc};
+use crate::gpu::shared::{GB_ALBEDO, GB_EMISSIVE, GB_HIT, GB_MATERIAL, GB_NORMAL, SPEC_ALPHA_TEST};
+use crate::render::frame::{Access, SharedBuffer, Use};
+use crate::render::shading::{Mode, ShadingConfig};
+use crate::render::targets::{TargetDesc, Targets};
 use crate::scene::AlphaMode;
 use crate::vk::pipeline::{pipeline_layout, shader_module, Specialization};
-use crate::vk::{image_barrier, Context};
+use crate::vk::Context;
+
+/// The G-buffer targets (gbuffer.frag's outputs, in attachment order; the
+/// `primary` pass writes the same ones). Albedo is sRGB-encoded; `primary`
+/// writes it through a UNORM view.
+pub static ALBEDO: TargetDesc = TargetDesc {
+    name: "gbuffer albedo+occlusion",
+    format: vk::Format::R8G8B8A8_SRGB,
+    storage_format: Some(vk::Format::R8G8B8A8_UNORM),
+};
+pub static NORMAL: TargetDesc = TargetDesc::new("gbuffer normal+roughness", vk::Format::R16G16B16A16_SFLOAT);
+pub static MATERIAL: TargetDesc =
+    TargetDesc::new("gbuffer metallic+transmission+ior", vk::Format::R8G8B8A8_UNORM);
+pub static EMISSIVE: TargetDesc = TargetDesc::new("gbuffer emissive", vk::Format::R16G16B16A16_SFLOAT);
+pub static HIT: TargetDesc = TargetDesc::new("gbuffer hit (instance, primitive)", vk::Format::R32G32_UINT);
+pub static DEPTH: TargetDesc = TargetDesc::new("gbuffer depth (reversed-Z)", vk::Format::D32_SFLOAT);
+
+const COLOR: [&TargetDesc; 5] = [&ALBEDO, &NORMAL, &MATERIAL, &EMISSIVE, &HIT];
+
+/// The set-1 bindings through which later passes read the primary hit.
+pub fn reads() -> Vec<Io> {
+    let s = Access::Sampled;
+    vec![
+        Io::new(GB_ALBEDO, &ALBEDO, s),
+        Io::new(GB_NORMAL, &NORMAL, s),
+        Io::new(GB_MATERIAL, &MATERIAL, s),
+        Io::new(GB_EMISSIVE, &EMISSIVE, s),
+        Io::new(GB_HIT, &HIT, s),
+    ]
+}
+
+fn uses(_: &ShadingConfig) -> Vec<Use> {
+    let mut u: Vec<Use> = COLOR.iter().map(|t| Use::image(t, Access::ColorAttachment)).collect();
+    u.push(Use::image(&DEPTH, Access::DepthAttachment));
+    u.push(Use::buffer(SharedBuffer::Geometry, Access::VertexInput));
+    u
+}
+
+fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    (c.mode == Mode::Rt).then_some("pure ray-traced mode: camera rays (pass primary) find the primary hits")
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "gbuffer",
+    skip,
+    uses,
+    create: |i: &Init| Ok(Box::new(GBufferPass::new(i.ctx, i.gpu.set.layout)?)),
+};
 
 pub struct GBufferPass {
     layout: vk::PipelineLayout,
@@ -27,42 +79,18 @@ impl GBufferPass {
         ctx.name(masked, "gbuffer alpha-masked");
         Ok(GBufferPass { layout, opaque, masked })
     }
+}
 
-    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, scene: &GpuScene, t: &Targets) {
-        let d = &ctx.device;
-        let attach =
-            (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
-        let prior_reads = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_SAMPLED_READ);
-        for img in &t.gbuffer {
-            image_barrier(
-                ctx,
-                cmd,
-                img.raw,
-                img.aspect,
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                prior_reads,
-                attach,
-            );
-        }
-        image_barrier(
-            ctx,
-            cmd,
-            t.depth.raw,
-            t.depth.aspect,
-            vk::ImageLayout::UNDEFINED,
-            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-            prior_reads,
-            (
-                vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
-                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
-                    | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
-            ),
-        );
+impl Pass for GBufferPass {
+    fn stage(&self) -> vk::PipelineStageFlags2 {
+        vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
+    }
 
-        let colors: Vec<_> = t
-            .gbuffer
+    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
+        let (d, t, scene) = (&cx.ctx.device, cx.targets, cx.gpu);
+        let colors: Vec<_> = COLOR
             .iter()
+            .filter_map(|desc| t.get(desc))
             .map(|img| {
                 vk::RenderingAttachmentInfo::default()
                     .image_view(img.view)
@@ -72,8 +100,9 @@ impl GBufferPass {
                     .clear_value(vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } })
             })
             .collect();
+        let Some(depth_target) = t.get(&DEPTH) else { return };
         let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(t.depth.view)
+            .image_view(depth_target.view)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
             .load_op(vk::AttachmentLoadOp::CLEAR)
             .store_op(vk::AttachmentStoreOp::STORE)
@@ -129,33 +158,11 @@ impl GBufferPass {
             }
             d.cmd_end_rendering(cmd);
         }
-
-        let sampled = (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_SAMPLED_READ);
-        for img in &t.gbuffer {
-            image_barrier(
-                ctx,
-                cmd,
-                img.raw,
-                img.aspect,
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                attach,
-                sampled,
-            );
-        }
-        image_barrier(
-            ctx,
-            cmd,
-            t.depth.raw,
-            t.depth.aspect,
-            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-            (vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS, vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE),
-            sampled,
-        );
     }
 
-    pub fn destroy(&mut self, ctx: &Context) {
+    fn bind(&self, _: &Context, _: &Targets) {}
+
+    fn destroy(&mut self, ctx: &Context) {
         unsafe {
             ctx.device.destroy_pipeline(self.opaque, None);
             ctx.device.destroy_pipeline(self.masked, None);
@@ -167,7 +174,7 @@ impl GBufferPass {
 fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) -> Result<vk::Pipeline> {
     let vs = shader_module(ctx, "gbuffer.vert")?;
     let fs = shader_module(ctx, "gbuffer.frag")?;
-    let spec = Specialization::new(&[(0, alpha_test as u32)]);
+    let spec = Specialization::new(&[(SPEC_ALPHA_TEST, alpha_test as u32)]);
     let spec_info = spec.info();
     let stages = [
         vk::PipelineShaderStageCreateInfo::default()
@@ -195,7 +202,7 @@ fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) 
         .depth_test_enable(true)
         .depth_write_enable(true)
         .depth_compare_op(vk::CompareOp::GREATER);
-    let blend: Vec<_> = GBUFFER_FORMATS
+    let blend: Vec<_> = COLOR
         .iter()
         .map(|_| {
             vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)
@@ -204,10 +211,10 @@ fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) 
     let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
     let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR, vk::DynamicState::CULL_MODE];
     let dyn_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
-    let formats: Vec<_> = GBUFFER_FORMATS.iter().map(|(f, _)| *f).collect();
+    let formats: Vec<_> = COLOR.iter().map(|t| t.format).collect();
     let mut rendering = vk::PipelineRenderingCreateInfo::default()
         .color_attachment_formats(&formats)
-        .depth_attachment_format(DEPTH_FORMAT);
+        .depth_attachment_format(DEPTH.format);
     let info = [vk::GraphicsPipelineCreateInfo::default()
         .stages(&stages)
         .vertex_input_state(&vertex_input)

@@ -1,0 +1,60 @@
+#version 460
+// Pass `composite`: the primary hit's emission + direct light (pass
+// `direct`) + ambient environment light + the traced reflection/refraction
+// chain (pass `specular`, variant HAS_SPECULAR); the environment where the
+// camera ray missed. Variant DEBUG_VIEWS shows a G-buffer view instead and
+// reads neither light pass.
+#include "common/gbuffer_read.glsl"
+#include "common/integrator.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+#ifndef DEBUG_VIEWS
+layout(set = SET_PASS, binding = DIRECT_IN, rgba32f) uniform readonly image2D direct_in;
+#endif
+#ifdef HAS_SPECULAR
+layout(set = SET_PASS, binding = SPECULAR_IN, rgba32f) uniform readonly image2D specular_in;
+#endif
+layout(set = SET_PASS, binding = HDR_OUT, rgba32f) uniform writeonly image2D hdr_out;
+
+vec3 hash_color(uint x) {
+    x = (x ^ 61u) ^ (x >> 16u);
+    x *= 9u;
+    x = x ^ (x >> 4u);
+    x *= 0x27d4eb2du;
+    x = x ^ (x >> 15u);
+    return vec3(x & 255u, (x >> 8u) & 255u, (x >> 16u) & 255u) / 255.0;
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (outside_frame(px)) return;
+    PrimaryHit p;
+    if (!read_primary(px, p)) {
+        vec3 bg = frame.debug_view == DEBUG_NONE ? environment(p.dir) : vec3(0.0);
+        imageStore(hdr_out, px, vec4(bg, 1.0));
+        return;
+    }
+    Surface s = p.s;
+    vec3 color = vec3(0.0);
+#ifdef DEBUG_VIEWS
+    switch (frame.debug_view) {
+    case DEBUG_ALBEDO: color = s.base_color; break;
+    case DEBUG_NORMAL: color = s.normal * 0.5 + 0.5; break;
+    // Reversed-Z depth (znear / view distance), shown on a log scale.
+    case DEBUG_DEPTH: {
+        vec3 forward = -transpose(mat3(frame.view))[2];
+        float depth = frame.znear / max(dot(s.position - frame.camera_pos, forward), 1e-30);
+        color = vec3(clamp(1.0 + log2(max(depth, 1e-8)) / 16.0, 0.0, 1.0));
+        break;
+    }
+    case DEBUG_MATERIAL: color = vec3(s.metallic, s.roughness, s.transmission); break;
+    case DEBUG_OBJECT: color = hash_color(instances[p.instance].object_id + 1u); break;
+    }
+#else
+    color = s.emissive + imageLoad(direct_in, px).rgb + ambient_light(s, is_mirror(s, 0u));
+#ifdef HAS_SPECULAR
+    color += imageLoad(specular_in, px).rgb;
+#endif
+#endif
+    imageStore(hdr_out, px, vec4(color, 1.0));
+}

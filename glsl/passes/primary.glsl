@@ -1,0 +1,38 @@
+// Pass `primary` (pure ray-traced mode): camera rays find the primary hit
+// and write it into the same G-buffer targets the `gbuffer` raster pass
+// fills, so every later pass is shared between the two modes. Albedo goes
+// through a UNORM view of the sRGB target, hence the explicit encoding.
+#include "../common/scene.glsl"
+#include "../common/hit.glsl"
+#include "../common/primary_hit.glsl"
+#include "../common/integrator.glsl"
+
+layout(set = SET_PASS, binding = GB_ALBEDO, rgba8) uniform writeonly image2D gb_albedo;
+layout(set = SET_PASS, binding = GB_NORMAL, rgba16f) uniform writeonly image2D gb_normal;
+layout(set = SET_PASS, binding = GB_MATERIAL, rgba8) uniform writeonly image2D gb_material;
+layout(set = SET_PASS, binding = GB_EMISSIVE, rgba16f) uniform writeonly image2D gb_emissive;
+layout(set = SET_PASS, binding = GB_HIT, rg32ui) uniform writeonly uimage2D gb_hit;
+
+vec3 srgb_encode(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
+}
+
+void primary_pixel(ivec2 px) {
+    if (any(greaterThanEqual(uvec2(px), frame.resolution))) return;
+    vec3 dir = camera_ray_dir(vec2(px) + 0.5);
+    RayHit h;
+    count_ray(RAY_KIND_CAMERA);
+    if (!trace_closest(frame.camera_pos, dir, RAY_TMAX, h)) {
+        imageStore(gb_hit, px, uvec4(0u));
+        return;
+    }
+    vec3 gn;
+    bool back_face;
+    Surface s = hit_surface(h, frame.camera_pos, dir, gn, back_face);
+    imageStore(gb_albedo, px, vec4(srgb_encode(s.base_color), s.occlusion));
+    imageStore(gb_normal, px, vec4(s.normal, s.roughness));
+    imageStore(gb_material, px, vec4(s.metallic, s.transmission, clamp((s.ior - 1.0) * 0.5, 0.0, 1.0), 0.0));
+    imageStore(gb_emissive, px, vec4(s.emissive, 0.0));
+    imageStore(gb_hit, px, uvec4(h.instance + 1u, h.primitive, 0u, 0u));
+}

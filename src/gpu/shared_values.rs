@@ -1,0 +1,103 @@
+// Values shared by the Rust host code and the GLSL shaders, defined here
+// once. build.rs includes this file to write `generated/shared.glsl`
+// (`#define`s every shader includes through common/types.glsl);
+// src/gpu/shared.rs includes it to define the same names as Rust
+// constants. Kinds: `id` (set, binding and specialization-constant numbers:
+// plain GLSL integers, usable in layout qualifiers), `uint`, `float`.
+shared! {
+    // Descriptor sets: 0 the scene (every pass), 1 the pass's own images,
+    // 2 the tracer's acceleration data.
+    id SET_SCENE = 0;
+    id SET_PASS = 1;
+    id SET_TRACE = 2;
+
+    // Set 0 (gpu/scene.rs): the scene.
+    id SCENE_FRAME = 0;
+    id SCENE_VERTICES = 1;
+    id SCENE_INDICES = 2;
+    id SCENE_MATERIALS = 3;
+    id SCENE_INSTANCES = 4;
+    id SCENE_LIGHTS = 5;
+    id SCENE_ENV_MAP = 6;
+    id SCENE_RAY_COUNTERS = 7;
+    // Bindless textures: variable-count, so the last binding.
+    id SCENE_TEXTURES = 8;
+
+    // Set 1 of the passes that read the primary hit (render/passes): the
+    // G-buffer targets first, then each pass's own images.
+    id GB_ALBEDO = 0;
+    id GB_NORMAL = 1;
+    id GB_MATERIAL = 2;
+    id GB_EMISSIVE = 3;
+    id GB_HIT = 4;
+    id DIRECT_OUT = 5;
+    id SPECULAR_OUT = 5;
+    id DIRECT_IN = 5;
+    id SPECULAR_IN = 6;
+    id HDR_OUT = 7;
+    // Set 1 of the tone-mapping pass.
+    id TONEMAP_IN = 0;
+    id TONEMAP_OUT = 1;
+
+    // Set 2: the ray-query and RT-pipeline tracers bind the TLAS ...
+    id TRACE_TLAS = 0;
+    // ... the compute tracer its own two-level BVH (accel/compute_bvh.rs).
+    id BVH_BLAS_NODES = 0;
+    id BVH_BLAS_PRIMS = 1;
+    id BVH_TLAS_NODES = 2;
+    id BVH_TLAS_PRIMS = 3;
+    id BVH_INSTANCES = 4;
+
+    // Specialization constants.
+    id SPEC_ALPHA_TEST = 0;
+    id SPEC_SHADOWS = 1;
+    id SPEC_REFLECTIONS = 2;
+    id SPEC_REFRACTIONS = 3;
+    id SPEC_MAX_DEPTH = 4;
+    id SPEC_MIN_WEIGHT = 5;
+    id SPEC_COUNT_RAYS = 6;
+
+    // Instance mask bits: which kind of ray may hit an instance.
+    uint MASK_VISIBLE = 1;
+    uint MASK_SHADOW = 2;
+    // RT-pipeline hit groups per geometry (shader binding table order).
+    uint HIT_GROUP_VISIBLE = 0;
+    uint HIT_GROUP_SHADOW = 1;
+    uint HIT_GROUP_STRIDE = 2;
+    // Ray counters (set 0, SCENE_RAY_COUNTERS) by kind.
+    uint RAY_KIND_CAMERA = 0;
+    uint RAY_KIND_SHADOW = 1;
+    uint RAY_KIND_SECONDARY = 2;
+
+    // Materials (Material.alpha_mode, Material.flags).
+    uint ALPHA_OPAQUE = 0;
+    uint ALPHA_MASK = 1;
+    uint ALPHA_BLEND = 2;
+    uint MAT_DOUBLE_SIDED = 1;
+    uint MAT_CASTS_SHADOWS = 2;
+    // Surfaces at most this rough get mirror reflections (glossy-as-mirror).
+    float MIRROR_ROUGHNESS = 0.35;
+    // Instances (Instance.flags).
+    uint INST_CASTS_SHADOWS = 1;
+    // Lights (Light.type, Light.flags).
+    uint LIGHT_DIRECTIONAL = 0;
+    uint LIGHT_POINT = 1;
+    uint LIGHT_SPOT = 2;
+    uint LIGHT_CASTS_SHADOWS = 1;
+    // Debug views (Frame.debug_view).
+    uint DEBUG_NONE = 0;
+    uint DEBUG_ALBEDO = 1;
+    uint DEBUG_NORMAL = 2;
+    uint DEBUG_DEPTH = 3;
+    uint DEBUG_MATERIAL = 4;
+    uint DEBUG_OBJECT = 5;
+
+    // Strides of the host/shader structs in bytes (scalar layout); the Rust
+    // mirrors assert them, tests/shared_layout.rs reads them from SPIR-V.
+    uint VERTEX_STRIDE = 48;
+    uint MATERIAL_STRIDE = 96;
+    uint INSTANCE_STRIDE = 160;
+    uint LIGHT_STRIDE = 64;
+    uint BVH_NODE_STRIDE = 32;
+    uint BVH_INSTANCE_STRIDE = 80;
+}

@@ -1,0 +1,75 @@
+//! The pipeline of a full-screen pass: a compute shader (8x8 workgroups,
+//! one invocation per pixel) or a ray-tracing pipeline launched one
+//! ray-generation invocation per pixel. Passes hold one without knowing
+//! which: the tracer picks it (render/tracer).
+
+use anyhow::Result;
+use ash::vk;
+
+use crate::vk::pipeline::{compute_pipeline, Specialization};
+use crate::vk::rt_pipeline::RtPipeline;
+use crate::vk::Context;
+
+pub enum Kernel {
+    Compute(vk::Pipeline),
+    RayTracing(RtPipeline),
+}
+
+impl Kernel {
+    pub fn compute(
+        ctx: &Context,
+        shader: &str,
+        layout: vk::PipelineLayout,
+        spec: &Specialization,
+    ) -> Result<Kernel> {
+        Ok(Kernel::Compute(compute_pipeline(ctx, shader, layout, spec)?))
+    }
+
+    /// The shader stage its descriptor accesses happen in (for barriers).
+    pub fn stage(&self) -> vk::PipelineStageFlags2 {
+        match self {
+            Kernel::Compute(_) => vk::PipelineStageFlags2::COMPUTE_SHADER,
+            Kernel::RayTracing(_) => vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR,
+        }
+    }
+
+    pub fn bind_point(&self) -> vk::PipelineBindPoint {
+        match self {
+            Kernel::Compute(_) => vk::PipelineBindPoint::COMPUTE,
+            Kernel::RayTracing(_) => vk::PipelineBindPoint::RAY_TRACING_KHR,
+        }
+    }
+
+    /// Binds the pipeline and `sets` (from set 0) and runs one invocation per pixel.
+    pub fn dispatch(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        layout: vk::PipelineLayout,
+        sets: &[vk::DescriptorSet],
+        extent: vk::Extent2D,
+    ) {
+        let d = &ctx.device;
+        let pipeline = match self {
+            Kernel::Compute(p) => *p,
+            Kernel::RayTracing(rt) => rt.pipeline,
+        };
+        unsafe {
+            d.cmd_bind_pipeline(cmd, self.bind_point(), pipeline);
+            d.cmd_bind_descriptor_sets(cmd, self.bind_point(), layout, 0, sets, &[]);
+            match self {
+                Kernel::Compute(_) => {
+                    d.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1)
+                }
+                Kernel::RayTracing(rt) => rt.trace(ctx, cmd, extent.width, extent.height),
+            }
+        }
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        match self {
+            Kernel::Compute(p) => unsafe { ctx.device.destroy_pipeline(*p, None) },
+            Kernel::RayTracing(rt) => rt.destroy(ctx),
+        }
+    }
+}

@@ -1,0 +1,48 @@
+//! Pass `composite`: emission + direct light + ambient environment light +
+//! the specular chain at the primary hit, the environment where the camera
+//! ray missed (glsl/composite.comp); or, in a debug view, the G-buffer view.
+
+use ash::vk;
+
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::{direct, gbuffer, specular, Init, PassDesc};
+use crate::gpu::shared::{DIRECT_IN, HDR_OUT, SPECULAR_IN};
+use crate::render::frame::Access;
+use crate::render::shading::ShadingConfig;
+use crate::render::targets::TargetDesc;
+use crate::vk::pipeline::Specialization;
+
+/// Linear radiance of the frame.
+pub static HDR: TargetDesc = TargetDesc::new("hdr radiance", vk::Format::R32G32B32A32_SFLOAT);
+
+fn io(c: &ShadingConfig) -> Vec<Io> {
+    let mut io = gbuffer::reads();
+    if !c.debug_view {
+        io.push(Io::new(DIRECT_IN, &direct::DIRECT, Access::StorageRead));
+    }
+    if specular::skip(c).is_none() {
+        io.push(Io::new(SPECULAR_IN, &specular::SPECULAR, Access::StorageRead));
+    }
+    io.push(Io::new(HDR_OUT, &HDR, Access::StorageWrite));
+    io
+}
+
+fn shader(c: &ShadingConfig) -> &'static str {
+    if c.debug_view {
+        "composite_debug"
+    } else if specular::skip(c).is_none() {
+        "composite_specular"
+    } else {
+        "composite.comp"
+    }
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "composite",
+    skip: |_| None,
+    uses: |c| fullscreen::uses(&io(c), false),
+    create: |i: &Init| {
+        let spec = Specialization::new(&i.config.specialization());
+        FullScreen::create(i, "composite", io(i.config), Shader::Compute(shader(i.config)), &spec)
+    },
+};

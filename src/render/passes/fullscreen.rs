@@ -1,0 +1,153 @@
+//! A full-screen pass: set 0 the scene, set 1 its images (each binding
+//! number tied to one declared use), set 2 the tracer's when it traces, and
+//! one kernel invocation per pixel. Every pass but `gbuffer` is one.
+
+use anyhow::Result;
+use ash::vk;
+
+use super::{Cx, Init, Pass};
+use crate::render::frame::{Access, SharedBuffer, Use};
+use crate::render::kernel::Kernel;
+use crate::render::targets::{TargetDesc, Targets};
+use crate::vk::pipeline::{pipeline_layout, Binding, DescriptorSet, Specialization};
+use crate::vk::Context;
+
+/// One set-1 binding: which target, how it is accessed.
+#[derive(Clone, Copy)]
+pub struct Io {
+    pub binding: u32,
+    pub target: &'static TargetDesc,
+    pub access: Access,
+}
+
+impl Io {
+    pub const fn new(binding: u32, target: &'static TargetDesc, access: Access) -> Io {
+        Io { binding, target, access }
+    }
+}
+
+/// The shader of a full-screen pass.
+pub enum Shader {
+    /// A plain compute shader.
+    Compute(&'static str),
+    /// A tracing pass: the tracer supplies `{name}_query`, `.rgen`, ...
+    Traced(&'static str),
+}
+
+/// The declared uses of a full-screen pass with `io`; a traced one also
+/// reads the scene geometry and the acceleration data.
+pub fn uses(io: &[Io], traced: bool) -> Vec<Use> {
+    let mut u: Vec<Use> = io.iter().map(|i| Use::image(i.target, i.access)).collect();
+    if traced {
+        u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));
+        u.push(Use::buffer(SharedBuffer::Accel, Access::ShaderRead));
+    }
+    u
+}
+
+pub struct FullScreen {
+    io: Vec<Io>,
+    set: DescriptorSet,
+    layout: vk::PipelineLayout,
+    kernel: Kernel,
+    sampler: vk::Sampler,
+    traced: bool,
+}
+
+impl FullScreen {
+    /// Builds the pass (its set, layout and kernel) and binds its targets.
+    pub fn create(
+        init: &Init,
+        name: &'static str,
+        io: Vec<Io>,
+        shader: Shader,
+        spec: &Specialization,
+    ) -> Result<Box<dyn Pass>> {
+        let ctx = init.ctx;
+        let bindings: Vec<(u32, Binding)> = io
+            .iter()
+            .map(|i| {
+                let ty = match i.access {
+                    Access::Sampled => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    _ => vk::DescriptorType::STORAGE_IMAGE,
+                };
+                (i.binding, Binding::one(ty))
+            })
+            .collect();
+        let set = DescriptorSet::numbered(ctx, &format!("{name} set"), &bindings)?;
+        let tracer = match shader {
+            Shader::Traced(_) => Some(
+                init.tracer.ok_or_else(|| anyhow::anyhow!("pass {name} traces rays but no tracer exists"))?,
+            ),
+            Shader::Compute(_) => None,
+        };
+        let mut sets = vec![init.gpu.set.layout, set.layout];
+        sets.extend(tracer.map(|t| t.set().layout));
+        let layout = pipeline_layout(ctx, &format!("{name} layout"), &sets, 0)?;
+        let kernel = match (shader, tracer) {
+            (Shader::Traced(s), Some(t)) => t.kernel(ctx, s, layout, spec)?,
+            (Shader::Compute(s), _) | (Shader::Traced(s), None) => Kernel::compute(ctx, s, layout, spec)?,
+        };
+        let sampler = unsafe {
+            ctx.device.create_sampler(
+                &vk::SamplerCreateInfo::default()
+                    .mag_filter(vk::Filter::NEAREST)
+                    .min_filter(vk::Filter::NEAREST)
+                    .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                    .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE),
+                None,
+            )?
+        };
+        ctx.name(sampler, &format!("{name} point sampler"));
+        let pass = FullScreen { io, set, layout, kernel, sampler, traced: tracer.is_some() };
+        pass.bind(ctx, init.targets);
+        Ok(Box::new(pass))
+    }
+}
+
+impl Pass for FullScreen {
+    fn stage(&self) -> vk::PipelineStageFlags2 {
+        self.kernel.stage()
+    }
+
+    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
+        let mut sets = vec![cx.gpu.set.set, self.set.set];
+        if self.traced {
+            sets.extend(cx.tracer.map(|t| t.set().set));
+        }
+        self.kernel.dispatch(cx.ctx, cmd, self.layout, &sets, cx.targets.extent);
+    }
+
+    fn bind(&self, ctx: &Context, targets: &Targets) {
+        for i in &self.io {
+            let Some(t) = targets.get(i.target) else { continue };
+            match i.access {
+                Access::Sampled => self.set.write_image(
+                    ctx,
+                    i.binding,
+                    0,
+                    t.view,
+                    self.sampler,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
+                _ => self.set.write_image(
+                    ctx,
+                    i.binding,
+                    0,
+                    t.storage_view,
+                    vk::Sampler::null(),
+                    vk::ImageLayout::GENERAL,
+                ),
+            }
+        }
+    }
+
+    fn destroy(&mut self, ctx: &Context) {
+        self.kernel.destroy(ctx);
+        unsafe {
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+            ctx.device.destroy_sampler(self.sampler, None);
+        }
+        self.set.destroy(ctx);
+    }
+}

@@ -1,0 +1,64 @@
+//! The frame's passes, one module each, in frame order. A pass module
+//! exports a `PASS: PassDesc`: when it is left out (and why), what it reads
+//! and writes, and how to build it. Adding a pass is one module plus one
+//! line in `FRAME`.
+
+pub mod composite;
+pub mod direct;
+pub mod fullscreen;
+pub mod gbuffer;
+pub mod primary;
+pub mod specular;
+pub mod tonemap;
+
+use anyhow::Result;
+use ash::vk;
+
+use super::frame::Use;
+use super::shading::ShadingConfig;
+use super::targets::Targets;
+use super::tracer::Tracer;
+use crate::gpu::GpuScene;
+use crate::vk::Context;
+
+/// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
+/// or camera rays) -> direct light -> reflection/refraction chain ->
+/// composite -> tone map. The scene update (skinning, refit, top level)
+/// comes before it, recorded by `Renderer` and the tracer.
+pub const FRAME: &[PassDesc] =
+    &[gbuffer::PASS, primary::PASS, direct::PASS, specular::PASS, composite::PASS, tonemap::PASS];
+
+/// What everything a pass needs to be built from.
+pub struct Init<'a> {
+    pub ctx: &'a Context,
+    pub config: &'a ShadingConfig,
+    pub gpu: &'a GpuScene,
+    pub targets: &'a Targets,
+    pub tracer: Option<&'a dyn Tracer>,
+}
+
+/// What a pass records with.
+pub struct Cx<'a> {
+    pub ctx: &'a Context,
+    pub gpu: &'a GpuScene,
+    pub targets: &'a Targets,
+    pub tracer: Option<&'a dyn Tracer>,
+}
+
+pub struct PassDesc {
+    pub name: &'static str,
+    /// Why the pass is left out of a frame with this configuration (None: it runs).
+    pub skip: fn(&ShadingConfig) -> Option<&'static str>,
+    /// The resources it reads and writes in this configuration.
+    pub uses: fn(&ShadingConfig) -> Vec<Use>,
+    pub create: fn(&Init) -> Result<Box<dyn Pass>>,
+}
+
+pub trait Pass {
+    /// The shader stage its resource accesses happen in (for barriers).
+    fn stage(&self) -> vk::PipelineStageFlags2;
+    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer);
+    /// Points the pass at new targets (after a resize).
+    fn bind(&self, ctx: &Context, targets: &Targets);
+    fn destroy(&mut self, ctx: &Context);
+}

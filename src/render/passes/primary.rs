@@ -1,0 +1,35 @@
+//! Pass `primary` (pure ray-traced mode): camera rays find the primary hits
+//! and write them into the G-buffer targets `gbuffer` would fill, so every
+//! later pass is the same in both modes (glsl/passes/primary.glsl).
+
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::{gbuffer, Init, PassDesc};
+use crate::gpu::shared::{GB_ALBEDO, GB_EMISSIVE, GB_HIT, GB_MATERIAL, GB_NORMAL};
+use crate::render::frame::Access;
+use crate::render::shading::{Mode, ShadingConfig};
+use crate::vk::pipeline::Specialization;
+
+fn io(_: &ShadingConfig) -> Vec<Io> {
+    let w = Access::StorageWrite;
+    vec![
+        Io::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
+        Io::new(GB_NORMAL, &gbuffer::NORMAL, w),
+        Io::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
+        Io::new(GB_EMISSIVE, &gbuffer::EMISSIVE, w),
+        Io::new(GB_HIT, &gbuffer::HIT, w),
+    ]
+}
+
+fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    (c.mode == Mode::Hybrid).then_some("hybrid mode: the raster G-buffer holds the primary hits")
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "primary",
+    skip,
+    uses: |c| fullscreen::uses(&io(c), true),
+    create: |i: &Init| {
+        let spec = Specialization::new(&i.config.specialization());
+        FullScreen::create(i, "primary", io(i.config), Shader::Traced("primary"), &spec)
+    },
+};

@@ -1,0 +1,45 @@
+//! Pass `specular`: the reflection / refraction chain from the primary hit
+//! (Fresnel, total internal reflection, recursion to the max depth,
+//! environment on miss; glsl/passes/specular.glsl). Left out when nothing
+//! in the scene mirrors or transmits, or both effects are off.
+
+use ash::vk;
+
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::{gbuffer, Init, PassDesc};
+use crate::gpu::shared::SPECULAR_OUT;
+use crate::render::frame::Access;
+use crate::render::shading::ShadingConfig;
+use crate::render::targets::TargetDesc;
+use crate::vk::pipeline::Specialization;
+
+/// Radiance the chain brings back per pixel.
+pub static SPECULAR: TargetDesc = TargetDesc::new("specular chain", vk::Format::R32G32B32A32_SFLOAT);
+
+fn io(_: &ShadingConfig) -> Vec<Io> {
+    let mut io = gbuffer::reads();
+    io.push(Io::new(SPECULAR_OUT, &SPECULAR, Access::StorageWrite));
+    io
+}
+
+pub fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    if c.debug_view {
+        Some("a debug view shows the G-buffer instead")
+    } else if !c.needs.reflections && !c.needs.refractions {
+        Some("no mirror or transmissive material")
+    } else if !c.effects.reflections && !c.effects.refractions {
+        Some("reflections and refractions switched off")
+    } else {
+        None
+    }
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "specular",
+    skip,
+    uses: |c| fullscreen::uses(&io(c), true),
+    create: |i: &Init| {
+        let spec = Specialization::new(&i.config.specialization());
+        FullScreen::create(i, "specular", io(i.config), Shader::Traced("specular"), &spec)
+    },
+};

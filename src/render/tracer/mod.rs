@@ -1,0 +1,91 @@
+//! One tracing interface, three implementations: ray queries
+//! (`query.rs`), the ray-tracing pipeline (`pipeline.rs`) and our compute
+//! BVH (`compute.rs`). A tracer owns its acceleration data, records its own
+//! per-frame updates (refit, top level) and hands out the pipelines and the
+//! descriptor set (set 2) of the tracing passes, so no pass branches on the
+//! backend: a pass names its shader ("direct") and gets a `Kernel`.
+
+pub mod compute;
+pub mod hardware;
+pub mod pipeline;
+pub mod query;
+
+use anyhow::Result;
+use ash::vk;
+
+use super::frame::Recorder;
+use super::kernel::Kernel;
+use super::shading::Backend;
+use crate::accel::dynamic::RebuildPolicy;
+use crate::gpu::GpuScene;
+use crate::scene::{Aabb, Scene};
+use crate::vk::pipeline::{DescriptorSet, Specialization};
+use crate::vk::Context;
+
+/// What an update refit and rebuilt.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct UpdateCounts {
+    pub refits: usize,
+    pub rebuilds: usize,
+}
+
+pub trait Tracer {
+    fn backend(&self) -> Backend;
+
+    /// The pipeline of tracing pass `pass`, from its shader for this
+    /// backend (`{pass}_query`, `{pass}_compute` or `{pass}.rgen`).
+    fn kernel(
+        &self,
+        ctx: &Context,
+        pass: &str,
+        layout: vk::PipelineLayout,
+        spec: &Specialization,
+    ) -> Result<Kernel>;
+
+    /// Set 2 of the tracing passes.
+    fn set(&self) -> &DescriptorSet;
+
+    /// Host work before an update is recorded (instances moved, skinned
+    /// meshes deformed): which structures refit or rebuild, CPU rebuilds,
+    /// top-level records. The GPU must be done with the previous frame.
+    fn prepare_update(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu: &GpuScene,
+        policy: &RebuildPolicy,
+    ) -> Result<()>;
+
+    /// Records the update's GPU passes (after skinning, before tracing).
+    fn record_update(&mut self, rec: &mut Recorder, scene: &Scene, gpu: &GpuScene) -> Result<()>;
+
+    /// After the update's commands completed: feeds the rebuild policy
+    /// (`skinned_bounds`: the skinning pass's deformed bounds per slot).
+    /// Returns the counts and host-side times of the update.
+    fn finish_update(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        skinned_bounds: &[Aabb],
+        policy: &RebuildPolicy,
+    ) -> Result<(UpdateCounts, Vec<(&'static str, f64)>)>;
+
+    /// Whether `record_update` may share the frame's command buffer (false:
+    /// `finish_update` must run between the update and the tracing passes).
+    fn updates_in_frame(&self) -> bool;
+
+    fn destroy(&mut self, ctx: &Context);
+}
+
+/// Builds the tracer for `backend` over `scene` (acceleration structures
+/// or our BVH included).
+pub fn create(ctx: &Context, backend: Backend, scene: &Scene, gpu: &GpuScene) -> Result<Box<dyn Tracer>> {
+    Ok(match backend {
+        Backend::Compute => Box::new(compute::ComputeTracer::new(ctx, scene, gpu)?),
+        Backend::Query => Box::new(hardware::HardwareTracer::new(ctx, scene, gpu, backend, query::kernel)?),
+        Backend::Pipeline => {
+            Box::new(hardware::HardwareTracer::new(ctx, scene, gpu, backend, pipeline::kernel)?)
+        }
+        Backend::Auto => anyhow::bail!("Backend::Auto must be resolved before a tracer is created"),
+    })
+}
