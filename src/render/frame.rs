@@ -166,7 +166,9 @@ pub struct Recorder<'a> {
     buffers: HashMap<SharedBuffer, State>,
     /// Names of the passes recorded, in order.
     pub recorded: Vec<&'static str>,
-    /// Drain each pass before its end timestamp (CPU devices, see `pass`).
+    /// Drain each pass before its end timestamp (CPU devices, see `pass`;
+    /// not under synchronization validation, where the drain would hide a
+    /// missing derived barrier).
     drain_for_timing: bool,
 }
 
@@ -187,7 +189,7 @@ impl<'a> Recorder<'a> {
             images: HashMap::new(),
             buffers: HashMap::new(),
             recorded: Vec::new(),
-            drain_for_timing: ctx.caps.device_type == vk::PhysicalDeviceType::CPU,
+            drain_for_timing: ctx.caps.device_type == vk::PhysicalDeviceType::CPU && !ctx.sync_validation,
         }
     }
 

@@ -47,6 +47,8 @@ pub struct Context {
     pub rt: RtEnables,
     pub accel: Option<khr::acceleration_structure::Device>,
     pub rt_pipeline: Option<khr::ray_tracing_pipeline::Device>,
+    /// Synchronization validation is on: nothing may hide a missing barrier.
+    pub sync_validation: bool,
 }
 
 impl Context {
@@ -124,6 +126,7 @@ impl Context {
             rt,
             accel,
             rt_pipeline,
+            sync_validation: opts.validation && opts.sync_validation,
         };
         ctx.name(ctx.queue, "main queue");
         ctx.name(ctx.command_pool, "main command pool");

@@ -1,0 +1,108 @@
+//! The frame architecture: which passes a frame records in each mode and
+//! configuration, which targets it allocates, and that the barriers the
+//! pass layer derives are clean under validation and synchronization
+//! validation on every backend in both modes.
+mod common;
+
+use hybrid_rt::app::GpuOptions;
+use hybrid_rt::render::shading::{Backend, Mode};
+use hybrid_rt::render::{DebugView, RenderSettings, Renderer};
+use hybrid_rt::scene::Scene;
+
+const BACKENDS: [Backend; 3] = [Backend::Query, Backend::Pipeline, Backend::Compute];
+
+fn sync_validated_context() -> hybrid_rt::vk::Context {
+    let _ = env_logger::builder().is_test(true).try_init();
+    GpuOptions { validation: true, sync_validation: true, ..Default::default() }
+        .context()
+        .expect("create a Vulkan context with synchronization validation")
+}
+
+/// A frame's recorded passes (with the timings' names) and allocated targets.
+fn frame_of(ctx: &hybrid_rt::vk::Context, scene: &Scene, s: &RenderSettings) -> (Vec<&'static str>, Vec<&'static str>) {
+    let mut r = Renderer::new(ctx, scene, ash::vk::Extent2D { width: 48, height: 27 }).unwrap();
+    let out = r.render(ctx, scene, &scene.cameras[0], s).unwrap();
+    assert!(out.all_finite());
+    let passes = r.pass_names();
+    // Every recorded pass is timed under its own name (plus the readback).
+    let timed: Vec<_> = out.timings.iter().map(|(n, _)| *n).filter(|n| *n != "readback").collect();
+    assert_eq!(timed, passes, "timestamps per recorded pass");
+    let targets = r.targets().describe().into_iter().map(|(n, _)| n).collect();
+    r.destroy(ctx);
+    (passes, targets)
+}
+
+#[test]
+fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
+    let ctx = sync_validated_context();
+    let scene = Scene::load(&common::repo_path("assets/default.toml")).unwrap();
+    for backend in BACKENDS {
+        let hybrid = RenderSettings { backend, ..Default::default() };
+        let (h, targets) = frame_of(&ctx, &scene, &hybrid);
+        assert_eq!(h, ["gbuffer", "direct", "specular", "composite", "tonemap"], "{backend:?} hybrid");
+        assert!(targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
+        let rt = RenderSettings { backend, mode: Mode::Rt, ..Default::default() };
+        let (p, targets) = frame_of(&ctx, &scene, &rt);
+        assert_eq!(p, ["primary", "direct", "specular", "composite", "tonemap"], "{backend:?} rt");
+        // Pure RT differs by exactly one pass, and needs no depth buffer.
+        assert_eq!(h[1..], p[1..]);
+        assert!(!targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
+    }
+    common::assert_validation_clean(&ctx);
+}
+
+#[test]
+fn passes_and_targets_a_scene_does_not_need_are_left_out() {
+    let ctx = common::validated_context();
+    // Rough, opaque materials and no shadow-casting light: nothing to trace.
+    let plain = common::scene_from_toml(
+        "frame_plain",
+        r#"
+[[camera]]
+position = [0.0, 2.0, 5.0]
+target = [0.0, 0.0, 0.0]
+
+[[light]]
+type = "directional"
+direction = [0.0, -1.0, -0.3]
+intensity = 2.0
+casts_shadows = false
+
+[[material]]
+name = "clay"
+base_color = [0.7, 0.6, 0.5]
+roughness = 0.9
+
+[[object]]
+name = "ball"
+primitive = "sphere"
+material = "clay"
+
+[[object]]
+name = "floor"
+primitive = "plane"
+size = 10.0
+translation = [0.0, -1.0, 0.0]
+material = "clay"
+"#,
+    );
+    let (passes, targets) = frame_of(&ctx, &plain, &RenderSettings::default());
+    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap"]);
+    assert!(!targets.contains(&"specular chain"), "{targets:?}");
+
+    // The default scene with reflections and refractions switched off.
+    let scene = Scene::load(&common::repo_path("assets/default.toml")).unwrap();
+    let mut s = RenderSettings { backend: Backend::Compute, ..Default::default() };
+    s.effects.reflections = false;
+    s.effects.refractions = false;
+    let (passes, targets) = frame_of(&ctx, &scene, &s);
+    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap"]);
+    assert!(!targets.contains(&"specular chain"), "{targets:?}");
+
+    // A debug view shows the G-buffer: no light pass at all.
+    let debug = RenderSettings { debug_view: DebugView::Normal, ..Default::default() };
+    let (passes, targets) = frame_of(&ctx, &scene, &debug);
+    assert_eq!(passes, ["gbuffer", "composite", "tonemap"]);
+    assert!(!targets.contains(&"direct light"), "{targets:?}");
+    common::assert_validation_clean(&ctx);
+}
