@@ -299,7 +299,11 @@ impl<'a> Recorder<'a> {
                 State { layout, write: (stage, access & write_bits()), visible_to: S::NONE, readers: S::NONE }
             } else {
                 let visible_to = if transition { stage } else { state.visible_to | stage };
-                State { layout, write: state.write, visible_to, readers: state.readers | stage }
+                // A later reader in another stage chains through this
+                // barrier (it may have carried the layout transition).
+                let chain = if src.is_some() { stage } else { S::NONE };
+                let write = (state.write.0 | chain, state.write.1);
+                State { layout, write, visible_to, readers: state.readers | stage }
             };
         }
         let memory: Vec<_> = if mem_dst.0.is_empty() {
