@@ -23,6 +23,7 @@ struct BvhInstance {
     uint prim_offset;  // base of its triangle list in blas_prims
     uint mask;
     uint opaque;
+    mat4 object_to_world;  // for the top level's GPU fit (anim/tlas_refit.comp)
 };
 
 layout(set = 2, binding = 0, scalar) readonly buffer BlasNodes { BvhNode blas_nodes[]; };

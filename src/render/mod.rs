@@ -16,14 +16,14 @@ use gpu_allocator::MemoryLocation;
 use crate::accel::compute_bvh::ComputeBvh;
 use crate::accel::dynamic::{RebuildPolicy, Update};
 use crate::accel::SceneAccel;
+use crate::gpu::types::GpuFrame;
+use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
 use crate::vk::pipeline::{Binding, DescriptorSet, Specialization};
 use crate::vk::timer::{pass, GpuTimer};
 use crate::vk::{image_barrier, Buffer, Context};
 use compute_pass::{ComputePass, Input};
 use gbuffer::GBufferPass;
-use crate::gpu::GpuScene;
-use crate::gpu::types::GpuFrame;
 use shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;
@@ -87,7 +87,6 @@ pub struct FrameOutput {
 struct UpdatePlan {
     blas: Vec<Update>,
     bvh: Vec<Update>,
-    cpu_rebuild_ms: f64,
 }
 
 pub struct Renderer {
@@ -218,10 +217,10 @@ impl Renderer {
     /// `scene` (already posed by `Scene::animate`): instance transforms and
     /// lights, then in one submission skinning -> skinned BLAS refit (or
     /// rebuild, per `rebuild_policy`) -> TLAS build, or for the compute
-    /// backend skinning -> BVH refit, after which the host rebuilds the top
-    /// level. Static per-mesh structures are untouched. Call only when
-    /// something moved (so a still scene rebuilds nothing), with the GPU
-    /// idle; it waits for its own work. Pass times land in `update_timings`.
+    /// backend skinning -> BVH refit -> GPU fit of the top level (whose
+    /// topology the host built first). Static per-mesh structures are
+    /// untouched. Call only when something moved (so a still scene rebuilds
+    /// nothing), with the GPU idle; it waits for its own work. Pass times land in `update_timings`.
     /// The viewer uses `record_scene_update` instead, which needs no wait.
     pub fn update_scene(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         let plan = self.plan_update(ctx, scene)?;
@@ -230,30 +229,21 @@ impl Renderer {
         self.record_update(ctx, cmd, scene, &plan)?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
-        self.finish_update(ctx, scene, plan)
+        self.finish_update(ctx, plan)
     }
 
-    /// Whether `record_scene_update` can put the scene update into the
-    /// frame's own command buffer: true for the hardware backends, whose
-    /// TLAS is built on the GPU; false for the compute BVH, whose top level
-    /// the host builds from the refit roots between refit and tracing.
-    /// Valid after `prepare` (which picks the backend).
-    pub fn can_record_update(&self) -> bool {
-        self.bvh.is_none()
-    }
-
-    /// `update_scene` without its own submission: records skinning -> BLAS
-    /// refit -> TLAS build at the start of `cmd` (before `record`), so a
-    /// frame is one submission and the host never waits for the update.
-    /// Needs `can_record_update()`, a GPU done with the previous frame, and
-    /// `finish_scene_update` once `cmd` has completed.
+    /// `update_scene` without its own submission, for every backend:
+    /// records skinning -> BLAS refit -> TLAS build (compute BVH: refit ->
+    /// top-level fit) at the start of `cmd` (before `record`), so a frame is
+    /// one submission and the host never waits for the update. Needs a GPU
+    /// done with the previous frame, and `finish_scene_update` once `cmd`
+    /// has completed.
     pub fn record_scene_update(
         &mut self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         scene: &Scene,
     ) -> Result<()> {
-        anyhow::ensure!(self.can_record_update(), "the compute BVH's scene update needs its own submission");
         let plan = self.plan_update(ctx, scene)?;
         self.record_update(ctx, cmd, scene, &plan)?;
         if self.pending_update.replace(plan).is_some() {
@@ -265,9 +255,9 @@ impl Renderer {
     /// The host side of a recorded update, once its command buffer is done:
     /// pass times, refit / rebuild counts and the rebuild policy's view of
     /// the deformed bounds. Does nothing when no update is pending.
-    pub fn finish_scene_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+    pub fn finish_scene_update(&mut self, ctx: &Context) -> Result<()> {
         match self.pending_update.take() {
-            Some(plan) => self.finish_update(ctx, scene, plan),
+            Some(plan) => self.finish_update(ctx, plan),
             None => Ok(()),
         }
     }
@@ -297,17 +287,15 @@ impl Renderer {
             s.write(scene)?;
         }
         let policy = self.rebuild_policy;
-        let t_rebuild = std::time::Instant::now();
         let bvh = match &mut self.bvh {
-            Some(b) => b.prepare_skinned(ctx, scene, &policy)?,
+            Some(b) => b.prepare_update(scene, &policy)?,
             None => Vec::new(),
         };
-        let cpu_rebuild_ms = t_rebuild.elapsed().as_secs_f64() * 1e3;
         let blas = match self.accel.as_ref().and_then(|(a, _)| a.dynamic.as_ref()) {
             Some(d) => d.blases.iter().map(|b| b.state.next(&policy)).collect(),
             None => Vec::new(),
         };
-        Ok(UpdatePlan { blas, bvh, cpu_rebuild_ms })
+        Ok(UpdatePlan { blas, bvh })
     }
 
     /// The update's GPU work, timed by `update_timer`.
@@ -353,20 +341,20 @@ impl Renderer {
                     bvh.record_refit(ctx, cmd);
                     Ok(())
                 })?;
+                pass(ctx, timer, cmd, "top level fit", |cmd| {
+                    bvh.record_top_level(ctx, cmd);
+                    Ok(())
+                })?;
             }
         }
         Ok(())
     }
 
     /// Host work after the update's commands completed.
-    fn finish_update(&mut self, ctx: &Context, scene: &Scene, plan: UpdatePlan) -> Result<()> {
+    fn finish_update(&mut self, ctx: &Context, plan: UpdatePlan) -> Result<()> {
         let policy = self.rebuild_policy;
         self.update_timings = self.update_timer.results(ctx)?;
-        if plan.bvh.contains(&Update::Rebuild) {
-            self.update_timings.push(("bvh rebuild (CPU)", plan.cpu_rebuild_ms));
-        }
         // Judge this frame's results for the next frame's rebuild decisions.
-        let t0 = std::time::Instant::now();
         if let Some((accel, _)) = &mut self.accel {
             if let (Some(d), Some(s)) = (&mut accel.dynamic, &self.skinning) {
                 for ((b, bounds), u) in d.blases.iter_mut().zip(s.bounds()?).zip(&plan.blas) {
@@ -375,8 +363,11 @@ impl Renderer {
             }
         }
         if let Some(bvh) = &mut self.bvh {
-            bvh.finish_refit(scene, &plan.bvh, &policy)?;
-            self.update_timings.push(("top level (CPU)", t0.elapsed().as_secs_f64() * 1e3));
+            bvh.finish_update(&plan.bvh, &policy)?;
+            if plan.bvh.contains(&Update::Rebuild) {
+                self.update_timings.push(("bvh rebuild (CPU)", bvh.rebuild_ms));
+            }
+            self.update_timings.push(("top level (CPU)", bvh.top_level_ms));
         }
         let count = |u: &[Update], k: Update| u.iter().filter(|x| **x == k).count();
         self.update_counts = [
