@@ -19,7 +19,11 @@ fn sync_validated_context() -> hybrid_rt::vk::Context {
 }
 
 /// A frame's recorded passes (with the timings' names) and allocated targets.
-fn frame_of(ctx: &hybrid_rt::vk::Context, scene: &Scene, s: &RenderSettings) -> (Vec<&'static str>, Vec<&'static str>) {
+fn frame_of(
+    ctx: &hybrid_rt::vk::Context,
+    scene: &Scene,
+    s: &RenderSettings,
+) -> (Vec<&'static str>, Vec<&'static str>) {
     let mut r = Renderer::new(ctx, scene, ash::vk::Extent2D { width: 48, height: 27 }).unwrap();
     let out = r.render(ctx, scene, &scene.cameras[0], s).unwrap();
     assert!(out.all_finite());

@@ -197,9 +197,9 @@ fn assert_same_image(shot: &Path, headless: &Path, size: (u32, u32), log: &str) 
 }
 
 /// A skinned model playing in the viewer at a fixed step, per backend with
-/// synchronization validation: ray query and pipeline record the scene
-/// update (skinning -> BLAS refit -> TLAS) into the frame's own command
-/// buffer, the compute BVH submits it separately. After eight frames the
+/// synchronization validation: every backend records the scene update
+/// (skinning -> BLAS refit -> TLAS; compute BVH: skinning -> refit -> GPU
+/// top-level fit) into the frame's own command buffer. After eight frames the
 /// screenshot must equal a headless render at the last frame's time
 /// (measured on lavapipe: equal, PSNR inf; the figure one 0.1 s step behind
 /// scores 33 dB, an update never recorded leaves the start pose: 26.5 dB).

@@ -4,7 +4,8 @@
 // the threads of a level working in parallel. Leaves take the exact min/max
 // of their triangles' skinned vertices (what the CPU build computes, so a
 // refit tree equals a CPU refit bit for bit); interior nodes the union of
-// their two children. The root lands in `roots` for the host's top level.
+// their two children. The root also lands in `roots`, which the host reads
+// after the frame (rebuild policy, next top-level topology).
 #extension GL_EXT_scalar_block_layout : require
 #include "../common/types.glsl"
 

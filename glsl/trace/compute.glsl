@@ -23,6 +23,7 @@ struct BvhInstance {
     uint prim_offset;  // base of its triangle list in blas_prims
     uint mask;
     uint opaque;
+    mat4 object_to_world;  // for the top level's GPU fit (anim/tlas_refit.comp)
 };
 
 layout(set = SET_TRACE, binding = BVH_BLAS_NODES, scalar) readonly buffer BlasNodes { BvhNode blas_nodes[]; };

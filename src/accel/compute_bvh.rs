@@ -2,6 +2,17 @@
 //! (one binned-SAH BVH per mesh primitive + a top level over instances),
 //! laid out flat for glsl/trace/compute.glsl. Triangles are not copied: the
 //! shader reads them from the one shared vertex/index buffer.
+//!
+//! A frame's update needs no host round-trip: before recording,
+//! [`ComputeBvh::prepare_update`] rebuilds the trees the policy marks (on the
+//! CPU; their upload is a copy recorded into the frame) and the top level's
+//! topology from the bounds the host knows (the previous frame's refit
+//! roots); [`ComputeBvh::record_update`] records the skinned refit and the
+//! GPU fit of the top level's bounds to this frame's roots
+//! ([`TopLevelRefit`]); [`ComputeBvh::finish_update`], after the frame's
+//! fence, reads the roots back for the rebuild policy and the next
+//! topology. The topology only decides speed; the bounds tracing uses are
+//! always this frame's.
 
 use anyhow::Result;
 use ash::vk;
@@ -11,14 +22,16 @@ use gpu_allocator::MemoryLocation;
 
 use super::bvh::{triangle_aabbs, Bvh, BvhNode};
 use super::compute_refit::ComputeRefit;
+use super::compute_top_level::TopLevelRefit;
 use super::dynamic::{RebuildPolicy, RefitState, Update};
 use super::{instance_mask, instance_opaque};
 use crate::gpu::scene::GpuScene;
 use crate::scene::{Aabb, Instance, Scene};
 use crate::vk::pipeline::{Binding, DescriptorSet};
-use crate::vk::{Buffer, Context};
+use crate::vk::{memory_barrier, Buffer, Context};
 
-/// Mirrors `BvhInstance` in glsl/trace/compute.glsl.
+/// Mirrors `BvhInstance` in glsl/trace/compute.glsl and
+/// glsl/anim/tlas_refit.comp.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuBvhInstance {
@@ -27,8 +40,10 @@ pub struct GpuBvhInstance {
     pub prim_offset: u32,
     pub mask: u32,
     pub opaque: u32,
+    /// For the GPU top-level fit: the matrix the host's fit uses.
+    pub object_to_world: [f32; 16],
 }
-const _: () = assert!(std::mem::size_of::<GpuBvhInstance>() == 80);
+const _: () = assert!(std::mem::size_of::<GpuBvhInstance>() == 144);
 
 /// A node no ray can enter: stands in for an empty level.
 const EMPTY_NODE: BvhNode = BvhNode { min: [1e30; 3], left_or_first: 0, max: [-1e30; 3], count: 1 };
@@ -45,6 +60,8 @@ struct BlasRef {
 struct SkinnedBvh {
     blas: BlasRef,
     state: RefitState,
+    /// Its region in `staging` (nodes, then triangle order) for rebuilds.
+    staging_offset: u64,
 }
 
 pub struct ComputeBvh {
@@ -53,14 +70,28 @@ pub struct ComputeBvh {
     /// Per skinned slot.
     skinned: Vec<SkinnedBvh>,
     refit: Option<ComputeRefit>,
+    /// The top level's GPU fit; only with skinned trees (a rigid-only top
+    /// level is exact from the host).
+    top_refit: Option<TopLevelRefit>,
+    /// Host-visible copies of rebuilt skinned trees, copied into
+    /// `blas_nodes` / `blas_prims` by the frame's commands.
+    staging: Option<Buffer>,
+    /// Those copies for the next `record_refit`: into nodes, into prims.
+    uploads: (Vec<vk::BufferCopy>, Vec<vk::BufferCopy>),
     blas_nodes: Buffer,
     blas_prims: Buffer,
     tlas_nodes: Buffer,
     tlas_prims: Buffer,
     instances: Buffer,
+    /// The host's copy of the top level last written (topology; bounds as
+    /// the host knew them).
+    tlas: Bvh,
     pub set: DescriptorSet,
     pub build_ms: f64,
     pub triangles: usize,
+    /// Host ms of the last `prepare_update`: CPU tree rebuilds, top level.
+    pub rebuild_ms: f64,
+    pub top_level_ms: f64,
 }
 
 fn append(nodes: &mut Vec<BvhNode>, prims: &mut Vec<u32>, bvh: Bvh, capacity: usize) -> BlasRef {
@@ -73,7 +104,7 @@ fn append(nodes: &mut Vec<BvhNode>, prims: &mut Vec<u32>, bvh: Bvh, capacity: us
 
 /// Top-level buffers are host-visible and rewritten in place every frame
 /// something moves; sized for the worst case once.
-fn host_buffer(ctx: &Context, name: &str, bytes: usize) -> Result<Buffer> {
+pub(super) fn host_buffer(ctx: &Context, name: &str, bytes: usize) -> Result<Buffer> {
     Buffer::new(ctx, name, bytes as u64, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::CpuToGpu)
 }
 
@@ -108,6 +139,7 @@ impl ComputeBvh {
         // which is exactly what the GPU vertex range holds at upload.
         let world = scene.world_matrices();
         let mut skinned = Vec::new();
+        let mut staging_size = 0u64;
         for inst in &scene.instances {
             let Some(posed) = scene.skinned_pose(inst, &world) else { continue };
             let indices = &scene.meshes[inst.mesh].primitives[inst.primitive].indices;
@@ -115,8 +147,10 @@ impl ComputeBvh {
             let aabbs = triangle_aabbs(&posed, indices);
             let bvh = Bvh::build(&aabbs);
             let state = RefitState::new(&bvh.root_bounds());
-            let blas = append(&mut nodes, &mut prims, bvh, (2 * aabbs.len()).saturating_sub(1));
-            skinned.push(SkinnedBvh { blas, state });
+            let capacity = (2 * aabbs.len()).saturating_sub(1);
+            let blas = append(&mut nodes, &mut prims, bvh, capacity);
+            skinned.push(SkinnedBvh { blas, state, staging_offset: staging_size });
+            staging_size += (capacity * std::mem::size_of::<BvhNode>() + 4 * aabbs.len()) as u64;
         }
         let blas_ms = t0.elapsed().as_secs_f64() * 1e3;
         if nodes.is_empty() {
@@ -127,6 +161,12 @@ impl ComputeBvh {
         let blas_nodes = Buffer::with_data(ctx, "BVH BLAS nodes", bytemuck::cast_slice(&nodes), storage)?;
         let blas_prims =
             Buffer::with_data(ctx, "BVH BLAS triangle order", bytemuck::cast_slice(&prims), storage)?;
+        let staging = if skinned.is_empty() {
+            None
+        } else {
+            let src = vk::BufferUsageFlags::TRANSFER_SRC;
+            Some(Buffer::new(ctx, "BVH rebuild staging", staging_size, src, MemoryLocation::CpuToGpu)?)
+        };
         let refit = if skinned.is_empty() {
             None
         } else {
@@ -139,6 +179,11 @@ impl ComputeBvh {
         let tlas_nodes = host_buffer(ctx, "BVH top-level nodes", 2 * n * std::mem::size_of::<BvhNode>())?;
         let tlas_prims = host_buffer(ctx, "BVH top-level instance order", 4 * n)?;
         let instances = host_buffer(ctx, "BVH instances", n * std::mem::size_of::<GpuBvhInstance>())?;
+        let top_refit = if refit.is_some() {
+            Some(TopLevelRefit::new(ctx, n, &tlas_nodes, &tlas_prims, &instances, &blas_nodes)?)
+        } else {
+            None
+        };
         let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
         let set = DescriptorSet::new(ctx, "trace set (compute BVH)", &[sb, sb, sb, sb, sb])?;
         for (i, b) in [&blas_nodes, &blas_prims, &tlas_nodes, &tlas_prims, &instances].iter().enumerate() {
@@ -148,23 +193,31 @@ impl ComputeBvh {
             blas,
             skinned,
             refit,
+            top_refit,
+            staging,
+            uploads: (Vec::new(), Vec::new()),
             blas_nodes,
             blas_prims,
             tlas_nodes,
             tlas_prims,
             instances,
+            tlas: Bvh::default(),
             set,
             build_ms: 0.0,
             triangles,
+            rebuild_ms: 0.0,
+            top_level_ms: 0.0,
         };
-        // Fit the skinned trees to the GPU's vertices (the CPU pose they were
-        // built from may differ in the last bit), which also places the top level.
+        // Fit the skinned trees (and the top level) to the GPU's vertices:
+        // the CPU pose they were built from may differ in the last bit. A
+        // load-time submission, not part of any frame.
+        bvh.write_top_level(scene)?;
         let updates = vec![Update::Refit; bvh.skinned.len()];
         ctx.one_shot("refit skinned BVHs", |cmd| {
-            bvh.record_refit(ctx, cmd);
+            bvh.record_update(ctx, cmd);
             Ok(())
         })?;
-        bvh.finish_refit(scene, &updates, &RebuildPolicy::default())?;
+        bvh.finish_update(&updates, &RebuildPolicy::default())?;
         bvh.build_ms = t0.elapsed().as_secs_f64() * 1e3;
         log::info!(
             "compute BVH: {} triangles in {} nodes, built in {:.0} ms ({:.2} Mtri/s), triangle-weighted SAH cost {:.1}, top level over {} instances, {} refit each frame",
@@ -179,17 +232,23 @@ impl ComputeBvh {
         Ok(bvh)
     }
 
-    /// Rebuilds the small top level (and the per-instance records) after
-    /// instances moved or skinned trees were refit. The caller ensures the
-    /// GPU is not reading the old contents.
-    pub fn update_instances(&mut self, scene: &Scene) -> Result<()> {
-        let (tlas, instances) = top_level(scene, |inst| match inst.skinned {
-            Some(slot) => self.skinned.get(slot).map(|s| &s.blas),
-            None => self.blas[inst.mesh][inst.primitive].as_ref(),
-        });
+    /// Builds the top level's topology over the bounds the host knows (for
+    /// skinned trees: the last roots read back, or a CPU rebuild's) and
+    /// writes it with the per-instance records. With skinned trees the GPU
+    /// fit recorded by `record_top_level` then sets this frame's bounds;
+    /// without, the host's bounds are exact. The GPU must not be reading the
+    /// top level (the previous frame is done).
+    fn write_top_level(&mut self, scene: &Scene) -> Result<()> {
+        let (tlas, instances) = top_level(scene, |inst| self.blas_of(inst));
         self.tlas_nodes.write(0, bytemuck::cast_slice(&tlas.nodes))?;
         self.tlas_prims.write(0, bytemuck::cast_slice(&tlas.prim_indices))?;
-        self.instances.write(0, bytemuck::cast_slice(&instances))
+        self.instances.write(0, bytemuck::cast_slice(&instances))?;
+        if let Some(t) = &mut self.top_refit {
+            // The placeholder of an empty top level must stay unenterable.
+            t.set_tree((tlas.nodes[0] != EMPTY_NODE).then_some(&tlas))?;
+        }
+        self.tlas = tlas;
+        Ok(())
     }
 
     /// Number of skinned trees (refit every frame).
@@ -197,63 +256,158 @@ impl ComputeBvh {
         self.skinned.len()
     }
 
-    /// Before recording a frame's update: rebuilds (on the CPU, from the
-    /// scene's CPU pose) the skinned trees the policy marks, uploading their
-    /// topology; the GPU refit recorded next then fits them to the GPU's
-    /// skinned vertices. Returns what each slot gets this frame.
-    pub fn prepare_skinned(
-        &mut self,
-        ctx: &Context,
-        scene: &Scene,
-        policy: &RebuildPolicy,
-    ) -> Result<Vec<Update>> {
+    /// Host work before a frame's update is recorded (the GPU done with the
+    /// previous frame): rebuilds on the CPU, from the scene's CPU pose, the
+    /// skinned trees the policy marks, staging them for the copy
+    /// `record_refit` records (the GPU refit after it fits them to the
+    /// GPU's skinned vertices); then writes the top level for `scene`'s
+    /// instance transforms. No submission, no wait. Returns what each
+    /// skinned slot gets this frame, for `finish_update`.
+    pub fn prepare_update(&mut self, scene: &Scene, policy: &RebuildPolicy) -> Result<Vec<Update>> {
+        let t0 = std::time::Instant::now();
         let updates: Vec<Update> = self.skinned.iter().map(|s| s.state.next(policy)).collect();
-        if !updates.contains(&Update::Rebuild) {
-            return Ok(updates);
+        self.uploads.0.clear();
+        self.uploads.1.clear();
+        if updates.contains(&Update::Rebuild) {
+            self.rebuild_skinned(scene, &updates)?;
         }
-        let world = scene.world_matrices();
-        let mut trees = Vec::new();
-        for (inst, _) in scene
-            .instances
-            .iter()
-            .filter_map(|i| Some((i, i.skinned?)))
-            .filter(|(_, s)| updates[*s] == Update::Rebuild)
-        {
-            let slot = inst.skinned.unwrap();
-            let posed = scene.skinned_pose(inst, &world).expect("skinned slot has a pose");
-            let indices = &scene.meshes[inst.mesh].primitives[inst.primitive].indices;
-            let bvh = Bvh::build(&triangle_aabbs(&posed, indices));
-            let b = &mut self.skinned[slot].blas;
-            self.blas_nodes.upload(ctx, b.node_offset as u64 * 32, bytemuck::cast_slice(&bvh.nodes))?;
-            self.blas_prims.upload(ctx, b.prim_offset as u64 * 4, bytemuck::cast_slice(&bvh.prim_indices))?;
-            b.bvh = bvh;
-            trees.push(slot);
-        }
-        if let Some(refit) = &mut self.refit {
-            for slot in trees {
-                refit.set_levels(slot, &self.skinned[slot].blas.bvh)?;
-            }
-        }
+        self.rebuild_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = std::time::Instant::now();
+        self.write_top_level(scene)?;
+        self.top_level_ms = t1.elapsed().as_secs_f64() * 1e3;
         Ok(updates)
     }
 
-    /// Records the GPU refit of every skinned tree (after skinning).
+    fn rebuild_skinned(&mut self, scene: &Scene, updates: &[Update]) -> Result<()> {
+        let world = scene.world_matrices();
+        let staging = self.staging.as_mut().expect("skinned trees have a staging buffer");
+        for inst in &scene.instances {
+            let Some(slot) = inst.skinned.filter(|s| updates[*s] == Update::Rebuild) else { continue };
+            let posed = scene.skinned_pose(inst, &world).expect("skinned slot has a pose");
+            let indices = &scene.meshes[inst.mesh].primitives[inst.primitive].indices;
+            let bvh = Bvh::build(&triangle_aabbs(&posed, indices));
+            let s = &mut self.skinned[slot];
+            let nodes: &[u8] = bytemuck::cast_slice(&bvh.nodes);
+            let prims: &[u8] = bytemuck::cast_slice(&bvh.prim_indices);
+            staging.write(s.staging_offset as usize, nodes)?;
+            let prims_at = s.staging_offset + nodes.len() as u64;
+            staging.write(prims_at as usize, prims)?;
+            let (b, size) = (&s.blas, std::mem::size_of::<BvhNode>() as u64);
+            self.uploads.0.push(vk::BufferCopy {
+                src_offset: s.staging_offset,
+                dst_offset: b.node_offset as u64 * size,
+                size: nodes.len() as u64,
+            });
+            self.uploads.1.push(vk::BufferCopy {
+                src_offset: prims_at,
+                dst_offset: b.prim_offset as u64 * 4,
+                size: prims.len() as u64,
+            });
+            if let Some(refit) = &mut self.refit {
+                refit.set_levels(slot, &bvh)?;
+            }
+            s.blas.bvh = bvh;
+        }
+        Ok(())
+    }
+
+    /// Records the frame's scene update: the skinned trees' rebuild copies
+    /// and refit, then the top level's GPU fit, each followed by its
+    /// barrier (the last one to the tracer's storage reads). Needs
+    /// `prepare_update` first, and skinning recorded before it.
+    pub fn record_update(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        self.record_refit(ctx, cmd);
+        self.record_top_level(ctx, cmd);
+    }
+
+    /// The first half of `record_update` (separate for pass timing).
     pub fn record_refit(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        if let Some(refit) = &self.refit {
-            refit.record(ctx, cmd);
+        let Some(refit) = &self.refit else { return };
+        // The previous frame's tracing read what this update rewrites.
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        memory_barrier(
+            ctx,
+            cmd,
+            (compute, vk::AccessFlags2::SHADER_STORAGE_READ),
+            (
+                compute | vk::PipelineStageFlags2::COPY,
+                vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::TRANSFER_WRITE,
+            ),
+        );
+        if let (Some(staging), false) = (&self.staging, self.uploads.0.is_empty()) {
+            unsafe {
+                ctx.device.cmd_copy_buffer(cmd, staging.raw, self.blas_nodes.raw, &self.uploads.0);
+                ctx.device.cmd_copy_buffer(cmd, staging.raw, self.blas_prims.raw, &self.uploads.1);
+            }
+            memory_barrier(
+                ctx,
+                cmd,
+                (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+                (compute, vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE),
+            );
+        }
+        refit.record(ctx, cmd);
+    }
+
+    /// The second half of `record_update`, after `record_refit`.
+    pub fn record_top_level(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        if let Some(t) = &self.top_refit {
+            t.record(ctx, cmd);
         }
     }
 
-    /// After the refit completed: takes the refit roots, judges them for the
-    /// rebuild policy and rebuilds the top level.
-    pub fn finish_refit(&mut self, scene: &Scene, updates: &[Update], policy: &RebuildPolicy) -> Result<()> {
+    /// After the update's commands completed (its fence, never inside a
+    /// frame): reads the refit roots back and judges them for the rebuild
+    /// policy; they also shape the next frame's top-level topology.
+    pub fn finish_update(&mut self, updates: &[Update], policy: &RebuildPolicy) -> Result<()> {
         if let Some(refit) = &self.refit {
             for ((s, root), u) in self.skinned.iter_mut().zip(refit.roots()?).zip(updates) {
                 s.blas.bvh.nodes[0] = root;
                 s.state.done(*u, &s.blas.bvh.root_bounds(), policy);
             }
         }
-        self.update_instances(scene)
+        self.uploads.0.clear();
+        self.uploads.1.clear();
+        Ok(())
+    }
+
+    /// The top level as the GPU left it after the last completed update:
+    /// the topology the host wrote, with the bounds the GPU fit (for tests).
+    pub fn gpu_top_level(&self) -> Result<Bvh> {
+        let nodes: Vec<BvhNode> = bytemuck::pod_collect_to_vec(self.tlas_nodes.read()?);
+        Ok(Bvh {
+            nodes: nodes[..self.tlas.nodes.len()].to_vec(),
+            prim_indices: self.tlas.prim_indices.clone(),
+        })
+    }
+
+    /// The top level as the host last wrote it: the topology, with the
+    /// bounds it estimated before the GPU fit (for tests).
+    pub fn host_topology(&self) -> &Bvh {
+        &self.tlas
+    }
+
+    /// What the host computes from the refit roots `finish_update` read
+    /// back (for tests): the topology of the last update refit on the CPU
+    /// over them (the GPU fit's reference, node for node), and a fresh
+    /// top-level build over them (what the old host path traced).
+    pub fn host_top_level(&self, scene: &Scene) -> (Bvh, Bvh) {
+        let blas_of = |inst: &Instance| self.blas_of(inst);
+        let bounds: Vec<Aabb> = scene
+            .instances
+            .iter()
+            .map(|inst| world_bounds(scene, inst, blas_of(inst)).unwrap_or(Aabb::EMPTY))
+            .collect();
+        let mut refit = self.tlas.clone();
+        refit.refit(&bounds);
+        (refit, top_level(scene, blas_of).0)
+    }
+
+    fn blas_of(&self, inst: &Instance) -> Option<&BlasRef> {
+        match inst.skinned {
+            Some(slot) => self.skinned.get(slot).map(|s| &s.blas),
+            None => self.blas[inst.mesh][inst.primitive].as_ref(),
+        }
     }
 
     /// SAH cost of the per-primitive BVHs, averaged with triangle counts as weights.
@@ -280,8 +434,24 @@ impl ComputeBvh {
         if let Some(r) = &mut self.refit {
             r.destroy(ctx);
         }
+        if let Some(t) = &mut self.top_refit {
+            t.destroy(ctx);
+        }
+        if let Some(b) = &mut self.staging {
+            b.destroy(ctx);
+        }
         self.set.destroy(ctx);
     }
+}
+
+/// World bounds of `inst`'s tree, if some ray can hit it.
+fn world_bounds(scene: &Scene, inst: &Instance, b: Option<&BlasRef>) -> Option<Aabb> {
+    let n = b?.bvh.nodes.first()?;
+    if instance_mask(scene, inst) == 0 {
+        return None;
+    }
+    let world = Aabb { min: n.min.into(), max: n.max.into() }.transformed(&inst.world);
+    (world.min.is_finite() && world.max.is_finite()).then_some(world)
 }
 
 /// The top level over all instances (rebuilt whenever instances move) and
@@ -309,13 +479,11 @@ fn top_level<'a>(
             prim_offset: b.map(|b| b.prim_offset).unwrap_or(0),
             mask,
             opaque: instance_opaque(scene, inst) as u32,
+            object_to_world: inst.world.to_cols_array(),
         });
-        if let Some(n) = b.and_then(|b| b.bvh.nodes.first()).filter(|_| mask != 0) {
-            let world = Aabb { min: n.min.into(), max: n.max.into() }.transformed(&inst.world);
-            if world.min.is_finite() && world.max.is_finite() {
-                bounds.push(world);
-                traceable.push(i as u32);
-            }
+        if let Some(world) = world_bounds(scene, inst, b) {
+            bounds.push(world);
+            traceable.push(i as u32);
         }
     }
     let mut tlas = Bvh::build(&bounds);

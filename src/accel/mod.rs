@@ -9,6 +9,7 @@ use gpu_allocator::MemoryLocation;
 pub mod bvh;
 pub mod compute_bvh;
 pub mod compute_refit;
+pub mod compute_top_level;
 pub mod dynamic;
 pub mod watertight;
 

@@ -215,28 +215,20 @@ impl Renderer {
         self.record_update(ctx, cmd, scene)?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
-        self.finish_update(ctx, scene)
+        self.finish_update(ctx)
     }
 
-    /// Whether `record_scene_update` can put the scene update into the
-    /// frame's own command buffer (the tracer needs no host step between its
-    /// update and the tracing passes). Valid after `prepare`.
-    pub fn can_record_update(&self) -> bool {
-        self.tracer.as_ref().is_none_or(|t| t.updates_in_frame())
-    }
-
-    /// `update_scene` without its own submission: records the update at the
-    /// start of `cmd` (before `record`), so a frame is one submission and
-    /// the host never waits for the update. Needs `can_record_update()`, a
-    /// GPU done with the previous frame, and `finish_scene_update` once
-    /// `cmd` has completed.
+    /// `update_scene` without its own submission, for every backend:
+    /// records the update at the start of `cmd` (before `record`), so a
+    /// frame is one submission and the host never waits for the update.
+    /// Needs a GPU done with the previous frame, and `finish_scene_update`
+    /// once `cmd` has completed.
     pub fn record_scene_update(
         &mut self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         scene: &Scene,
     ) -> Result<()> {
-        anyhow::ensure!(self.can_record_update(), "this tracer's scene update needs its own submission");
         self.plan_update(ctx, scene)?;
         self.record_update(ctx, cmd, scene)?;
         if std::mem::replace(&mut self.pending_update, true) {
@@ -247,9 +239,9 @@ impl Renderer {
 
     /// The host side of a recorded update, once its command buffer is done.
     /// Does nothing when no update is pending.
-    pub fn finish_scene_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+    pub fn finish_scene_update(&mut self, ctx: &Context) -> Result<()> {
         if std::mem::take(&mut self.pending_update) {
-            self.finish_update(ctx, scene)?;
+            self.finish_update(ctx)?;
         }
         Ok(())
     }
@@ -284,7 +276,7 @@ impl Renderer {
     }
 
     /// Host work after the update's commands completed.
-    fn finish_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+    fn finish_update(&mut self, ctx: &Context) -> Result<()> {
         self.update_timings = self.update_timer.results(ctx)?;
         let bounds = match &self.skinning {
             Some(s) => s.bounds()?,
@@ -292,7 +284,7 @@ impl Renderer {
         };
         self.update_counts = [0; 2];
         if let Some(t) = &mut self.tracer {
-            let (counts, host) = t.finish_update(ctx, scene, &bounds, &self.rebuild_policy)?;
+            let (counts, host) = t.finish_update(ctx, &bounds, &self.rebuild_policy)?;
             self.update_timings.extend(host);
             self.update_counts = [counts.refits, counts.rebuilds];
         }

@@ -645,7 +645,7 @@ impl Viewer {
         let prev = self.slots[(s + FRAMES_IN_FLIGHT - 1) % FRAMES_IN_FLIGHT].fence;
         unsafe { dev.wait_for_fences(&[prev], true, u64::MAX) }
             .context("waiting for a frame (device lost?)")?;
-        self.renderer.finish_scene_update(&self.ctx, &self.scene)?;
+        self.renderer.finish_scene_update(&self.ctx)?;
         self.collect_gpu_times()?;
         self.finish_screenshot()?;
 
@@ -667,15 +667,9 @@ impl Viewer {
         }
         let camera = self.controller.camera();
         self.renderer.prepare(&self.ctx, &self.scene, &camera, &self.settings)?;
-        // The hardware backends' update (skinning, refit, TLAS) goes into
-        // this frame's command buffer; the compute BVH's needs the host
-        // between refit and tracing, so it is submitted and waited for here.
-        let update_in_frame = std::mem::take(&mut self.scene_dirty) && {
-            if !self.renderer.can_record_update() {
-                self.renderer.update_scene(&self.ctx, &self.scene)?;
-            }
-            self.renderer.can_record_update()
-        };
+        // The scene update (skinning, refit, top level) goes into this
+        // frame's command buffer, for every backend: no wait for it here.
+        let update_in_frame = std::mem::take(&mut self.scene_dirty);
 
         let last = self.is_final_frame()?;
         let shot_path =
@@ -729,7 +723,7 @@ impl Viewer {
         }
         if last {
             unsafe { self.ctx.device.device_wait_idle() }.context("vkDeviceWaitIdle")?;
-            self.renderer.finish_scene_update(&self.ctx, &self.scene)?;
+            self.renderer.finish_scene_update(&self.ctx)?;
             self.collect_gpu_times()?;
             self.finish_screenshot()?;
             return Ok(Flow::Exit);

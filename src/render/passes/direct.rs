@@ -37,6 +37,12 @@ pub const PASS: PassDesc = PassDesc {
     create: |i: &Init| {
         let shader =
             if shadows(i.config) { Shader::Traced("direct") } else { Shader::Compute("direct.comp") };
-        FullScreen::create(i, "direct", io(i.config), shader, &Specialization::new(&i.config.specialization()))
+        FullScreen::create(
+            i,
+            "direct",
+            io(i.config),
+            shader,
+            &Specialization::new(&i.config.specialization()),
+        )
     },
 };

@@ -1,6 +1,8 @@
 //! Our own BVH traversed in compute shaders (glsl/trace/compute.glsl): no
 //! ray-tracing extension needed. Skinned trees are refit on the GPU after
-//! skinning; the top level follows the instances.
+//! skinning and the top level is fit on the GPU after them (its topology
+//! built by the host before the frame), so the update needs no host step
+//! inside the frame.
 
 use anyhow::Result;
 use ash::vk;
@@ -20,12 +22,11 @@ use crate::vk::Context;
 pub struct ComputeTracer {
     bvh: ComputeBvh,
     plan: Vec<Update>,
-    cpu_rebuild_ms: f64,
 }
 
 impl ComputeTracer {
     pub fn new(ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<ComputeTracer> {
-        Ok(ComputeTracer { bvh: ComputeBvh::build(ctx, scene, gpu)?, plan: Vec::new(), cpu_rebuild_ms: 0.0 })
+        Ok(ComputeTracer { bvh: ComputeBvh::build(ctx, scene, gpu)?, plan: Vec::new() })
     }
 }
 
@@ -50,28 +51,32 @@ impl Tracer for ComputeTracer {
 
     fn prepare_update(
         &mut self,
-        ctx: &Context,
+        _: &Context,
         scene: &Scene,
         _: &GpuScene,
         policy: &RebuildPolicy,
     ) -> Result<()> {
-        let t0 = std::time::Instant::now();
-        self.plan = self.bvh.prepare_skinned(ctx, scene, policy)?;
-        self.cpu_rebuild_ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.plan = self.bvh.prepare_update(scene, policy)?;
         Ok(())
     }
 
     fn record_update(&mut self, rec: &mut Recorder, _: &Scene, _: &GpuScene) -> Result<()> {
         if self.bvh.skinned_count() == 0 {
+            // Rigid motion only: the host's top level is exact.
             return Ok(());
         }
-        let uses = [
+        let (ctx, bvh) = (rec.ctx, &self.bvh);
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let refit = [
             Use::buffer(SharedBuffer::Geometry, Access::ShaderRead),
             Use::buffer(SharedBuffer::Accel, Access::ShaderWrite),
         ];
-        let (ctx, bvh) = (rec.ctx, &self.bvh);
-        rec.pass("bvh refit", vk::PipelineStageFlags2::COMPUTE_SHADER, &uses, |cmd| {
+        rec.pass("bvh refit", compute, &refit, |cmd| {
             bvh.record_refit(ctx, cmd);
+            Ok(())
+        })?;
+        rec.pass("top level fit", compute, &[Use::buffer(SharedBuffer::Accel, Access::ShaderWrite)], |cmd| {
+            bvh.record_top_level(ctx, cmd);
             Ok(())
         })
     }
@@ -79,24 +84,16 @@ impl Tracer for ComputeTracer {
     fn finish_update(
         &mut self,
         _: &Context,
-        scene: &Scene,
         _: &[Aabb],
         policy: &RebuildPolicy,
     ) -> Result<(UpdateCounts, Vec<(&'static str, f64)>)> {
         let plan = std::mem::take(&mut self.plan);
-        let t0 = std::time::Instant::now();
-        self.bvh.finish_refit(scene, &plan, policy)?;
-        let mut times = vec![("top level (CPU)", t0.elapsed().as_secs_f64() * 1e3)];
+        self.bvh.finish_update(&plan, policy)?;
+        let mut times = vec![("top level (CPU)", self.bvh.top_level_ms)];
         if plan.contains(&Update::Rebuild) {
-            times.insert(0, ("bvh rebuild (CPU)", self.cpu_rebuild_ms));
+            times.insert(0, ("bvh rebuild (CPU)", self.bvh.rebuild_ms));
         }
         Ok((counts(&plan), times))
-    }
-
-    fn updates_in_frame(&self) -> bool {
-        // The host builds the top level from the refit roots, between the
-        // refit and the tracing passes.
-        false
     }
 
     fn destroy(&mut self, ctx: &Context) {

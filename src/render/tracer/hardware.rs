@@ -98,7 +98,6 @@ impl Tracer for HardwareTracer {
     fn finish_update(
         &mut self,
         _: &Context,
-        _: &Scene,
         skinned_bounds: &[Aabb],
         policy: &RebuildPolicy,
     ) -> Result<(UpdateCounts, Vec<(&'static str, f64)>)> {
@@ -109,10 +108,6 @@ impl Tracer for HardwareTracer {
             }
         }
         Ok((counts(&plan), Vec::new()))
-    }
-
-    fn updates_in_frame(&self) -> bool {
-        true
     }
 
     fn destroy(&mut self, ctx: &Context) {

@@ -65,14 +65,9 @@ pub trait Tracer {
     fn finish_update(
         &mut self,
         ctx: &Context,
-        scene: &Scene,
         skinned_bounds: &[Aabb],
         policy: &RebuildPolicy,
     ) -> Result<(UpdateCounts, Vec<(&'static str, f64)>)>;
-
-    /// Whether `record_update` may share the frame's command buffer (false:
-    /// `finish_update` must run between the update and the tracing passes).
-    fn updates_in_frame(&self) -> bool;
 
     fn destroy(&mut self, ctx: &Context);
 }

@@ -1,0 +1,110 @@
+//! GPU refit of the compute backend's top level (glsl/anim/tlas_refit.comp),
+//! recorded right after the skinned BLAS refit: the host builds the top
+//! level's topology before the frame from the bounds it knows, the GPU
+//! then puts the bounds of this frame's refit roots into it. So tracing
+//! never waits for the host to read the refit roots back.
+
+use anyhow::Result;
+use ash::vk;
+
+use super::bvh::{Bvh, MAX_DEPTH};
+use crate::vk::pipeline::{
+    bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,
+};
+use crate::vk::{memory_barrier, Buffer, Context};
+
+/// Mirrors `Push` in glsl/anim/tlas_refit.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct Levels {
+    level_offset: u32,
+    level_count: u32,
+}
+
+pub struct TopLevelRefit {
+    /// Host-visible: rewritten with each new topology.
+    order: Buffer,
+    levels: Levels,
+    set: DescriptorSet,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+}
+
+impl TopLevelRefit {
+    /// `instances`: the most instances the top level can hold. The buffers
+    /// are the compute BVH's (top-level nodes and instance order, instance
+    /// records, BLAS nodes).
+    pub fn new(
+        ctx: &Context,
+        instances: usize,
+        tlas_nodes: &Buffer,
+        tlas_prims: &Buffer,
+        records: &Buffer,
+        blas_nodes: &Buffer,
+    ) -> Result<TopLevelRefit> {
+        // Every node plus the level boundaries of the deepest allowed tree.
+        let capacity = (2 * instances.max(1) - 1) + MAX_DEPTH + 2;
+        let order = super::compute_bvh::host_buffer(ctx, "BVH top-level refit order", 4 * capacity)?;
+        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
+        let set = DescriptorSet::new(ctx, "BVH top-level refit set", &[sb; 5])?;
+        for (i, b) in [tlas_nodes, tlas_prims, records, blas_nodes, &order].iter().enumerate() {
+            set.write_buffer(ctx, i as u32, b.raw);
+        }
+        let push = std::mem::size_of::<Levels>() as u32;
+        let layout = pipeline_layout(ctx, "BVH top-level refit layout", &[set.layout], push)?;
+        let pipeline = compute_pipeline(ctx, "anim/tlas_refit.comp", layout, &Specialization::new(&[]))?;
+        Ok(TopLevelRefit { order, levels: Levels::default(), set, layout, pipeline })
+    }
+
+    /// Takes the level order of a new top-level topology (None: the top
+    /// level holds no instance, nothing to fit). The GPU must be idle.
+    pub fn set_tree(&mut self, tlas: Option<&Bvh>) -> Result<()> {
+        let Some(tlas) = tlas else {
+            self.levels = Levels::default();
+            return Ok(());
+        };
+        let (order, bounds) = tlas.levels();
+        self.order.write(0, bytemuck::cast_slice(&order))?;
+        self.order.write(order.len() * 4, bytemuck::cast_slice(&bounds))?;
+        self.levels = Levels { level_offset: order.len() as u32, level_count: bounds.len() as u32 - 1 };
+        Ok(())
+    }
+
+    /// Records the fit (after the BLAS refit's barrier) and the barrier to
+    /// the tracer (and to a host read of the nodes after the fence, for tests).
+    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        if self.levels.level_count == 0 {
+            return;
+        }
+        let d = &ctx.device;
+        unsafe {
+            bind_compute(ctx, cmd, self.pipeline, self.layout, &[self.set.set]);
+            d.cmd_push_constants(
+                cmd,
+                self.layout,
+                vk::ShaderStageFlags::ALL,
+                0,
+                bytemuck::bytes_of(&self.levels),
+            );
+            d.cmd_dispatch(cmd, 1, 1, 1);
+        }
+        memory_barrier(
+            ctx,
+            cmd,
+            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
+            (
+                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::HOST,
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::HOST_READ,
+            ),
+        );
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        unsafe {
+            ctx.device.destroy_pipeline(self.pipeline, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+        }
+        self.set.destroy(ctx);
+        self.order.destroy(ctx);
+    }
+}
