@@ -29,13 +29,13 @@ struct RefitJob {
     uint pad;
 };
 
-layout(set = 0, binding = 0, scalar) buffer Nodes { BvhNode nodes[]; };
-layout(set = 0, binding = 1, scalar) readonly buffer Prims { uint prims[]; };
-layout(set = 0, binding = 2, scalar) readonly buffer Vertices { Vertex vertices[]; };
-layout(set = 0, binding = 3, scalar) readonly buffer Indices { uint indices[]; };
-layout(set = 0, binding = 4, scalar) readonly buffer Jobs { RefitJob jobs[]; };
-layout(set = 0, binding = 5, scalar) readonly buffer Order { uint order[]; };
-layout(set = 0, binding = 6, scalar) writeonly buffer Roots { BvhNode roots[]; };
+layout(set = SET_ANIM, binding = REFIT_NODES, scalar) buffer Nodes { BvhNode nodes[]; };
+layout(set = SET_ANIM, binding = REFIT_PRIMS, scalar) readonly buffer Prims { uint prims[]; };
+layout(set = SET_ANIM, binding = REFIT_VERTICES, scalar) readonly buffer Vertices { Vertex vertices[]; };
+layout(set = SET_ANIM, binding = REFIT_INDICES, scalar) readonly buffer Indices { uint indices[]; };
+layout(set = SET_ANIM, binding = REFIT_JOBS, scalar) readonly buffer Jobs { RefitJob jobs[]; };
+layout(set = SET_ANIM, binding = REFIT_ORDER, scalar) readonly buffer Order { uint order[]; };
+layout(set = SET_ANIM, binding = REFIT_ROOTS, scalar) writeonly buffer Roots { BvhNode roots[]; };
 
 vec3 position(RefitJob job, uint tri, uint corner) {
     return vertices[job.vertex_offset + indices[job.first_index + 3u * tri + corner]].position;

@@ -18,11 +18,11 @@ struct SkinVertex {
     vec4 weights;
 };
 
-layout(set = 0, binding = 0, scalar) readonly buffer Source { SkinVertex src[]; };
-layout(set = 0, binding = 1, scalar) readonly buffer Joints { mat4 joints[]; };
-layout(set = 0, binding = 2, scalar) writeonly buffer Dest { Vertex dst[]; };
+layout(set = SET_ANIM, binding = SKIN_SOURCE, scalar) readonly buffer Source { SkinVertex src[]; };
+layout(set = SET_ANIM, binding = SKIN_JOINTS, scalar) readonly buffer Joints { mat4 joints[]; };
+layout(set = SET_ANIM, binding = SKIN_DEST, scalar) writeonly buffer Dest { Vertex dst[]; };
 // Per skinned instance: min.xyz, max.xyz as order-preserving uints.
-layout(set = 0, binding = 3, scalar) buffer Bounds { uint bounds[]; };
+layout(set = SET_ANIM, binding = SKIN_BOUNDS, scalar) buffer Bounds { uint bounds[]; };
 
 layout(push_constant, scalar) uniform Job {
     uint src_offset;

@@ -9,6 +9,7 @@
 // rounding error, so a leaf always contains the exact transformed box);
 // interior nodes the union of their two children.
 #extension GL_EXT_scalar_block_layout : require
+#include "generated/shared.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -29,13 +30,13 @@ struct BvhInstance {
     mat4 object_to_world;
 };
 
-layout(set = 0, binding = 0, scalar) buffer TlasNodes { BvhNode nodes[]; };
-layout(set = 0, binding = 1, scalar) readonly buffer TlasPrims { uint prims[]; };
-layout(set = 0, binding = 2, scalar) readonly buffer Instances { BvhInstance instances[]; };
-layout(set = 0, binding = 3, scalar) readonly buffer BlasNodes { BvhNode blas_nodes[]; };
+layout(set = SET_ANIM, binding = TOP_FIT_NODES, scalar) buffer TlasNodes { BvhNode nodes[]; };
+layout(set = SET_ANIM, binding = TOP_FIT_PRIMS, scalar) readonly buffer TlasPrims { uint prims[]; };
+layout(set = SET_ANIM, binding = TOP_FIT_INSTANCES, scalar) readonly buffer Instances { BvhInstance instances[]; };
+layout(set = SET_ANIM, binding = TOP_FIT_BLAS_NODES, scalar) readonly buffer BlasNodes { BvhNode blas_nodes[]; };
 // The top level's nodes deepest level first, then level_count + 1
 // boundaries into that list at level_offset.
-layout(set = 0, binding = 4, scalar) readonly buffer Order { uint order[]; };
+layout(set = SET_ANIM, binding = TOP_FIT_ORDER, scalar) readonly buffer Order { uint order[]; };
 
 layout(push_constant) uniform Push {
     uint level_offset;

@@ -43,7 +43,9 @@ pub struct GpuBvhInstance {
     /// For the GPU top-level fit: the matrix the host's fit uses.
     pub object_to_world: [f32; 16],
 }
-const _: () = assert!(std::mem::size_of::<GpuBvhInstance>() == 144);
+const _: () =
+    assert!(std::mem::size_of::<GpuBvhInstance>() == crate::gpu::shared::BVH_INSTANCE_STRIDE as usize);
+const _: () = assert!(std::mem::size_of::<BvhNode>() == crate::gpu::shared::BVH_NODE_STRIDE as usize);
 
 /// A node no ray can enter: stands in for an empty level.
 const EMPTY_NODE: BvhNode = BvhNode { min: [1e30; 3], left_or_first: 0, max: [-1e30; 3], count: 1 };

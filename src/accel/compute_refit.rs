@@ -10,9 +10,10 @@ use gpu_allocator::MemoryLocation;
 
 use super::bvh::{Bvh, BvhNode, MAX_DEPTH};
 use crate::gpu::scene::{GpuScene, PrimitiveRange};
-use crate::vk::pipeline::{
-    bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,
+use crate::gpu::shared::{
+    REFIT_INDICES, REFIT_JOBS, REFIT_NODES, REFIT_ORDER, REFIT_PRIMS, REFIT_ROOTS, REFIT_VERTICES,
 };
+use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
 use crate::vk::{memory_barrier, Buffer, Context};
 
 /// Mirrors `RefitJob` in glsl/anim/bvh_refit.comp.
@@ -78,12 +79,19 @@ impl ComputeRefit {
             (job_list.len() * std::mem::size_of::<BvhNode>()) as u64,
             MemoryLocation::GpuToCpu,
         )?;
-        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
-        let set = DescriptorSet::new(ctx, "BVH refit set", &[sb; 7])?;
-        let buffers = [nodes, prims, &gpu.vertices, &gpu.indices, &jobs, &order, &roots];
-        for (i, b) in buffers.iter().enumerate() {
-            set.write_buffer(ctx, i as u32, b.raw);
-        }
+        let set = DescriptorSet::storage_buffers(
+            ctx,
+            "BVH refit set",
+            &[
+                (REFIT_NODES, nodes.raw),
+                (REFIT_PRIMS, prims.raw),
+                (REFIT_VERTICES, gpu.vertices.raw),
+                (REFIT_INDICES, gpu.indices.raw),
+                (REFIT_JOBS, jobs.raw),
+                (REFIT_ORDER, order.raw),
+                (REFIT_ROOTS, roots.raw),
+            ],
+        )?;
         let layout = pipeline_layout(ctx, "BVH refit layout", &[set.layout], 0)?;
         let pipeline = compute_pipeline(ctx, "anim/bvh_refit.comp", layout, &Specialization::new(&[]))?;
         let mut refit = ComputeRefit { jobs, order, roots, job_list, set, layout, pipeline };

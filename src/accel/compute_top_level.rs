@@ -7,10 +7,12 @@
 use anyhow::Result;
 use ash::vk;
 
-use super::bvh::{Bvh, MAX_DEPTH};
-use crate::vk::pipeline::{
-    bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,
+use crate::gpu::shared::{
+    TOP_FIT_BLAS_NODES, TOP_FIT_INSTANCES, TOP_FIT_NODES, TOP_FIT_ORDER, TOP_FIT_PRIMS,
 };
+
+use super::bvh::{Bvh, MAX_DEPTH};
+use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
 use crate::vk::{memory_barrier, Buffer, Context};
 
 /// Mirrors `Push` in glsl/anim/tlas_refit.comp.
@@ -45,11 +47,17 @@ impl TopLevelRefit {
         // Every node plus the level boundaries of the deepest allowed tree.
         let capacity = (2 * instances.max(1) - 1) + MAX_DEPTH + 2;
         let order = super::compute_bvh::host_buffer(ctx, "BVH top-level refit order", 4 * capacity)?;
-        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
-        let set = DescriptorSet::new(ctx, "BVH top-level refit set", &[sb; 5])?;
-        for (i, b) in [tlas_nodes, tlas_prims, records, blas_nodes, &order].iter().enumerate() {
-            set.write_buffer(ctx, i as u32, b.raw);
-        }
+        let set = DescriptorSet::storage_buffers(
+            ctx,
+            "BVH top-level refit set",
+            &[
+                (TOP_FIT_NODES, tlas_nodes.raw),
+                (TOP_FIT_PRIMS, tlas_prims.raw),
+                (TOP_FIT_INSTANCES, records.raw),
+                (TOP_FIT_BLAS_NODES, blas_nodes.raw),
+                (TOP_FIT_ORDER, order.raw),
+            ],
+        )?;
         let push = std::mem::size_of::<Levels>() as u32;
         let layout = pipeline_layout(ctx, "BVH top-level refit layout", &[set.layout], push)?;
         let pipeline = compute_pipeline(ctx, "anim/tlas_refit.comp", layout, &Specialization::new(&[]))?;

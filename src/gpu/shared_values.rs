@@ -48,6 +48,27 @@ shared! {
     id BVH_TLAS_PRIMS = 3;
     id BVH_INSTANCES = 4;
 
+    // The animation compute passes' own single set (SET_ANIM): skinning
+    // (render/skinning.rs), BLAS refit (accel/compute_refit.rs) and the
+    // top-level fit (accel/compute_top_level.rs) of the compute BVH.
+    id SET_ANIM = 0;
+    id SKIN_SOURCE = 0;
+    id SKIN_JOINTS = 1;
+    id SKIN_DEST = 2;
+    id SKIN_BOUNDS = 3;
+    id REFIT_NODES = 0;
+    id REFIT_PRIMS = 1;
+    id REFIT_VERTICES = 2;
+    id REFIT_INDICES = 3;
+    id REFIT_JOBS = 4;
+    id REFIT_ORDER = 5;
+    id REFIT_ROOTS = 6;
+    id TOP_FIT_NODES = 0;
+    id TOP_FIT_PRIMS = 1;
+    id TOP_FIT_INSTANCES = 2;
+    id TOP_FIT_BLAS_NODES = 3;
+    id TOP_FIT_ORDER = 4;
+
     // Specialization constants.
     id SPEC_ALPHA_TEST = 0;
     id SPEC_SHADOWS = 1;
@@ -99,5 +120,5 @@ shared! {
     uint INSTANCE_STRIDE = 160;
     uint LIGHT_STRIDE = 64;
     uint BVH_NODE_STRIDE = 32;
-    uint BVH_INSTANCE_STRIDE = 80;
+    uint BVH_INSTANCE_STRIDE = 144;
 }

@@ -10,10 +10,9 @@ use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
 use crate::gpu::scene::GpuScene;
+use crate::gpu::shared::{SKIN_BOUNDS, SKIN_DEST, SKIN_JOINTS, SKIN_SOURCE};
 use crate::scene::{Aabb, Scene, Vertex};
-use crate::vk::pipeline::{
-    bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,
-};
+use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
 use crate::vk::{memory_barrier, Buffer, Context};
 
 /// Mirrors `SkinVertex` in glsl/anim/skinning.comp.
@@ -116,11 +115,16 @@ impl Skinning {
         )?;
         let bounds =
             Buffer::new(ctx, "skinned bounds", jobs.len() as u64 * 24, storage, MemoryLocation::GpuToCpu)?;
-        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
-        let set = DescriptorSet::new(ctx, "skinning set", &[sb, sb, sb, sb])?;
-        for (i, b) in [source.raw, joints.raw, gpu.vertices.raw, bounds.raw].into_iter().enumerate() {
-            set.write_buffer(ctx, i as u32, b);
-        }
+        let set = DescriptorSet::storage_buffers(
+            ctx,
+            "skinning set",
+            &[
+                (SKIN_SOURCE, source.raw),
+                (SKIN_JOINTS, joints.raw),
+                (SKIN_DEST, gpu.vertices.raw),
+                (SKIN_BOUNDS, bounds.raw),
+            ],
+        )?;
         let layout =
             pipeline_layout(ctx, "skinning layout", &[set.layout], std::mem::size_of::<Job>() as u32)?;
         let pipeline = compute_pipeline(ctx, "anim/skinning.comp", layout, &Specialization::new(&[]))?;

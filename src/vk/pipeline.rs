@@ -194,6 +194,21 @@ impl DescriptorSet {
         Ok(DescriptorSet { layout, pool, set, bindings: numbered.to_vec() })
     }
 
+    /// A set of storage buffers at the given binding numbers, written.
+    pub fn storage_buffers(
+        ctx: &Context,
+        name: &str,
+        buffers: &[(u32, vk::Buffer)],
+    ) -> Result<DescriptorSet> {
+        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
+        let numbered: Vec<(u32, Binding)> = buffers.iter().map(|(b, _)| (*b, sb)).collect();
+        let set = Self::numbered(ctx, name, &numbered)?;
+        for (b, buffer) in buffers {
+            set.write_buffer(ctx, *b, *buffer);
+        }
+        Ok(set)
+    }
+
     fn binding_type(&self, binding: u32) -> vk::DescriptorType {
         self.bindings.iter().find(|(i, _)| *i == binding).map(|(_, b)| b.ty).unwrap_or_else(|| {
             panic!("descriptor set has no binding {binding}") // a programming error, not input
