@@ -2,7 +2,7 @@
 // extension needed. Same interface as trace/query.glsl:
 //   bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit)
 //   vec3 trace_shadow(vec3 o, vec3 d, float tmax)   -> transmittance
-// Layout (src/accel/bvh.rs, src/accel/compute_bvh.rs): nodes are 32 bytes;
+// Layout (src/accel/bvh/mod.rs, src/accel/compute_bvh.rs): nodes are 32 bytes;
 // count == 0 marks an interior node whose children are left and left + 1;
 // count > 0 a leaf over prims[first .. first + count]. Triangles are read
 // from the one shared vertex/index copy.

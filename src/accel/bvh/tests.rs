@@ -1,0 +1,284 @@
+//! Unit tests of the BVH: random, degenerate and skewed inputs, refit,
+//! levels, the shader layout, build speed, and Sponza.
+
+use std::time::Instant;
+
+use super::build::levels_needed;
+use super::*;
+use crate::accel::watertight::{traverse_closest, triangle_positions};
+use crate::scene::primitives::uv_sphere;
+
+struct Rng(u64);
+impl Rng {
+    fn f(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    fn v(&mut self) -> Vec3 {
+        Vec3::new(self.f(), self.f(), self.f())
+    }
+}
+
+fn tri_aabbs(tris: &[[Vec3; 3]]) -> Vec<Aabb> {
+    tris.iter().map(|t| Aabb { min: t[0].min(t[1]).min(t[2]), max: t[0].max(t[1]).max(t[2]) }).collect()
+}
+
+fn soup(n: usize, seed: u64) -> Vec<[Vec3; 3]> {
+    let mut r = Rng(seed);
+    (0..n)
+        .map(|_| {
+            let c = r.v() * 100.0;
+            [c + r.v() * 4.0 - 2.0, c + r.v() * 4.0 - 2.0, c + r.v() * 4.0 - 2.0]
+        })
+        .collect()
+}
+
+/// `n` x `n` quads over [0, size]^2 in XZ, heights with some noise.
+fn noisy_grid(n: usize, size: f32, seed: u64) -> Vec<[Vec3; 3]> {
+    let mut r = Rng(seed);
+    let h: Vec<f32> = (0..(n + 1) * (n + 1)).map(|_| r.f() * 0.3 * size / n as f32).collect();
+    let p = |i: usize, j: usize| {
+        Vec3::new(i as f32 * size / n as f32, h[i * (n + 1) + j], j as f32 * size / n as f32)
+    };
+    let mut tris = Vec::with_capacity(2 * n * n);
+    for i in 0..n {
+        for j in 0..n {
+            tris.push([p(i, j), p(i + 1, j), p(i + 1, j + 1)]);
+            tris.push([p(i, j), p(i + 1, j + 1), p(i, j + 1)]);
+        }
+    }
+    tris
+}
+
+fn check(aabbs: &[Aabb]) -> Bvh {
+    let bvh = Bvh::build(aabbs);
+    bvh.validate(aabbs).unwrap();
+    for (i, n) in bvh.nodes.iter().enumerate() {
+        if n.count == 0 {
+            assert!(n.left_or_first as usize > i, "children after parents");
+        } else {
+            assert!(n.count as usize <= MAX_LEAF);
+        }
+    }
+    assert!(bvh.depth() <= MAX_DEPTH);
+    bvh
+}
+
+#[test]
+fn layout_matches_the_shader() {
+    assert_eq!(std::mem::size_of::<BvhNode>(), 32);
+    assert_eq!(std::mem::offset_of!(BvhNode, min), 0);
+    assert_eq!(std::mem::offset_of!(BvhNode, left_or_first), 12);
+    assert_eq!(std::mem::offset_of!(BvhNode, max), 16);
+    assert_eq!(std::mem::offset_of!(BvhNode, count), 28);
+}
+
+#[test]
+fn random_soups_are_valid() {
+    for (n, seed) in [(1, 1), (2, 2), (3, 3), (5, 7), (17, 4), (1000, 5), (20000, 6)] {
+        let a = tri_aabbs(&soup(n, seed));
+        let bvh = check(&a);
+        assert!(bvh.sah_cost() > 0.0);
+        if n == 1 {
+            assert_eq!(bvh.nodes.len(), 1);
+            assert_eq!((bvh.nodes[0].left_or_first, bvh.nodes[0].count), (0, 1));
+        }
+    }
+    let empty = Bvh::build(&[]);
+    assert!(empty.nodes.is_empty() && empty.prim_indices.is_empty());
+    empty.validate(&[]).unwrap();
+    assert_eq!((empty.depth(), empty.sah_cost()), (0, 0.0));
+}
+
+#[test]
+fn grid_and_sphere_are_valid() {
+    let grid = noisy_grid(64, 10.0, 9);
+    let bvh = check(&tri_aabbs(&grid));
+    eprintln!("grid: {} tris, SAH {:.2}, depth {}", grid.len(), bvh.sah_cost(), bvh.depth());
+    let p = uv_sphere(1.0, 64, 32);
+    let a = triangle_aabbs(&p.vertices, &p.indices);
+    let bvh = check(&a);
+    eprintln!("sphere: {} tris, SAH {:.2}, depth {}", a.len(), bvh.sah_cost(), bvh.depth());
+}
+
+#[test]
+fn degenerate_inputs_still_build() {
+    // All identical triangles (coincident centroids).
+    let t = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    for n in [1, 2, 3, 4, 5, 8, 1000] {
+        let bvh = check(&tri_aabbs(&vec![t; n]));
+        assert!(bvh.depth() <= levels_needed(n) + 1);
+    }
+    // Identical point boxes.
+    let b = Aabb { min: Vec3::ONE, max: Vec3::ONE };
+    let bvh = check(&vec![b; 1000]);
+    assert_eq!(bvh.sah_cost(), 0.0);
+    // Zero-area triangles: collinear and single points, on a line.
+    let tris: Vec<[Vec3; 3]> = (0..500)
+        .map(|i| {
+            let p = Vec3::splat(i as f32 * 0.01);
+            if i % 2 == 0 {
+                [p, p + Vec3::X, p + 2.0 * Vec3::X]
+            } else {
+                [p, p, p]
+            }
+        })
+        .collect();
+    check(&tri_aabbs(&tris));
+    // Two triangles; one and two at the same place.
+    check(&tri_aabbs(&[t, [Vec3::Z, Vec3::Z + Vec3::X, Vec3::Z + Vec3::Y]]));
+    check(&tri_aabbs(&[t, t]));
+    // Empty boxes mixed in (an instance of an empty primitive).
+    let mut a = tri_aabbs(&soup(50, 3));
+    a.extend([Aabb::EMPTY; 7]);
+    check(&a);
+}
+
+#[test]
+fn depth_is_bounded_on_skewed_input() {
+    // Exponentially spaced primitives: SAH alone peels off few at a time.
+    let a: Vec<Aabb> = (0..5000)
+        .map(|i| {
+            let x = 1.002f32.powi(i);
+            Aabb { min: Vec3::new(x, 0.0, 0.0), max: Vec3::new(x * 1.001, 1.0, 1.0) }
+        })
+        .collect();
+    let bvh = check(&a);
+    eprintln!("skewed: depth {}", bvh.depth());
+}
+
+#[test]
+fn levels_put_children_before_parents() {
+    let p = uv_sphere(1.0, 24, 12);
+    let bvh = check(&tri_aabbs(&triangle_positions(&p.vertices, &p.indices)));
+    let (order, levels) = bvh.levels();
+    assert_eq!(levels.len(), bvh.depth() + 1);
+    assert_eq!(order.len(), bvh.nodes.len());
+    assert_eq!(*order.last().unwrap(), 0, "the root is the last level");
+    let mut rank = vec![usize::MAX; bvh.nodes.len()];
+    for (r, &n) in order.iter().enumerate() {
+        assert_eq!(rank[n as usize], usize::MAX, "node {n} listed twice");
+        rank[n as usize] = r;
+    }
+    for (i, n) in bvh.nodes.iter().enumerate().filter(|(_, n)| n.count == 0) {
+        let c = n.left_or_first as usize;
+        assert!(rank[c] < rank[i] && rank[c + 1] < rank[i], "node {i} comes before its children");
+    }
+}
+
+#[test]
+fn refit_matches_a_fresh_build() {
+    let p = uv_sphere(1.0, 48, 24);
+    let mut tris = triangle_positions(&p.vertices, &p.indices);
+    let mut bvh = check(&tri_aabbs(&tris));
+    // Move every vertex (a wobble plus a shift), then refit.
+    let mut r = Rng(77);
+    for t in &mut tris {
+        for v in t.iter_mut() {
+            *v = *v * (1.0 + 0.3 * v.y.sin()) + Vec3::new(2.0, 0.5, -1.0);
+        }
+        t[0] += (r.v() - 0.5) * 0.05;
+    }
+    let moved = tri_aabbs(&tris);
+    bvh.refit(&moved);
+    bvh.validate(&moved).unwrap();
+    let fresh = check(&moved);
+    let center = Vec3::new(2.0, 0.5, -1.0);
+    let mut hits = 0;
+    for _ in 0..2000 {
+        let o = center + (r.v() - 0.5) * 8.0;
+        let d = center + (r.v() - 0.5) * 1.5 - o;
+        let a = traverse_closest(&bvh, &tris, o, d, f32::INFINITY);
+        let b = traverse_closest(&fresh, &tris, o, d, f32::INFINITY);
+        assert_eq!(a.map(|h| (h.0, h.1)), b.map(|h| (h.0, h.1)), "ray {o} {d}");
+        hits += a.is_some() as usize;
+    }
+    assert!(hits > 1000, "{hits} hits");
+}
+
+/// ~1M triangles: build time and quality (release-like numbers need
+/// the dev profile's opt-level; see the eprintln).
+#[test]
+fn million_triangles_build_fast() {
+    let tris = noisy_grid(707, 100.0, 42);
+    let a = tri_aabbs(&tris);
+    let t0 = Instant::now();
+    let bvh = Bvh::build(&a);
+    let s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let mut refitted = bvh.clone();
+    refitted.refit(&a);
+    let refit_s = t1.elapsed().as_secs_f64();
+    assert_eq!(refitted.nodes, bvh.nodes);
+    bvh.validate(&a).unwrap();
+    eprintln!(
+        "1M grid: {} tris in {:.3} s ({:.2} Mtri/s), {} nodes, SAH {:.2}, depth {}, refit {:.3} s",
+        a.len(),
+        s,
+        a.len() as f64 / s / 1e6,
+        bvh.nodes.len(),
+        bvh.sah_cost(),
+        bvh.depth(),
+        refit_s
+    );
+    let p = uv_sphere(1.0, 1000, 500);
+    let a = triangle_aabbs(&p.vertices, &p.indices);
+    let t0 = Instant::now();
+    let bvh = Bvh::build(&a);
+    let s = t0.elapsed().as_secs_f64();
+    bvh.validate(&a).unwrap();
+    eprintln!(
+        "1M sphere: {} tris in {:.3} s ({:.2} Mtri/s), SAH {:.2}, depth {}",
+        a.len(),
+        s,
+        a.len() as f64 / s / 1e6,
+        bvh.sah_cost(),
+        bvh.depth()
+    );
+}
+
+#[test]
+fn sponza_builds_per_primitive_and_top_level() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/assets/scenes/SponzaCapsaicin/Sponza.gltf");
+    if !std::path::Path::new(path).exists() {
+        eprintln!("skipping: {path} not found");
+        return;
+    }
+    let t0 = Instant::now();
+    let scene = Scene::load(std::path::Path::new(path)).unwrap();
+    let load_s = t0.elapsed().as_secs_f64();
+    let (mut tris, mut secs, mut weighted_sah, mut depth, mut largest, mut blases) =
+        (0usize, 0.0f64, 0.0f64, 0, 0, 0);
+    for mesh in &scene.meshes {
+        for p in &mesh.primitives {
+            if p.indices.len() < 3 {
+                continue;
+            }
+            let a = triangle_aabbs(&p.vertices, &p.indices);
+            let t = Instant::now();
+            let bvh = Bvh::build(&a);
+            secs += t.elapsed().as_secs_f64();
+            bvh.validate(&a).unwrap();
+            tris += a.len();
+            largest = largest.max(a.len());
+            weighted_sah += bvh.sah_cost() as f64 * a.len() as f64;
+            depth = depth.max(bvh.depth());
+            blases += 1;
+        }
+    }
+    let inst = instance_aabbs(&scene);
+    let tlas = Bvh::build(&inst);
+    tlas.validate(&inst).unwrap();
+    assert!(tris > 100_000);
+    eprintln!(
+        "Sponza: loaded in {load_s:.2} s; {blases} BLASes, {tris} tris (largest {largest}; {} instanced) \
+             in {secs:.3} s ({:.2} Mtri/s), triangle-weighted SAH {:.2}, max depth {depth}; \
+             top level over {} instances: SAH {:.2}, depth {}",
+        scene.triangle_count(),
+        tris as f64 / secs / 1e6,
+        weighted_sah / tris as f64,
+        inst.len(),
+        tlas.sah_cost(),
+        tlas.depth()
+    );
+}

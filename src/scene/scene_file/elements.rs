@@ -1,0 +1,175 @@
+//! Conversion of single definitions: lights, materials, object transforms,
+//! procedural primitives, and the HDR environment map.
+
+use std::path::Path;
+
+use anyhow::{bail, ensure, Context, Result};
+use glam::{EulerRot, Quat, Vec3};
+
+use super::checks::{finite3, non_negative, non_negative3, unit, unit_interval};
+use super::schema::{LightDef, LightType, MaterialDef, ObjectDef, PrimitiveKind, Scalar3, Size};
+use crate::scene::{primitives, AlphaMode, HdrImage, Light, LightKind, Material, Primitive, Transform};
+
+pub(super) fn light_from_def(l: LightDef, kind: LightType, name: String) -> Result<Light> {
+    let color = non_negative3(l.color.unwrap_or([1.0; 3]), "color")?;
+    let intensity = non_negative(l.intensity.unwrap_or(1.0), "intensity")?;
+    let position = l.position.map(|p| finite3(p, "position")).transpose()?;
+    let aim = match (l.direction, l.target) {
+        (Some(_), Some(_)) => bail!("set either `direction` or `target`, not both"),
+        (Some(d), None) => Some(unit(d, "direction")?),
+        (None, Some(t)) => {
+            let from = position.context("`target` needs a `position`")?;
+            Some(unit((finite3(t, "target")? - from).to_array(), "target - position")?)
+        }
+        (None, None) => None,
+    };
+    if let Some(r) = l.range {
+        ensure!(r > 0.0 && r.is_finite(), "range must be positive");
+    }
+    let has_cones = l.inner_cone_deg.is_some() || l.outer_cone_deg.is_some();
+    ensure!(kind == LightType::Spot || !has_cones, "cone angles only apply to spot lights");
+    let (kind, position, direction) = match kind {
+        LightType::Directional => {
+            ensure!(position.is_none(), "a directional light has no position");
+            (LightKind::Directional, Vec3::ZERO, aim.context("a directional light needs `direction`")?)
+        }
+        LightType::Point => {
+            ensure!(aim.is_none(), "a point light has no direction");
+            (LightKind::Point, position.context("a point light needs `position`")?, Vec3::NEG_Y)
+        }
+        LightType::Spot => {
+            // KHR_lights_punctual defaults: inner 0, outer 45 degrees.
+            let inner = l.inner_cone_deg.unwrap_or(0.0);
+            let outer = l.outer_cone_deg.unwrap_or(45.0);
+            ensure!(
+                (0.0..outer).contains(&inner) && outer <= 90.0,
+                "cone angles need 0 <= inner_cone_deg < outer_cone_deg <= 90"
+            );
+            let kind = LightKind::Spot { inner_cone: inner.to_radians(), outer_cone: outer.to_radians() };
+            let position = position.context("a spot light needs `position`")?;
+            (kind, position, aim.context("a spot light needs `direction` or `target`")?)
+        }
+    };
+    Ok(Light {
+        name,
+        kind,
+        color,
+        intensity,
+        position,
+        direction,
+        range: l.range,
+        casts_shadows: l.casts_shadows.unwrap_or(true),
+        node: None,
+    })
+}
+
+pub(super) fn material_from_def(m: MaterialDef) -> Result<Material> {
+    let mut base_color = [1.0; 4];
+    if let Some(c) = &m.base_color {
+        ensure!(c.len() == 3 || c.len() == 4, "base_color needs 3 or 4 components, got {}", c.len());
+        ensure!(m.opacity.is_none() || c.len() == 3, "set the alpha either in base_color or as opacity");
+        for (dst, &v) in base_color.iter_mut().zip(c) {
+            *dst = non_negative(v, "base_color")?;
+        }
+    }
+    if let Some(o) = m.opacity {
+        base_color[3] = o;
+    }
+    ensure!(base_color[3] <= 1.0, "opacity must be within [0, 1]");
+    let emissive = non_negative3(m.emissive.unwrap_or([0.0; 3]), "emissive")?;
+    let strength = non_negative(m.emissive_strength.unwrap_or(1.0), "emissive_strength")?;
+    let ior = m.ior.unwrap_or(1.5);
+    ensure!(ior >= 1.0 && ior.is_finite(), "ior must be at least 1");
+    Ok(Material {
+        name: m.name.get_ref().clone(),
+        base_color,
+        metallic: unit_interval(m.metallic.unwrap_or(0.0), "metallic")?,
+        roughness: unit_interval(m.roughness.unwrap_or(0.5), "roughness")?,
+        emissive: (emissive * strength).to_array(),
+        alpha_mode: if base_color[3] < 1.0 { AlphaMode::Blend } else { AlphaMode::Opaque },
+        double_sided: m.double_sided.unwrap_or(false),
+        transmission: unit_interval(m.transmission.unwrap_or(0.0), "transmission")?,
+        ior,
+        casts_shadows: m.casts_shadows.unwrap_or(true),
+        ..Material::default()
+    })
+}
+
+/// Translation, then rotation (X, then Y, then Z about the world axes, as
+/// Blender's "XYZ Euler"), then scale: the usual TRS.
+pub(super) fn object_transform(o: &ObjectDef) -> Result<Transform> {
+    let translation = finite3(o.translation.unwrap_or([0.0; 3]), "translation")?;
+    let [x, y, z] =
+        finite3(o.rotation_deg.unwrap_or([0.0; 3]), "rotation_deg")?.to_array().map(f32::to_radians);
+    let scale = match o.scale.unwrap_or(Scalar3::Uniform(1.0)) {
+        Scalar3::Uniform(s) => Vec3::splat(s),
+        Scalar3::PerAxis(s) => Vec3::from(s),
+    };
+    ensure!(scale.is_finite() && scale.cmpne(Vec3::ZERO).all(), "scale must be finite and non-zero");
+    Ok(Transform { translation, rotation: Quat::from_euler(EulerRot::ZYX, z, y, x), scale })
+}
+
+pub(super) fn check_no_shape_parameters(o: &ObjectDef, what: &str) -> Result<()> {
+    let set = [
+        ("size", o.size.is_some()),
+        ("radius", o.radius.is_some()),
+        ("slices", o.slices.is_some()),
+        ("stacks", o.stacks.is_some()),
+    ];
+    if let Some((key, _)) = set.iter().find(|(_, s)| *s) {
+        bail!("`{key}` only applies to primitives; scale {what} with `scale`");
+    }
+    Ok(())
+}
+
+pub(super) fn procedural(o: &ObjectDef, kind: PrimitiveKind) -> Result<Primitive> {
+    let sphere_only = o.radius.is_some() || o.slices.is_some() || o.stacks.is_some();
+    ensure!(
+        kind == PrimitiveKind::Sphere || !sphere_only,
+        "`radius`, `slices` and `stacks` only apply to spheres"
+    );
+    let positive = |v: f32, what: &str| {
+        ensure!(v > 0.0 && v.is_finite(), "{what} must be positive");
+        Ok(v)
+    };
+    Ok(match kind {
+        PrimitiveKind::Plane => {
+            let [x, z] = match o.size.unwrap_or(Size::Xz([10.0, 10.0])) {
+                Size::Uniform(s) => [s, s],
+                Size::Xz(xz) => xz,
+            };
+            primitives::plane(positive(x, "size")?, positive(z, "size")?)
+        }
+        PrimitiveKind::Cube => match o.size.unwrap_or(Size::Uniform(1.0)) {
+            Size::Uniform(s) => primitives::cube(positive(s, "size")?),
+            Size::Xz(_) => bail!("a cube's `size` is one number (use `scale` for boxes)"),
+        },
+        PrimitiveKind::Sphere => {
+            ensure!(o.size.is_none(), "a sphere takes `radius`, not `size`");
+            let (slices, stacks) = (o.slices.unwrap_or(64), o.stacks.unwrap_or(32));
+            ensure!(slices >= 3 && stacks >= 2, "a sphere needs slices >= 3 and stacks >= 2");
+            primitives::uv_sphere(positive(o.radius.unwrap_or(0.5), "radius")?, slices, stacks)
+        }
+    })
+}
+
+/// Equirectangular Radiance HDR; non-finite and negative texels (which would
+/// poison importance sampling) become 0.
+pub(super) fn load_hdr(path: &Path) -> Result<HdrImage> {
+    let image = image::open(path)
+        .with_context(|| format!("cannot load environment map '{}'", path.display()))?
+        .into_rgb32f();
+    let (width, height) = image.dimensions();
+    let mut rgb = image.into_raw();
+    let mut bad = 0usize;
+    for v in &mut rgb {
+        if !v.is_finite() || *v < 0.0 {
+            *v = 0.0;
+            bad += 1;
+        }
+    }
+    if bad > 0 {
+        log::warn!("{}: {bad} non-finite or negative values set to 0", path.display());
+    }
+    Ok(HdrImage { width, height, rgb })
+}
