@@ -13,7 +13,7 @@ what=${2:-all}
 out=bench/results
 mkdir -p "$out"
 cargo build --locked
-bin=./target/debug/hybrid-rt
+bin=${CARGO_TARGET_DIR:-target}/debug/hybrid-rt
 header() { echo "# $label, $(date -u +%Y-%m-%d), $($bin info | head -3 | tr '\n' ' ')"; echo; }
 
 frame_tables() {
@@ -26,6 +26,9 @@ frame_tables() {
     --frames 5 --warmup 1 --compare-backends
   echo "## Ray backends side by side, default scene, 320x180 (hybrid)"
   $bin --log warn bench --width 320 --height 180 --frames 10 --warmup 2 --compare-backends
+  echo "## Every backend in both modes, armadillo in glass, 320x180 (per-pass GPU ms by stage)"
+  $bin --log warn bench --scene assets/armadillo_glass.toml --width 320 --height 180 \
+    --frames 3 --warmup 1 --compare-backends --compare-modes
 }
 
 animation_tables() {

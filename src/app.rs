@@ -243,19 +243,24 @@ impl BenchReport {
         let [camera, shadow, secondary] = self.rays_first_frame;
         let total = (camera + shadow + secondary) as f64;
         if total > 0.0 {
-            // Rays of the first frame over the median time of the pass that
-            // traces them (it also shades, so this is a lower bound).
-            let trace_ms =
-                self.passes.iter().find(|p| p.name == "shade+trace" || p.name == "rt").map(|p| p.median);
+            // Rays of the first frame over the median times of the passes
+            // that trace them (they also shade, so this is a lower bound).
+            let traced: Vec<&PassStats> =
+                self.passes.iter().filter(|p| TRACING_PASSES.contains(&p.name)).collect();
+            let trace_ms: f64 = traced.iter().map(|p| p.median).sum();
             s.push_str(&format!("rays/frame: camera {camera}, shadow {shadow}, secondary {secondary}"));
-            if let Some(ms) = trace_ms {
-                s.push_str(&format!(" -> {:.2} Mrays/s in the tracing pass", total / (ms * 1e3)));
+            if !traced.is_empty() {
+                let names: Vec<_> = traced.iter().map(|p| p.name).collect();
+                s.push_str(&format!(" -> {:.2} Mrays/s in {}", total / (trace_ms * 1e3), names.join(" + ")));
             }
             s.push('\n');
         }
         s
     }
 }
+
+/// The passes that may trace rays (camera, shadow, reflection/refraction).
+const TRACING_PASSES: [&str; 3] = ["primary", "direct", "specular"];
 
 fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
     v.sort_by(|a, b| a.total_cmp(b));
