@@ -461,7 +461,7 @@ impl SceneAccel {
             (build, vk::AccessFlags2::SHADER_READ),
         );
         unsafe { loader.cmd_build_acceleration_structures(cmd, &[info], &[&range]) };
-        // The shading passes of later submissions trace against it.
+        // The tracing passes (this frame's or later submissions') read it.
         let mut tracers = vk::PipelineStageFlags2::COMPUTE_SHADER;
         if ctx.rt.ray_tracing_pipeline {
             tracers |= vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;

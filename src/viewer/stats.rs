@@ -30,7 +30,7 @@ impl Summary {
         self.passes.iter().map(|(_, ms)| ms).sum()
     }
 
-    /// "12.3 fps (81.3 ms) | GPU 7.20 ms: gbuffer 1.00, lighting 5.00, ..."
+    /// "12.3 fps (81.3 ms) | GPU 7.20 ms: gbuffer 1.00, direct 5.00, ..."
     pub fn line(&self) -> String {
         let mut s = format!("{:.1} fps ({:.1} ms)", self.fps, self.frame_ms);
         if !self.passes.is_empty() {
