@@ -1,0 +1,342 @@
+//! The per-frame loop: pacing between events (`about_to_wait`), one frame
+//! from fence wait to present (`frame`), its command recording with the
+//! present blit (`record`), the `--frames` end condition, GPU pass times and
+//! screenshot readback.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context as _, Result};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use winit::event_loop::{ActiveEventLoop, ControlFlow};
+
+use super::session::Viewer;
+use super::swapchain::Acquired;
+use super::{Flow, FRAMES_IN_FLIGHT};
+use crate::render::frame::{Access, Use};
+use crate::render::passes::tonemap::LDR;
+use crate::render::FrameOutput;
+use crate::vk::{image_barrier, memory_barrier, Buffer};
+
+pub(super) struct FrameSlot {
+    pub(super) cmd: vk::CommandBuffer,
+    pub(super) fence: vk::Fence,
+    pub(super) image_available: vk::Semaphore,
+}
+
+/// A frame copied to a host buffer, written to PNG once its fence is done.
+pub(super) struct PendingShot {
+    pub(super) buffer: Buffer,
+    pub(super) extent: vk::Extent2D,
+    pub(super) path: PathBuf,
+}
+
+impl Viewer {
+    pub(super) fn about_to_wait(&mut self, el: &ActiveEventLoop) -> Result<Flow> {
+        if let Some(t) = &mut self.resize_test {
+            t.tick(&self.window, self.presented, self.presenter.extent, self.paused);
+        }
+        if self.paused {
+            // Not every window system sends a resize when a window is
+            // restored: look at the surface again now and then.
+            el.set_control_flow(ControlFlow::wait_duration(Duration::from_millis(50)));
+            if self.needs_recreate || self.last_recreate_try.elapsed() >= Duration::from_millis(50) {
+                self.recreate()?;
+            }
+            if self.paused {
+                return Ok(Flow::Continue);
+            }
+        }
+        el.set_control_flow(ControlFlow::Poll);
+        self.window.request_redraw();
+        Ok(Flow::Continue)
+    }
+
+    /// Reads the GPU pass times of the last submitted frame (its fence is done).
+    fn collect_gpu_times(&mut self) -> Result<()> {
+        if std::mem::take(&mut self.gpu_pending) {
+            let mut t = self.renderer.timer.results(&self.ctx)?;
+            // The scene update (skinning, refit, TLAS) of the frame, when it had one.
+            if self.animation.as_ref().is_some_and(|(_, _, paused)| !paused) {
+                t.extend(self.renderer.update_timings.iter().copied());
+            }
+            self.stats.gpu(&t);
+        }
+        Ok(())
+    }
+
+    /// Writes a pending screenshot; its frame has completed.
+    pub(super) fn finish_screenshot(&mut self) -> Result<()> {
+        let Some(mut shot) = self.shot.take() else { return Ok(()) };
+        let r = (|| {
+            let frame = FrameOutput {
+                width: shot.extent.width,
+                height: shot.extent.height,
+                ldr: shot.buffer.read()?.to_vec(),
+                hdr: Vec::new(),
+                timings: Vec::new(),
+                ray_counts: [0; 3],
+            };
+            frame.save_png(&shot.path)
+        })();
+        shot.buffer.destroy(&self.ctx);
+        r?;
+        self.shots_taken += 1;
+        log::info!(
+            "screenshot: wrote {} ({}x{})",
+            shot.path.display(),
+            shot.extent.width,
+            shot.extent.height
+        );
+        Ok(())
+    }
+
+    /// Whether this frame is the last of `--frames`; errors when the window
+    /// never gets back to the requested size.
+    fn is_final_frame(&mut self) -> Result<bool> {
+        let Some(n) = self.frames else { return Ok(false) };
+        if self.presented + 1 < n {
+            return Ok(false);
+        }
+        let test_busy = self.resize_test.as_ref().is_some_and(|t| !t.done());
+        let size_ok = self.presenter.extent == self.requested;
+        if !test_busy && size_ok {
+            return Ok(true);
+        }
+        let since = *self.final_wait.get_or_insert_with(|| {
+            log::info!(
+                "frame {n} reached; waiting for {} before the last frame",
+                if test_busy {
+                    "the resize test to finish"
+                } else {
+                    "the window to return to its requested size"
+                }
+            );
+            Instant::now()
+        });
+        if since.elapsed() > Duration::from_secs(20) {
+            let e = self.presenter.extent;
+            bail!(
+                "the window stayed at {}x{} instead of the requested {}x{} for 20 s; no final frame",
+                e.width,
+                e.height,
+                self.requested.width,
+                self.requested.height
+            );
+        }
+        Ok(false)
+    }
+
+    pub(super) fn frame(&mut self) -> Result<Flow> {
+        if self.needs_recreate || !self.presenter.has_swapchain() {
+            self.recreate()?;
+        }
+        if self.paused {
+            return Ok(Flow::Continue);
+        }
+        let now = Instant::now();
+        let dt = now.duration_since(self.last_frame).as_secs_f32();
+        self.last_frame = now;
+        let dev = &self.ctx.device;
+        let s = self.slot;
+        let FrameSlot { cmd, fence, image_available } = self.slots[s];
+        // This slot's previous frame (two ago) must be done with its command
+        // buffer and image-available semaphore.
+        unsafe { dev.wait_for_fences(&[fence], true, u64::MAX) }
+            .context("waiting for a frame (device lost?)")?;
+        let index = match self.presenter.acquire(image_available)? {
+            Acquired::OutOfDate => {
+                self.needs_recreate = true;
+                return Ok(Flow::Continue);
+            }
+            Acquired::Image { index, suboptimal } => {
+                self.needs_recreate |= suboptimal;
+                index
+            }
+        };
+        // One set of targets and frame uniforms in the renderer: the previous
+        // frame must finish before `prepare` rewrites them (and before its
+        // timestamps are read).
+        let prev = self.slots[(s + FRAMES_IN_FLIGHT - 1) % FRAMES_IN_FLIGHT].fence;
+        unsafe { dev.wait_for_fences(&[prev], true, u64::MAX) }
+            .context("waiting for a frame (device lost?)")?;
+        self.renderer.finish_scene_update(&self.ctx)?;
+        self.collect_gpu_times()?;
+        self.finish_screenshot()?;
+
+        self.controller.update(dt);
+        if let Some((i, clock, paused)) = &mut self.animation {
+            if !*paused {
+                // Wall-clock playback unless a fixed step was asked for (the
+                // first frame shows the start time).
+                *clock += match self.fixed_fps {
+                    Some(fps) if self.presented > 0 => 1.0 / fps,
+                    Some(_) => 0.0,
+                    None => dt,
+                };
+                self.scene_dirty = true;
+            }
+            if self.scene_dirty {
+                self.scene.animate(*i, *clock);
+            }
+        }
+        let camera = self.controller.camera();
+        self.renderer.prepare(&self.ctx, &self.scene, &camera, &self.settings)?;
+        // The scene update (skinning, refit, top level) goes into this
+        // frame's command buffer, for every backend: no wait for it here.
+        let update_in_frame = std::mem::take(&mut self.scene_dirty);
+
+        let last = self.is_final_frame()?;
+        let shot_path =
+            (if last { self.screenshot.clone() } else { None }).or_else(|| self.shot_request.take());
+        let shot_buffer = match &shot_path {
+            Some(_) => {
+                let e = self.renderer.extent();
+                Some(Buffer::new(
+                    &self.ctx,
+                    "screenshot readback",
+                    e.width as u64 * e.height as u64 * 4,
+                    vk::BufferUsageFlags::TRANSFER_DST,
+                    MemoryLocation::GpuToCpu,
+                )?)
+            }
+            None => None,
+        };
+        let recorded = self.record(cmd, index, update_in_frame, shot_buffer.as_ref());
+        if let (Some(buffer), Some(path)) = (shot_buffer, shot_path) {
+            self.shot = Some(PendingShot { buffer, extent: self.renderer.extent(), path });
+        }
+        recorded?;
+
+        let dev = &self.ctx.device;
+        unsafe { dev.reset_fences(&[fence]) }?;
+        let waits = [vk::SemaphoreSubmitInfo::default()
+            .semaphore(image_available)
+            .stage_mask(vk::PipelineStageFlags2::BLIT)];
+        let signals = [vk::SemaphoreSubmitInfo::default()
+            .semaphore(self.presenter.render_finished[index as usize])
+            .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+        let submit = vk::SubmitInfo2::default()
+            .wait_semaphore_infos(&waits)
+            .command_buffer_infos(&cmds)
+            .signal_semaphore_infos(&signals);
+        unsafe { dev.queue_submit2(self.ctx.queue, &[submit], fence) }
+            .context("vkQueueSubmit2 (device lost?)")?;
+        self.gpu_pending = true;
+        self.needs_recreate |= self.presenter.present(self.ctx.queue, index)?;
+        self.presented += 1;
+        self.slot = (s + 1) % FRAMES_IN_FLIGHT;
+        self.stats.frame_presented();
+
+        let tick = self.stats.tick(Instant::now());
+        if tick.title.is_some() {
+            self.window.set_title(&self.title());
+        }
+        if let Some(line) = tick.log {
+            log::info!("{line}");
+        }
+        if last {
+            unsafe { self.ctx.device.device_wait_idle() }.context("vkDeviceWaitIdle")?;
+            self.renderer.finish_scene_update(&self.ctx)?;
+            self.collect_gpu_times()?;
+            self.finish_screenshot()?;
+            return Ok(Flow::Exit);
+        }
+        Ok(Flow::Continue)
+    }
+
+    /// The frame's commands: the scene update when `update`, the renderer's
+    /// passes, then the blit of the tone-mapped image into swapchain image
+    /// `index` (and a readback copy for a screenshot), ending in PRESENT_SRC.
+    fn record(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        index: u32,
+        update: bool,
+        shot: Option<&Buffer>,
+    ) -> Result<()> {
+        let ctx = &self.ctx;
+        ctx.begin_commands(cmd)?;
+        if update {
+            self.renderer.record_scene_update(ctx, cmd, &self.scene)?;
+        }
+        let image = self.presenter.images[index as usize];
+        let dst = self.presenter.extent;
+        let uses = [Use::image(&LDR, Access::TransferRead)];
+        self.renderer.record_with(ctx, cmd, |rec, t| {
+            let ldr = t.get(&LDR).context("no tone-mapped output")?;
+            rec.pass("present blit", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
+                let src = t.extent;
+                // The swapchain image is outside the frame's targets: its
+                // barriers are written here. Waits for the image-available
+                // semaphore (its wait stage is BLIT).
+                image_barrier(
+                    ctx,
+                    cmd,
+                    image,
+                    vk::ImageAspectFlags::COLOR,
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::NONE),
+                    (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::TRANSFER_WRITE),
+                );
+                let layers = vk::ImageSubresourceLayers::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .layer_count(1);
+                let corner = |e: vk::Extent2D| vk::Offset3D { x: e.width as i32, y: e.height as i32, z: 1 };
+                let region = [vk::ImageBlit::default()
+                    .src_subresource(layers)
+                    .src_offsets([vk::Offset3D::default(), corner(src)])
+                    .dst_subresource(layers)
+                    .dst_offsets([vk::Offset3D::default(), corner(dst)])];
+                let filter = if src == dst { vk::Filter::NEAREST } else { vk::Filter::LINEAR };
+                unsafe {
+                    ctx.device.cmd_blit_image(
+                        cmd,
+                        ldr.raw,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &region,
+                        filter,
+                    )
+                };
+                if let Some(buf) = shot {
+                    let copy = [vk::BufferImageCopy::default()
+                        .image_subresource(layers)
+                        .image_extent(vk::Extent3D { width: src.width, height: src.height, depth: 1 })];
+                    unsafe {
+                        ctx.device.cmd_copy_image_to_buffer(
+                            cmd,
+                            ldr.raw,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            buf.raw,
+                            &copy,
+                        )
+                    };
+                    memory_barrier(
+                        ctx,
+                        cmd,
+                        (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+                        (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+                    );
+                }
+                image_barrier(
+                    ctx,
+                    cmd,
+                    image,
+                    vk::ImageAspectFlags::COLOR,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::ImageLayout::PRESENT_SRC_KHR,
+                    (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::TRANSFER_WRITE),
+                    (vk::PipelineStageFlags2::BOTTOM_OF_PIPE, vk::AccessFlags2::NONE),
+                );
+                Ok(())
+            })
+        })?;
+        unsafe { ctx.device.end_command_buffer(cmd)? };
+        Ok(())
+    }
+}

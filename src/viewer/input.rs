@@ -1,0 +1,150 @@
+//! Window events and keys: camera input goes to the controller, viewer keys
+//! change the render settings (debug view, exposure, effects, mode), the
+//! animation clock or request a screenshot; the window title shows them.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::keyboard::{KeyCode, PhysicalKey};
+
+use super::camera_controller::{self, digit};
+use super::session::Viewer;
+use super::{Flow, DEBUG_VIEWS};
+use crate::render::shading::Mode;
+use crate::render::DebugView;
+
+impl Viewer {
+    pub(super) fn title(&self) -> String {
+        let e = self.presenter.extent;
+        let mut t = format!("hybrid-rt - {} - {}x{}", self.scene_name, e.width, e.height);
+        if self.settings.debug_view != DebugView::None {
+            t.push_str(&format!(" - {:?} view", self.settings.debug_view).to_lowercase());
+        }
+        if self.controller.mode() == camera_controller::Mode::Orbit {
+            t.push_str(" - orbit");
+        }
+        if let Some(s) = &self.stats.last {
+            t.push_str(&format!(" - {}", s.line()));
+        }
+        t
+    }
+
+    pub(super) fn window_event(&mut self, event: WindowEvent) -> Result<Flow> {
+        match event {
+            WindowEvent::CloseRequested => return Ok(Flow::Exit),
+            WindowEvent::Resized(_) => self.needs_recreate = true,
+            WindowEvent::RedrawRequested => return self.frame(),
+            WindowEvent::Focused(false) => self.controller.release_all(),
+            WindowEvent::ModifiersChanged(m) => self.modifiers = m.state(),
+            WindowEvent::KeyboardInput { event, .. } => {
+                let PhysicalKey::Code(code) = event.physical_key else { return Ok(Flow::Continue) };
+                if event.repeat {
+                    return Ok(Flow::Continue);
+                }
+                let pressed = event.state == ElementState::Pressed;
+                if self.controller.key(code, pressed, self.modifiers.control_key()) || !pressed {
+                    return Ok(Flow::Continue);
+                }
+                return Ok(self.key(code));
+            }
+            WindowEvent::MouseInput { state, button: MouseButton::Left | MouseButton::Right, .. } => {
+                self.controller.mouse_button(state == ElementState::Pressed)
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                if let Some((x, y)) = self.cursor {
+                    self.controller.mouse_motion((position.x - x) as f32, (position.y - y) as f32);
+                }
+                self.cursor = Some((position.x, position.y));
+            }
+            WindowEvent::CursorLeft { .. } => self.cursor = None,
+            WindowEvent::MouseWheel { delta, .. } => match delta {
+                MouseScrollDelta::LineDelta(_, y) => self.controller.scroll(y),
+                MouseScrollDelta::PixelDelta(p) => self.controller.scroll(p.y as f32 / 40.0),
+            },
+            _ => {}
+        }
+        Ok(Flow::Continue)
+    }
+
+    /// Viewer keys (the camera's are handled by the controller).
+    fn key(&mut self, code: KeyCode) -> Flow {
+        match code {
+            KeyCode::Escape => return Flow::Exit,
+            KeyCode::F12 | KeyCode::KeyP => {
+                let path = match &self.screenshot {
+                    Some(p) if self.frames.is_none() => p.clone(),
+                    _ => {
+                        let secs = std::time::SystemTime::now()
+                            .duration_since(std::time::UNIX_EPOCH)
+                            .map(|d| d.as_secs())
+                            .unwrap_or(0);
+                        PathBuf::from(format!("out/screenshot-{secs}-{}.png", self.shots_taken))
+                    }
+                };
+                self.shot_request = Some(path);
+            }
+            KeyCode::KeyV => {
+                let i = DEBUG_VIEWS.iter().position(|v| *v == self.settings.debug_view).unwrap_or(0);
+                self.set_debug_view(DEBUG_VIEWS[(i + 1) % DEBUG_VIEWS.len()]);
+            }
+            KeyCode::Minus | KeyCode::NumpadSubtract => {
+                self.set_exposure(self.settings.exposure / 2f32.sqrt())
+            }
+            KeyCode::Equal | KeyCode::NumpadAdd => self.set_exposure(self.settings.exposure * 2f32.sqrt()),
+            KeyCode::F5 => toggle("shadows", &mut self.settings.effects.shadows),
+            KeyCode::F6 => toggle("reflections", &mut self.settings.effects.reflections),
+            KeyCode::F7 => toggle("refractions", &mut self.settings.effects.refractions),
+            KeyCode::F8 => log::info!("toggle the per-object heuristic: not available yet"),
+            KeyCode::Space | KeyCode::Comma | KeyCode::Period => {
+                if let Some((_, clock, paused)) = &mut self.animation {
+                    match code {
+                        KeyCode::Space => *paused = !*paused,
+                        // Scrub a tenth of a second (pauses playback).
+                        KeyCode::Comma => (*clock, *paused) = ((*clock - 0.1).max(0.0), true),
+                        _ => (*clock, *paused) = (*clock + 0.1, true),
+                    }
+                    self.scene_dirty = true;
+                    log::info!("animation t = {:.2} s{}", clock, if *paused { " (paused)" } else { "" });
+                }
+            }
+            KeyCode::KeyT => {
+                if self.ctx.rt.ray_query {
+                    self.settings.mode = match self.settings.mode {
+                        Mode::Hybrid => Mode::Rt,
+                        Mode::Rt => Mode::Hybrid,
+                    };
+                    log::info!("render mode: {:?}", self.settings.mode);
+                } else {
+                    log::info!("render mode rt: not available (the device has no ray query)");
+                }
+            }
+            _ => {
+                if let Some(d) = digit(code).filter(|d| (*d as usize) < DEBUG_VIEWS.len()) {
+                    let v = DEBUG_VIEWS[d as usize];
+                    // The active view's key again goes back to the lit image.
+                    self.set_debug_view(if v == self.settings.debug_view { DebugView::None } else { v });
+                }
+            }
+        }
+        Flow::Continue
+    }
+
+    fn set_debug_view(&mut self, v: DebugView) {
+        self.settings.debug_view = v;
+        log::info!("debug view: {v:?}");
+        self.window.set_title(&self.title());
+    }
+
+    fn set_exposure(&mut self, e: f32) {
+        self.settings.exposure = e.clamp(1.0 / 1024.0, 1024.0);
+        log::info!("exposure: {:.3}", self.settings.exposure);
+    }
+}
+
+/// Flips a secondary-effect switch (the shading pass is rebuilt on the next
+/// `prepare`; effects the scene does not need stay off either way).
+fn toggle(name: &str, on: &mut bool) {
+    *on = !*on;
+    log::info!("{name}: {}", if *on { "on" } else { "off" });
+}

@@ -1,0 +1,93 @@
+//! `--test-resize` automation: a scripted sequence of window resizes and a
+//! minimize/restore, used by the end-to-end viewer test.
+
+use std::time::{Duration, Instant};
+
+use ash::vk;
+use winit::dpi::PhysicalSize;
+use winit::window::Window;
+
+/// `--test-resize`: two resizes, a minimize/restore, then back to the
+/// requested size, each step after a few presented frames.
+pub(super) struct ResizeTest {
+    step: u32,
+    since: Instant,
+    since_frame: u64,
+    original: vk::Extent2D,
+    saw_pause: bool,
+}
+
+const TEST_SIZES: [(u32, u32); 2] = [(480, 270), (200, 120)];
+
+impl ResizeTest {
+    pub(super) fn new(original: vk::Extent2D) -> Self {
+        ResizeTest { step: 0, since: Instant::now(), since_frame: 0, original, saw_pause: false }
+    }
+
+    pub(super) fn done(&self) -> bool {
+        self.step >= 6
+    }
+
+    fn next(&mut self, presented: u64) {
+        self.step += 1;
+        self.since = Instant::now();
+        self.since_frame = presented;
+    }
+
+    pub(super) fn tick(&mut self, window: &Window, presented: u64, extent: vk::Extent2D, paused: bool) {
+        let frames = presented.saturating_sub(self.since_frame);
+        let waited = self.since.elapsed();
+        let at = |(w, h): (u32, u32)| extent == vk::Extent2D { width: w, height: h };
+        let request = |(w, h): (u32, u32)| {
+            log::info!("test-resize: requesting {w}x{h}");
+            let _ = window.request_inner_size(PhysicalSize::new(w, h));
+        };
+        match self.step {
+            0 if presented >= 5 => {
+                request(TEST_SIZES[0]);
+                self.next(presented);
+            }
+            1 | 2 if frames >= 5 => {
+                let size = TEST_SIZES[self.step as usize - 1];
+                if !at(size) && waited < Duration::from_secs(5) {
+                    return;
+                }
+                if !at(size) {
+                    log::warn!("test-resize: the window did not become {}x{}", size.0, size.1);
+                }
+                if self.step == 1 {
+                    request(TEST_SIZES[1]);
+                } else {
+                    log::info!("test-resize: minimizing");
+                    window.set_minimized(true);
+                }
+                self.next(presented);
+            }
+            3 => {
+                self.saw_pause |= paused;
+                if waited >= Duration::from_millis(500) {
+                    if self.saw_pause {
+                        log::info!("test-resize: minimized, rendering paused; restoring");
+                    } else {
+                        log::info!(
+                            "test-resize: the X server ignored the minimize request (no window manager?), \
+                             is_minimized = {:?}; restoring",
+                            window.is_minimized()
+                        );
+                    }
+                    window.set_minimized(false);
+                    self.next(presented);
+                }
+            }
+            4 if !paused && waited >= Duration::from_millis(300) => {
+                request((self.original.width, self.original.height));
+                self.next(presented);
+            }
+            5 if at((self.original.width, self.original.height)) && frames >= 3 => {
+                log::info!("test-resize: back at {}x{}, done", self.original.width, self.original.height);
+                self.next(presented);
+            }
+            _ => {}
+        }
+    }
+}
