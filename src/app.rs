@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context as _, Result};
+use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk as avk;
 use glam::Vec3;
 
@@ -13,14 +13,33 @@ use crate::render::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::vk::{Context, ContextOptions, DeviceSelector};
 
-/// The bundled default scene: `assets/default.toml` next to the working
-/// directory, else in the source tree the binary was built from.
-pub fn default_scene_path() -> PathBuf {
-    let local = PathBuf::from("assets/default.toml");
-    if local.exists() {
-        return local;
+/// The bundled default scene, looked for in the working directory, next to
+/// the executable (an installed copy, or `target/<profile>/` inside the
+/// source tree), and in the source tree the binary was built from.
+pub fn default_scene_path() -> Result<PathBuf> {
+    const REL: &str = "assets/default.toml";
+    let mut candidates = vec![PathBuf::from(REL)];
+    if let Some(dir) = std::env::current_exe().ok().and_then(|e| e.parent().map(Path::to_path_buf)) {
+        candidates.push(dir.join(REL));
+        candidates.push(dir.join("../..").join(REL));
     }
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/default.toml"))
+    candidates.push(PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/default.toml")));
+    let path = find_default_scene(&candidates)?;
+    log::info!("default scene {}", path.display());
+    Ok(path)
+}
+
+/// The first of `candidates` that exists; else an error listing where it
+/// looked and pointing to `--scene`.
+pub fn find_default_scene(candidates: &[PathBuf]) -> Result<PathBuf> {
+    if let Some(p) = candidates.iter().find(|p| p.is_file()) {
+        return Ok(p.clone());
+    }
+    let looked: Vec<String> = candidates.iter().map(|p| p.display().to_string()).collect();
+    bail!(
+        "the default scene assets/default.toml was not found (looked at {}); pass a scene with --scene PATH",
+        looked.join(", ")
+    )
 }
 
 /// Options shared by every command that touches the GPU.
@@ -137,31 +156,105 @@ fn load_posed(job: &RenderJob) -> Result<(Scene, Option<usize>)> {
     Ok((scene, anim))
 }
 
+/// The shading configuration for `settings`; a backend that `--no-rt`
+/// switched off is reported as such, not as missing from the device.
+pub fn resolve_shading(ctx: &Context, scene: &Scene, settings: &RenderSettings) -> Result<ShadingConfig> {
+    ShadingConfig::resolve(ctx, SceneNeeds::of(scene), settings).map_err(|e| {
+        // The capabilities say what the device has, `rt` what was enabled.
+        let disabled = match settings.backend {
+            Backend::Query => ctx.caps.ray_query && !ctx.rt.ray_query,
+            Backend::Pipeline => ctx.caps.ray_tracing_pipeline && !ctx.rt.ray_tracing_pipeline,
+            _ => false,
+        };
+        if disabled {
+            anyhow!(
+                "--backend {}: the device supports it, but the ray-tracing extensions are disabled by --no-rt \
+                 (drop --no-rt, or use --backend compute)",
+                format!("{:?}", settings.backend).to_lowercase()
+            )
+        } else {
+            e
+        }
+    })
+}
+
 pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
     let extent = job.extent()?;
     let (scene, _) = load_posed(job)?;
     let camera = job.camera.resolve(&scene)?;
+    resolve_shading(ctx, &scene, &job.settings)?;
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let out = renderer.render(ctx, &scene, &camera, &job.settings);
     renderer.destroy(ctx);
     out
 }
 
-/// `render`: one frame to PNG (and optionally linear HDR).
-pub fn render_command(gpu: &GpuOptions, job: &RenderJob, out: &Path, hdr_out: Option<&Path>) -> Result<()> {
+/// `render`: one frame to PNG (and optionally linear HDR). With `strict`,
+/// non-finite pixels fail the command (after the images are written).
+pub fn render_command(
+    gpu: &GpuOptions,
+    job: &RenderJob,
+    out: &Path,
+    hdr_out: Option<&Path>,
+    strict: bool,
+) -> Result<()> {
     let ctx = gpu.context()?;
     let frame = render_once(&ctx, job)?;
-    if !frame.all_finite() {
-        bail!("the rendered frame contains NaN or Inf radiance");
+    print_timings(&frame.timings);
+    let written = write_outputs(&frame, out, hdr_out, strict);
+    // A validation error explains a broken frame better than its pixels.
+    check_validation(&ctx)?;
+    written.map(|_| ())
+}
+
+/// Pixels whose radiance has a NaN or Inf component: how many, and the
+/// first one (x, y) in row order.
+pub fn non_finite_pixels(frame: &FrameOutput) -> (usize, Option<(u32, u32)>) {
+    let mut first = None;
+    let mut count = 0;
+    for (i, p) in frame.hdr.chunks_exact(4).enumerate() {
+        if !p.iter().all(|v| v.is_finite()) {
+            count += 1;
+            first = first.or(Some((i as u32 % frame.width, i as u32 / frame.width)));
+        }
     }
+    (count, first)
+}
+
+/// Writes the frame; non-finite pixels are logged and written marked
+/// (magenta in the PNG, 0 in the HDR) so they can be found, and fail only
+/// with `strict`. Returns the number of non-finite pixels.
+pub fn write_outputs(frame: &FrameOutput, out: &Path, hdr_out: Option<&Path>, strict: bool) -> Result<usize> {
+    let (count, first) = non_finite_pixels(frame);
+    let marked;
+    let frame = match first {
+        None => frame,
+        Some((x, y)) => {
+            log::warn!(
+                "{count} pixel(s) with NaN or Inf radiance, the first at ({x}, {y}); \
+                 written magenta in the PNG and 0 in the HDR"
+            );
+            let (mut ldr, mut hdr) = (frame.ldr.clone(), frame.hdr.clone());
+            for (l, h) in ldr.chunks_exact_mut(4).zip(hdr.chunks_exact_mut(4)) {
+                if !h.iter().all(|v| v.is_finite()) {
+                    l.copy_from_slice(&[255, 0, 255, 255]);
+                    h.copy_from_slice(&[0.0, 0.0, 0.0, 1.0]);
+                }
+            }
+            marked = FrameOutput { ldr, hdr, timings: frame.timings.clone(), ..*frame };
+            &marked
+        }
+    };
     frame.save_png(out)?;
     log::info!("wrote {} ({}x{})", out.display(), frame.width, frame.height);
     if let Some(h) = hdr_out {
         frame.save_hdr(h)?;
         log::info!("wrote {}", h.display());
     }
-    print_timings(&frame.timings);
-    check_validation(&ctx)
+    if let (true, Some((x, y))) = (strict, first) {
+        bail!("--strict: {count} pixel(s) of the rendered frame have NaN or Inf radiance, the first at ({x}, {y})");
+    }
+    Ok(count)
 }
 
 /// Fails when the validation layer reported an error during this run.
@@ -190,13 +283,35 @@ pub fn info_command(gpu: &GpuOptions) -> Result<String> {
     }
     let selected = crate::vk::device::select(&devices, &gpu.device).ok().map(|(_, c)| c.index);
     let mut s = String::new();
+    if gpu.disable_ray_tracing {
+        s.push_str("ray-tracing extensions disabled by --no-rt (what each device has is listed as is)\n");
+    }
     for (_, c) in &devices {
-        s.push_str(&c.report());
+        if gpu.disable_ray_tracing {
+            s.push_str(&mark_disabled_rt(&c.report()));
+        } else {
+            s.push_str(&c.report());
+        }
         if Some(c.index) == selected {
             s.push_str("  (selected)\n");
         }
     }
     Ok(s)
+}
+
+/// Appends "disabled by --no-rt" to the ray-tracing capabilities a device
+/// report says yes to, so `info` matches what the commands will use.
+fn mark_disabled_rt(report: &str) -> String {
+    let rt_keys = ["  acceleration structures: yes", "  ray query: yes", "  ray-tracing pipeline: yes"];
+    let mut s = String::new();
+    for line in report.lines() {
+        s.push_str(line);
+        if rt_keys.contains(&line) {
+            s.push_str(", disabled by --no-rt");
+        }
+        s.push('\n');
+    }
+    s
 }
 
 /// Per-pass statistics over a benchmark run.
@@ -310,6 +425,17 @@ pub fn bench(
     let extent = job.extent()?;
     let (mut scene, anim) = load_posed(job)?;
     let base_camera = job.camera.resolve(&scene)?;
+    // Every variant asked for must run: a skipped one would read as measured.
+    let unavailable: Vec<String> = variants
+        .iter()
+        .filter_map(|v| {
+            let settings = RenderSettings { mode: v.mode, backend: v.backend, ..job.settings };
+            resolve_shading(ctx, &scene, &settings).err().map(|e| format!("{:?} mode: {e:#}", v.mode))
+        })
+        .collect();
+    if !unavailable.is_empty() {
+        bail!("bench: not every variant asked for can run on {}: {}", ctx.caps.name, unavailable.join("; "));
+    }
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let mut reports = Vec::new();
     let result: Result<()> = (|| {
@@ -321,12 +447,6 @@ pub fn bench(
                 AccelUpdate::Rebuild | AccelUpdate::Full => RebuildPolicy::ALWAYS,
             };
             let mut counts = [0usize; 2];
-            if ShadingConfig::resolve(ctx, SceneNeeds::of(&scene), &settings).is_err() {
-                log::warn!(
-                    "bench: {mode:?} with backend {backend:?} is not available on this device, skipped"
-                );
-                continue;
-            }
             // One counted frame: the atomics would distort the timings.
             let counting =
                 RenderSettings { effects: Effects { count_rays: true, ..settings.effects }, ..settings };
@@ -511,6 +631,9 @@ pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
         .collect::<Result<_, _>>()?;
     if v.len() != 3 {
         return Err(format!("expected x,y,z, got '{s}'"));
+    }
+    if !v.iter().all(|c| c.is_finite()) {
+        return Err(format!("'{s}': coordinates must be finite"));
     }
     Ok(Vec3::new(v[0], v[1], v[2]))
 }

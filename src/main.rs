@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
-use clap::{Args, Parser, Subcommand};
+use clap::{error::ErrorKind, Args, CommandFactory, Parser, Subcommand};
 use glam::Vec3;
 
 use hybrid_rt::app::{self, AccelUpdate, CameraChoice, GpuOptions, RenderJob};
@@ -58,12 +58,17 @@ enum Command {
         /// Also write linear radiance as Radiance .hdr.
         #[arg(long)]
         hdr_out: Option<PathBuf>,
+        /// Fail (after writing) when a pixel is NaN or Inf; without it such
+        /// pixels are logged and written marked (magenta PNG, 0 HDR).
+        #[arg(long)]
+        strict: bool,
     },
     /// Render N frames along the scene's camera path; print per-pass GPU times.
     Bench {
         #[command(flatten)]
         view: ViewArgs,
-        #[arg(long, default_value_t = 60)]
+        /// Measured frames (>= 1).
+        #[arg(long, default_value_t = 60, value_parser = parse_count, allow_hyphen_values = true)]
         frames: usize,
         /// Frames rendered first and not measured (shader JIT, caches).
         #[arg(long, default_value_t = 3)]
@@ -88,9 +93,9 @@ enum Command {
         /// Swapchain present mode (falls back to fifo when unsupported).
         #[arg(long, value_enum, default_value_t = PresentMode::Fifo)]
         present_mode: PresentMode,
-        /// Exit after presenting N frames.
-        #[arg(long)]
-        frames: Option<u64>,
+        /// Exit after presenting N frames (>= 1).
+        #[arg(long, value_parser = parse_count, allow_hyphen_values = true)]
+        frames: Option<usize>,
         /// With --frames: write the last frame to this PNG. Without: where P / F12 write.
         #[arg(long)]
         screenshot: Option<PathBuf>,
@@ -102,27 +107,30 @@ enum Command {
 
 #[derive(Args, Clone)]
 struct ViewArgs {
-    /// glTF/GLB, OBJ or TOML scene file (default: the bundled assets/default.toml).
+    /// glTF/GLB, OBJ or TOML scene file (default: assets/default.toml, in
+    /// the working directory, next to the executable or in the source tree).
     #[arg(long)]
     scene: Option<PathBuf>,
-    #[arg(long, default_value_t = 1280)]
+    /// Image width in pixels (1..=16384).
+    #[arg(long, default_value_t = 1280, value_parser = parse_resolution, allow_hyphen_values = true)]
     width: u32,
-    #[arg(long, default_value_t = 720)]
+    /// Image height in pixels (1..=16384).
+    #[arg(long, default_value_t = 720, value_parser = parse_resolution, allow_hyphen_values = true)]
     height: u32,
     /// Index of the scene camera to use.
     #[arg(long, conflicts_with = "look_from")]
     camera: Option<usize>,
-    /// Camera position "x,y,z" (with --look-at).
-    #[arg(long, value_parser = app::parse_vec3, requires = "look_at")]
+    /// Camera position "x,y,z" (finite; with --look-at).
+    #[arg(long, value_parser = app::parse_vec3, requires = "look_at", allow_hyphen_values = true)]
     look_from: Option<Vec3>,
-    /// Camera target "x,y,z" (with --look-from).
-    #[arg(long, value_parser = app::parse_vec3, requires = "look_from")]
+    /// Camera target "x,y,z" (finite; with --look-from).
+    #[arg(long, value_parser = app::parse_vec3, requires = "look_from", allow_hyphen_values = true)]
     look_at: Option<Vec3>,
-    /// Vertical field of view in degrees for --look-from/--look-at.
-    #[arg(long, default_value_t = 60.0)]
-    fov: f32,
-    /// Exposure multiplier before tone mapping.
-    #[arg(long, default_value_t = 1.0)]
+    /// Vertical field of view in degrees, in (0, 180), for --look-from/--look-at [default: 60].
+    #[arg(long, value_parser = parse_fov, allow_hyphen_values = true)]
+    fov: Option<f32>,
+    /// Exposure multiplier before tone mapping (finite, > 0).
+    #[arg(long, default_value_t = 1.0, value_parser = parse_exposure, allow_hyphen_values = true)]
     exposure: f32,
     /// Show a G-buffer target instead of the lit image.
     #[arg(long, value_enum, default_value_t = DebugView::None)]
@@ -139,33 +147,116 @@ struct ViewArgs {
     no_reflections: bool,
     #[arg(long)]
     no_refractions: bool,
-    /// Maximum reflection/refraction recursion depth.
-    #[arg(long, default_value_t = 8)]
+    /// Maximum reflection/refraction recursion depth (0..=64).
+    #[arg(long, default_value_t = 8, value_parser = parse_max_depth, allow_hyphen_values = true)]
     max_depth: u32,
-    /// Importance cutoff: branches with a smaller weight are not traced.
-    #[arg(long, default_value_t = 0.01)]
+    /// Importance cutoff in [0, 1]: branches with a smaller weight are not traced.
+    #[arg(long, default_value_t = 0.01, value_parser = parse_min_weight, allow_hyphen_values = true)]
     min_weight: f32,
     /// glTF animation to play, by name or index.
     #[arg(long)]
     animation: Option<String>,
-    /// Animation time in seconds (render: the frame's time; bench: the start).
-    #[arg(long, default_value_t = 0.0)]
-    time: f32,
-    /// Fixed animation step: frame i is at time + i / fps (bench: 30 when
-    /// not given; view: wall-clock playback when not given).
-    #[arg(long)]
+    /// Animation time in seconds, finite, with --animation (render: the
+    /// frame's time; bench and view: the start) [default: 0].
+    #[arg(long, value_parser = parse_time, allow_hyphen_values = true)]
+    time: Option<f32>,
+    /// Fixed animation step (finite, > 0), with --animation: frame i is at
+    /// time + i / fps (bench: 30 when not given; view: wall-clock playback
+    /// when not given).
+    #[arg(long, value_parser = parse_fps, allow_hyphen_values = true)]
     fps: Option<f32>,
 }
 
+/// A finite float for `flag` that `ok` accepts; `range` says what is.
+fn parse_f32(s: &str, range: &str, ok: impl Fn(f32) -> bool) -> Result<f32, String> {
+    let v: f32 = s.trim().parse().map_err(|e| format!("{e} (expected {range})"))?;
+    if v.is_finite() && ok(v) {
+        Ok(v)
+    } else {
+        Err(format!("{v} is out of range (expected {range})"))
+    }
+}
+
+/// An integer in `lo..=hi`; parsed wide so that negative values get the
+/// range message instead of "invalid digit".
+fn parse_int(s: &str, lo: i64, hi: i64, what: &str) -> Result<i64, String> {
+    let v: i64 = s.trim().parse().map_err(|e| format!("{e} (expected {what} {lo}..={hi})"))?;
+    if (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{v} is out of range (expected {what} {lo}..={hi})"))
+    }
+}
+
+fn parse_resolution(s: &str) -> Result<u32, String> {
+    parse_int(s, 1, 16384, "a resolution of").map(|v| v as u32)
+}
+
+fn parse_max_depth(s: &str) -> Result<u32, String> {
+    parse_int(s, 0, 64, "a depth of").map(|v| v as u32)
+}
+
+fn parse_count(s: &str) -> Result<usize, String> {
+    parse_int(s, 1, i64::MAX, "a frame count of").map(|v| v as usize)
+}
+
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    parse_f32(s, "finite, > 0", |v| v > 0.0)
+}
+
+fn parse_fov(s: &str) -> Result<f32, String> {
+    parse_f32(s, "degrees in (0, 180)", |v| v > 0.0 && v < 180.0)
+}
+
+fn parse_min_weight(s: &str) -> Result<f32, String> {
+    parse_f32(s, "finite, in [0, 1]", |v| (0.0..=1.0).contains(&v))
+}
+
+fn parse_time(s: &str) -> Result<f32, String> {
+    parse_f32(s, "finite seconds", |_| true)
+}
+
+fn parse_fps(s: &str) -> Result<f32, String> {
+    parse_f32(s, "finite, > 0", |v| v > 0.0)
+}
+
 impl ViewArgs {
-    fn job(&self) -> RenderJob {
+    /// Options that would change nothing here: refused (a usage error), so a
+    /// typo'd or misplaced option is not silently ignored.
+    fn without_effect(&self, command: &str) -> Option<String> {
+        if self.fov.is_some() && self.look_from.is_none() {
+            return Some(
+                "--fov has no effect without --look-from/--look-at (scene cameras keep their own)".into(),
+            );
+        }
+        if self.time.is_some() && self.animation.is_none() {
+            return Some("--time has no effect without --animation".into());
+        }
+        if self.fps.is_some() && self.animation.is_none() {
+            return Some("--fps has no effect without --animation".into());
+        }
+        if self.fps.is_some() && command == "render" {
+            return Some(
+                "--fps has no effect on render (one frame at --time; it steps bench and view)".into(),
+            );
+        }
+        None
+    }
+
+    fn job(&self) -> Result<RenderJob> {
         let camera = match (self.camera, self.look_from, self.look_at) {
             (Some(i), _, _) => CameraChoice::Index(i),
-            (None, Some(from), Some(to)) => CameraChoice::LookAt { from, to, yfov_deg: self.fov },
+            (None, Some(from), Some(to)) => {
+                CameraChoice::LookAt { from, to, yfov_deg: self.fov.unwrap_or(60.0) }
+            }
             _ => CameraChoice::First,
         };
-        RenderJob {
-            scene: self.scene.clone().unwrap_or_else(app::default_scene_path),
+        let scene = match &self.scene {
+            Some(s) => s.clone(),
+            None => app::default_scene_path()?,
+        };
+        Ok(RenderJob {
+            scene,
             width: self.width,
             height: self.height,
             camera,
@@ -178,14 +269,34 @@ impl ViewArgs {
                     shadows: !self.no_shadows,
                     reflections: !self.no_reflections,
                     refractions: !self.no_refractions,
-                    max_depth: self.max_depth.min(64),
-                    min_weight: self.min_weight.max(0.0),
+                    max_depth: self.max_depth,
+                    min_weight: self.min_weight,
                     count_rays: false,
                 },
             },
             animation: self.animation.clone(),
-            time: self.time,
+            time: self.time.unwrap_or(0.0),
             fps: self.fps.unwrap_or(30.0),
+        })
+    }
+}
+
+impl Cli {
+    /// Checks across options the parser cannot express; exits like a clap
+    /// usage error (code 2).
+    fn check_usage(&self) {
+        let (name, view) = match &self.command {
+            Some(Command::Render { view, .. }) => ("render", view),
+            Some(Command::Bench { view, .. }) => ("bench", view),
+            Some(Command::View { view, .. }) => ("view", view),
+            Some(Command::Info) | None => return,
+        };
+        if let Some(p) = view.without_effect(name) {
+            // The subcommand's own usage line under the message.
+            let mut cli = Cli::command();
+            let sub = cli.find_subcommand_mut(name).expect("a defined subcommand");
+            sub.set_bin_name(format!("hybrid-rt {name}"));
+            sub.error(ErrorKind::ArgumentConflict, p).exit();
         }
     }
 }
@@ -203,8 +314,8 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", app::info_command(&gpu)?);
             Ok(())
         }
-        Some(Command::Render { view, out, hdr_out }) => {
-            app::render_command(&gpu, &view.job(), &out, hdr_out.as_deref())
+        Some(Command::Render { view, out, hdr_out, strict }) => {
+            app::render_command(&gpu, &view.job()?, &out, hdr_out.as_deref(), strict)
         }
         Some(Command::Bench {
             view,
@@ -234,15 +345,15 @@ fn run(cli: Cli) -> Result<()> {
                     }
                 }
             }
-            app::bench_command(&gpu, &view.job(), frames, warmup, &variants)
+            app::bench_command(&gpu, &view.job()?, frames, warmup, &variants)
         }
         Some(Command::View { view, present_mode, frames, screenshot, test_resize }) => {
             let event_loop = viewer::open_display()?;
             let opts = ViewerOptions {
                 gpu,
-                job: view.job(),
+                job: view.job()?,
                 present_mode,
-                frames,
+                frames: frames.map(|f| f as u64),
                 fixed_fps: view.fps,
                 screenshot,
                 test_resize,
@@ -256,8 +367,9 @@ fn run(cli: Cli) -> Result<()> {
 /// No command: the viewer on the default scene when a window can be opened,
 /// else (or with HYBRID_RT_HEADLESS=1) the headless render to out/default.png.
 fn default_command(gpu: GpuOptions) -> Result<()> {
-    let job = RenderJob::new(app::default_scene_path(), 1280, 720);
-    let headless = |gpu: &GpuOptions| app::render_command(gpu, &job, &PathBuf::from("out/default.png"), None);
+    let job = RenderJob::new(app::default_scene_path()?, 1280, 720);
+    let headless =
+        |gpu: &GpuOptions| app::render_command(gpu, &job, &PathBuf::from("out/default.png"), None, false);
     if std::env::var("HYBRID_RT_HEADLESS").is_ok_and(|v| v != "0" && !v.is_empty()) {
         log::info!("HYBRID_RT_HEADLESS is set: rendering the default scene headless");
         return headless(&gpu);
@@ -292,6 +404,7 @@ fn default_command(gpu: GpuOptions) -> Result<()> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    cli.check_usage();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(&cli.gpu.log))
         .format_timestamp_millis()
         .init();

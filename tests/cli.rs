@@ -198,12 +198,193 @@ fn no_arguments_renders_the_default_scene() {
     assert!(colors.len() > 500, "only {} distinct colours", colors.len());
 }
 
+/// One device block of `info`: its header line and "key: value" lines.
+struct InfoDevice {
+    header: String,
+    fields: Vec<(String, String)>,
+    selected: bool,
+}
+
+impl InfoDevice {
+    fn field(&self, key: &str) -> &str {
+        self.fields
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+            .unwrap_or_else(|| panic!("{}: no '{key}' line", self.header))
+    }
+}
+
+fn parse_info(s: &str) -> Vec<InfoDevice> {
+    let mut devices: Vec<InfoDevice> = Vec::new();
+    for line in s.lines() {
+        if line.starts_with("device ") {
+            devices.push(InfoDevice { header: line.to_string(), fields: Vec::new(), selected: false });
+            continue;
+        }
+        let d = devices.last_mut().unwrap_or_else(|| panic!("text before the first device:\n{s}"));
+        if line.trim() == "(selected)" {
+            d.selected = true;
+        } else if let Some((k, v)) = line.trim().split_once(": ") {
+            d.fields.push((k.to_string(), v.to_string()));
+        }
+    }
+    devices
+}
+
+/// `info` prints, for every device, its name and an explicit yes/no per
+/// capability equal to what the device reports (checked here against the
+/// device's extension list), and marks exactly the device `auto` selects.
 #[test]
 fn info_reports_devices() {
     let out = bin().arg("info").output().unwrap();
-    assert!(out.status.success());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let s = String::from_utf8_lossy(&out.stdout);
-    assert!(s.contains("ray query") && s.contains("(selected)"), "{s}");
+    let printed = parse_info(&s);
+
+    let instance = hybrid_rt::vk::Instance::new(&Default::default()).unwrap();
+    let devices = hybrid_rt::vk::device::enumerate(&instance.raw).unwrap();
+    assert_eq!(printed.len(), devices.len(), "one block per device:\n{s}");
+    let (_, chosen) = hybrid_rt::vk::device::select(&devices, &Default::default()).unwrap();
+    let yn = |b: bool| if b { "yes" } else { "no" };
+    for ((pd, caps), p) in devices.iter().zip(&printed) {
+        let expected_header = format!("device {}: {} (", caps.index, caps.name);
+        assert!(p.header.starts_with(&expected_header), "'{}' is not '{expected_header}...'", p.header);
+        assert_eq!(p.selected, caps.index == chosen.index, "{}: selection mark wrong:\n{s}", p.header);
+        // Independent of the capability query: what the driver lists.
+        let exts = unsafe { instance.raw.enumerate_device_extension_properties(*pd) }.unwrap();
+        let has = |name: &std::ffi::CStr| exts.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
+        for (key, value, ext) in [
+            ("acceleration structures", caps.acceleration_structure, ash::khr::acceleration_structure::NAME),
+            ("ray query", caps.ray_query, ash::khr::ray_query::NAME),
+            ("ray-tracing pipeline", caps.ray_tracing_pipeline, ash::khr::ray_tracing_pipeline::NAME),
+        ] {
+            assert_eq!(p.field(key), yn(value), "{}: {key}", p.header);
+            assert!(!value || has(ext), "{}: {key} yes without {ext:?}", p.header);
+        }
+        let ts = p.field("timestamps");
+        assert!(ts.starts_with(&format!("{} (", yn(caps.timestamps))), "{}: timestamps '{ts}'", p.header);
+    }
+    assert_eq!(printed.iter().filter(|p| p.selected).count(), 1, "exactly one device selected:\n{s}");
+}
+
+/// With --no-rt, `info` still shows what the device has, but says next to
+/// each ray-tracing capability that --no-rt disabled it.
+#[test]
+fn info_with_no_rt_says_ray_tracing_is_disabled() {
+    let out = bin().args(["--no-rt", "info"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let s = String::from_utf8_lossy(&out.stdout);
+    let (first, rest) = s.split_once('\n').unwrap();
+    assert!(first.starts_with("ray-tracing extensions disabled by --no-rt"), "no --no-rt note first:\n{s}");
+    let printed = parse_info(rest);
+    assert!(!printed.is_empty());
+    for p in &printed {
+        for key in ["acceleration structures", "ray query", "ray-tracing pipeline"] {
+            let v = p.field(key);
+            assert!(v == "no" || v == "yes, disabled by --no-rt", "{}: {key}: '{v}'", p.header);
+        }
+    }
+    assert!(s.contains("ray query: yes, disabled by --no-rt"), "lavapipe has ray queries:\n{s}");
+}
+
+/// A backend --no-rt disabled is reported as disabled by --no-rt, not as
+/// missing from the device.
+#[test]
+fn no_rt_render_with_query_backend_names_no_rt() {
+    let d = tmp("nortquery");
+    let out = bin()
+        .args(["--no-rt", "render", "--width", "16", "--height", "16", "--backend", "query", "--out"])
+        .arg(d.join("x.png"))
+        .output()
+        .unwrap();
+    assert_clean_failure(&out, &["--backend query", "disabled by --no-rt"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("has no usable"), "claims the device lacks it:\n{stderr}");
+}
+
+/// --validation says at info level that the layer is on.
+#[test]
+fn validation_is_confirmed_in_the_log() {
+    let d = tmp("valconfirm");
+    let out = Command::new(env!("CARGO_BIN_EXE_hybrid-rt"))
+        .env_remove("HYBRID_RT_VALIDATION")
+        .env_remove("RUST_LOG")
+        .args(["--validation", "render", "--width", "16", "--height", "16", "--out"])
+        .arg(d.join("x.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.lines().any(|l| l.contains(" INFO ") && l.contains("VK_LAYER_KHRONOS_validation is on")),
+        "no info line confirming the layer:\n{stderr}"
+    );
+}
+
+fn bench_small(extra: &[&str]) -> Output {
+    bin()
+        .args(["--no-rt", "bench", "--width", "16", "--height", "16", "--frames", "1", "--warmup", "0"])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+/// A benchmark asked for a backend the device cannot run fails (naming it)
+/// instead of skipping it and exiting 0.
+#[test]
+fn bench_with_an_unavailable_backend_fails() {
+    let out = bench_small(&["--backend", "query"]);
+    assert_clean_failure(&out, &["query", "--no-rt"]);
+    let out = bench_small(&["--compare-backends"]);
+    assert_clean_failure(&out, &["query", "pipeline", "--no-rt"]);
+    let out = bench_small(&["--backend", "compute"]);
+    assert!(out.status.success(), "compute: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("backend compute"), "no compute table");
+}
+
+/// The default scene is found next to the executable, whatever the current
+/// directory: a copy of the binary with its own assets/default.toml loads
+/// that one (the log says which).
+#[test]
+fn default_scene_is_found_next_to_the_executable() {
+    let d = tmp("exedir");
+    let exe_dir = d.join("bin");
+    std::fs::create_dir_all(exe_dir.join("assets")).unwrap();
+    let exe = exe_dir.join("hybrid-rt");
+    std::fs::copy(env!("CARGO_BIN_EXE_hybrid-rt"), &exe).unwrap();
+    let scene = exe_dir.join("assets/default.toml");
+    std::fs::copy(common::repo_path("assets/default.toml"), &scene).unwrap();
+    let cwd = d.join("elsewhere");
+    std::fs::create_dir_all(&cwd).unwrap();
+    let out = Command::new(&exe)
+        .env("HYBRID_RT_VALIDATION", "1")
+        .current_dir(&cwd)
+        .args(["render", "--width", "16", "--height", "16", "--out", "x.png"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("scene {}", scene.display())),
+        "does not load {}:\n{stderr}",
+        scene.display()
+    );
+    assert!(cwd.join("x.png").exists());
+}
+
+/// Where the default scene cannot be found, the error says where it looked
+/// and points to --scene.
+#[test]
+fn missing_default_scene_points_to_scene_flag() {
+    let d = tmp("nodefault");
+    let candidates = [d.join("assets/default.toml"), d.join("other/assets/default.toml")];
+    let e = hybrid_rt::app::find_default_scene(&candidates).unwrap_err();
+    let msg = format!("{e:#}");
+    assert!(msg.contains("--scene"), "{msg}");
+    for c in &candidates {
+        assert!(msg.contains(&c.display().to_string()), "does not list {}: {msg}", c.display());
+    }
 }
 
 /// Synchronization validation over every backend and over animated frames

@@ -133,6 +133,12 @@ impl Instance {
             info = info.push_next(&mut features);
         }
         let raw = unsafe { entry.create_instance(&info, None) }.context("vkCreateInstance failed")?;
+        if opts.validation {
+            log::info!(
+                "VK_LAYER_KHRONOS_validation is on (synchronization validation: {})",
+                opts.sync_validation
+            );
+        }
 
         let debug_utils = has_debug_utils.then(|| ext::debug_utils::Instance::new(&entry, &raw));
         let messenger = match (&debug_utils, opts.validation) {
