@@ -142,7 +142,7 @@ impl Viewer {
     }
 }
 
-/// Flips a secondary-effect switch (the shading pass is rebuilt on the next
+/// Flips a secondary-effect switch (the frame's passes are rebuilt on the next
 /// `prepare`; effects the scene does not need stay off either way).
 fn toggle(name: &str, on: &mut bool) {
     *on = !*on;
