@@ -410,21 +410,26 @@ impl Scene {
     }
 
     /// World matrices for every node (parents before children not assumed).
+    /// Iterative, so a 100,000-level chain does not overflow the stack; a
+    /// cycle (which the loaders reject) is cut where it closes.
     pub fn world_matrices(&self) -> Vec<Mat4> {
-        let mut world = vec![None; self.nodes.len()];
-        fn resolve(scene: &Scene, i: usize, world: &mut Vec<Option<Mat4>>) -> Mat4 {
-            if let Some(m) = world[i] {
-                return m;
+        let mut world: Vec<Option<Mat4>> = vec![None; self.nodes.len()];
+        let mut path = Vec::new();
+        for i in 0..self.nodes.len() {
+            // Climb to the first resolved ancestor (or a root), then resolve
+            // the chain top-down.
+            let mut at = Some(i);
+            while let Some(n) = at.filter(|&n| world[n].is_none() && path.len() <= self.nodes.len()) {
+                path.push(n);
+                at = self.nodes[n].parent.filter(|&p| p < self.nodes.len());
             }
-            let local = scene.nodes[i].local.matrix();
-            let m = match scene.nodes[i].parent {
-                Some(p) => resolve(scene, p, world) * local,
-                None => local,
-            };
-            world[i] = Some(m);
-            m
+            let mut parent = at.and_then(|p| world[p]).unwrap_or(Mat4::IDENTITY);
+            while let Some(n) = path.pop() {
+                parent *= self.nodes[n].local.matrix();
+                world[n] = Some(parent);
+            }
         }
-        (0..self.nodes.len()).map(|i| resolve(self, i, &mut world)).collect()
+        world.into_iter().map(|m| m.unwrap_or(Mat4::IDENTITY)).collect()
     }
 
     /// Rebuilds `instances` and `bounds` from the node hierarchy, and places

@@ -8,6 +8,7 @@ use glam::{Mat4, Quat, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 
 use super::checks::{check_accessor, Expected};
+use super::values::{sane, HUGE};
 use crate::scene::animation::{Animation, AnimationChannel, Channel, Interpolation};
 use crate::scene::skin::{Skin, SkinWeights};
 use crate::scene::Scene;
@@ -88,11 +89,19 @@ fn convert_channel(channel: &gltf::animation::Channel, buffers: &[Vec<u8>]) -> R
         values.len(),
         output.count()
     );
-    let finite = match &values {
-        Channel::Translation(v) | Channel::Scale(v) => v.iter().all(|v| v.is_finite()),
-        Channel::Rotation(v) => v.iter().all(|q| q.is_finite()),
+    // Huge values overflow f32 once composed with the hierarchy.
+    let bad = match &values {
+        Channel::Translation(v) | Channel::Scale(v) => {
+            v.iter().position(|v| !v.to_array().into_iter().all(sane))
+        }
+        Channel::Rotation(v) => v.iter().position(|q| !q.to_array().into_iter().all(sane)),
     };
-    ensure!(finite, "animation output has non-finite values");
+    if let Some(i) = bad {
+        bail!("animation output accessor {}: value {i} is not finite or is 1e30 or more", output.index());
+    }
+    if let Some(i) = times.iter().position(|t| t.is_finite() && t.abs() >= HUGE) {
+        bail!("animation input accessor {}: key time {i} ({}) is 1e30 or more", input.index(), times[i]);
+    }
     let channel = AnimationChannel { node: channel.target().node().index(), times, interpolation, values };
     channel.check()?;
     Ok(channel)

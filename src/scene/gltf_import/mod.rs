@@ -20,6 +20,7 @@ mod materials;
 mod nodes;
 #[cfg(test)]
 mod tests;
+mod values;
 
 use std::path::Path;
 
@@ -57,6 +58,7 @@ fn import(path: &Path) -> Result<Scene> {
 
     let mut scene = Scene::default();
     let mut slots = TextureSlots::default();
+    check_values(&doc)?;
     scene.materials = doc.materials().map(|m| convert_material(&m, &mut slots)).collect();
     let normal_mapped: Vec<bool> = scene.materials.iter().map(|m| m.normal_texture.is_some()).collect();
     // Primitives without a material use a default appended after the file's.
@@ -72,6 +74,23 @@ fn import(path: &Path) -> Result<Scene> {
     convert_skins(&doc, &buffers, &mut scene)?;
     scene.animations = convert_animations(&doc, &buffers, path)?;
     Ok(scene)
+}
+
+/// Every material, light and camera of the file, in range (see `values`).
+fn check_values(doc: &gltf::Document) -> Result<()> {
+    for m in doc.materials() {
+        let index = m.index().unwrap_or(0);
+        values::check_material(&m).with_context(|| format!("material {index}{}", quoted(m.name())))?;
+    }
+    for light in doc.lights().into_iter().flatten() {
+        values::check_light(&light)
+            .with_context(|| format!("light {}{}", light.index(), quoted(light.name())))?;
+    }
+    for cam in doc.cameras() {
+        values::check_camera(&cam)
+            .with_context(|| format!("camera {}{}", cam.index(), quoted(cam.name())))?;
+    }
+    Ok(())
 }
 
 fn quoted(name: Option<&str>) -> String {

@@ -5,6 +5,7 @@
 use anyhow::{bail, ensure, Context, Result};
 use glam::{Mat4, Quat, Vec3};
 
+use super::values::HUGE;
 use crate::scene::{Camera, Light, LightKind, Node, Object, Scene, Transform};
 
 pub(super) fn build_nodes(doc: &gltf::Document, scene: &mut Scene) -> Result<()> {
@@ -47,7 +48,15 @@ fn local_transform(t: gltf::scene::Transform) -> Result<Transform> {
         None if scale.cmpeq(Vec3::ZERO).any() => Quat::IDENTITY,
         None => bail!("has a non-finite or zero rotation"),
     };
-    ensure!(translation.is_finite() && scale.is_finite(), "has a non-finite transform");
+    ensure!(
+        translation.is_finite() && scale.is_finite(),
+        "has a non-finite transform (translation {translation}, scale {scale})"
+    );
+    // Finite but huge values overflow once multiplied along the hierarchy.
+    ensure!(
+        translation.abs().max_element() < HUGE && scale.abs().max_element() < HUGE,
+        "has a transform component of 1e30 or more (translation {translation}, scale {scale})"
+    );
     Ok(Transform { translation, rotation, scale })
 }
 
@@ -61,12 +70,25 @@ fn link_parents(scene: &mut Scene) -> Result<()> {
             child.parent = Some(p);
         }
     }
+    // Each node has at most one parent now, so climbing from every node
+    // finds any cycle; a node's state: 0 unseen, 1 on the current climb, 2
+    // known to reach a root. Linear in the node count, for deep chains.
+    let mut state = vec![0u8; scene.nodes.len()];
+    let mut climb = Vec::new();
     for start in 0..scene.nodes.len() {
-        let (mut at, mut steps) = (start, 0);
-        while let Some(p) = scene.nodes[at].parent {
-            at = p;
-            steps += 1;
-            ensure!(steps <= scene.nodes.len(), "node '{}' is its own ancestor", scene.nodes[start].name);
+        let mut at = Some(start);
+        while let Some(n) = at.filter(|&n| state[n] != 2) {
+            ensure!(
+                state[n] == 0,
+                "node '{}' is its own ancestor (the hierarchy has a cycle)",
+                scene.nodes[n].name
+            );
+            state[n] = 1;
+            climb.push(n);
+            at = scene.nodes[n].parent;
+        }
+        for n in climb.drain(..) {
+            state[n] = 2;
         }
     }
     Ok(())
@@ -114,7 +136,13 @@ fn convert_camera(cam: &gltf::Camera, node_name: &str, world: &Mat4) -> Camera {
             (2.0 * (o.ymag().abs() / depth).atan(), o.znear().max(depth * 1e-3))
         }
     };
-    let yfov = if yfov.is_finite() { yfov.clamp(1f32.to_radians(), 170f32.to_radians()) } else { 1.0 };
+    // Values are in range (checked by `values::check_camera`); what the spec
+    // allows but the projection cannot show well is clamped, and said so.
+    let (lo, hi) = (1f32.to_radians(), 170f32.to_radians());
+    if !(lo..=hi).contains(&yfov) {
+        log::warn!("camera '{name}': yfov {yfov} rad clamped to [1, 170] degrees");
+    }
+    let yfov = if yfov.is_finite() { yfov.clamp(lo, hi) } else { 1.0 };
     let znear = if znear.is_finite() && znear > 0.0 { znear } else { 0.01 };
     Camera { name, world: *world, yfov, znear }
 }
