@@ -5,20 +5,58 @@
 pub mod scenes;
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use hybrid_rt::app::GpuOptions;
 use hybrid_rt::render::FrameOutput;
-use hybrid_rt::vk::Context;
+use hybrid_rt::vk::{Context, ValidationCounters};
 
-/// A context with the Khronos validation layer on (tests always validate).
-pub fn validated_context() -> Context {
-    let _ = env_logger::builder().is_test(true).try_init();
-    GpuOptions { validation: true, ..Default::default() }
-        .context()
-        .expect("create a validated Vulkan context")
+/// A validated context that, when dropped, destroys the device and instance
+/// first and only then checks the validation counters: leaked objects are
+/// reported by vkDestroyDevice / vkDestroyInstance, after any check a test
+/// could make while the context lives.
+pub struct ValidatedContext {
+    ctx: Option<Context>,
+    counters: Arc<ValidationCounters>,
 }
 
-/// Panics when the validation layer reported any error on `ctx`.
+impl std::ops::Deref for ValidatedContext {
+    type Target = Context;
+    fn deref(&self) -> &Context {
+        self.ctx.as_ref().expect("context alive until drop")
+    }
+}
+
+impl Drop for ValidatedContext {
+    fn drop(&mut self) {
+        drop(self.ctx.take());
+        // A second panic while unwinding would abort and hide the first.
+        if !std::thread::panicking() {
+            let e = self.counters.errors();
+            assert_eq!(e, 0, "validation layer reported {e} error(s), teardown included (see log)");
+        }
+    }
+}
+
+/// Wraps a context created with validation on (see [`ValidatedContext`]).
+pub fn validated(ctx: Context) -> ValidatedContext {
+    assert!(ctx.instance.validation, "validated() needs a context created with validation on");
+    ValidatedContext { counters: ctx.validation_counters(), ctx: Some(ctx) }
+}
+
+/// A context with the Khronos validation layer on (tests always validate);
+/// its validation errors, teardown included, fail the test when it drops.
+pub fn validated_context() -> ValidatedContext {
+    let _ = env_logger::builder().is_test(true).try_init();
+    validated(
+        GpuOptions { validation: true, ..Default::default() }
+            .context()
+            .expect("create a validated Vulkan context"),
+    )
+}
+
+/// Panics when the validation layer reported any error on `ctx` so far
+/// (a [`ValidatedContext`] checks again after teardown).
 pub fn assert_validation_clean(ctx: &Context) {
     let c = ctx.validation_counters();
     assert_eq!(c.errors(), 0, "validation layer reported {} error(s) (see log)", c.errors());
@@ -144,7 +182,7 @@ pub fn render_scene(
         hybrid_rt::render::Renderer::new(&ctx, scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
     let out = r.render(&ctx, scene, &scene.cameras[0], settings).unwrap();
     r.destroy(&ctx);
-    assert_validation_clean(&ctx);
+    drop(ctx); // validation errors, teardown included, fail here
     assert!(out.all_finite(), "NaN or Inf reached the frame");
     out
 }
