@@ -1,11 +1,15 @@
 //! Three ray backends, one image: ray query, ray-tracing pipeline and the
 //! compute BVH tracer render the same scenes; they must agree pairwise.
 //!
-//! Tolerance: on non-silhouette pixels no 8-bit channel may differ by more
-//! than 2, and at most 0.5% of all pixels may differ by more than 2 (edges
-//! of alpha cut-outs and grazing hits, where the traversals' float rounding
-//! legitimately picks a different triangle). The fraction and the maximum
-//! difference are printed for every pair.
+//! Tolerance, asserted per pair: on the analytic scenes the images are
+//! identical up to 1/255 in any channel of any pixel (IDENTICAL); elsewhere
+//! at most 0.5% of the pixels may differ by more than 2/255 in any channel
+//! (NEAR: edges of alpha cut-outs and grazing hits, where the traversals'
+//! float rounding legitimately picks a different triangle). The fraction and
+//! the maximum difference are printed for every pair.
+//!
+//! Every backend renders with its own fresh renderer and context: a backend
+//! that wrote nothing would otherwise show the previous backend's image.
 mod common;
 
 use common::scenes::*;
@@ -18,22 +22,31 @@ use hybrid_rt::scene::Scene;
 const BACKENDS: [Backend; 3] = [Backend::Query, Backend::Pipeline, Backend::Compute];
 
 fn render_all(scene: &Scene, w: u32, h: u32, mode: Mode) -> Vec<(Backend, FrameOutput)> {
-    let ctx = common::validated_context();
-    let mut r = Renderer::new(&ctx, scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
     let mut out = Vec::new();
     for b in BACKENDS {
+        let ctx = common::validated_context();
+        let mut r = Renderer::new(&ctx, scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
         let s = RenderSettings { backend: b, mode, ..Default::default() };
         let frame = r.render(&ctx, scene, &scene.cameras[0], &s).unwrap();
         assert_eq!(r.shading_config().unwrap().backend, Some(b));
         assert!(frame.all_finite(), "{b:?}: NaN/Inf");
+        r.destroy(&ctx);
         out.push((b, frame));
     }
-    r.destroy(&ctx);
-    common::assert_validation_clean(&ctx);
     out
 }
 
-fn assert_agree(name: &str, frames: &[(Backend, FrameOutput)]) {
+/// How close two backends' images must be.
+#[derive(Clone, Copy, Debug)]
+enum Bound {
+    /// No channel of any pixel differs by more than 1/255.
+    Identical,
+    /// At most 0.5% of pixels differ by more than 2/255.
+    Near,
+}
+use Bound::*;
+
+fn assert_agree(name: &str, frames: &[(Backend, FrameOutput)], bound: Bound) {
     for i in 0..frames.len() {
         for j in i + 1..frames.len() {
             let (a, fa) = &frames[i];
@@ -44,7 +57,12 @@ fn assert_agree(name: &str, frames: &[(Backend, FrameOutput)]) {
                 "{name}: {a:?} vs {b:?}: {:.3}% pixels differ by > 2/255, max difference {max}/255, PSNR {psnr:.1} dB",
                 frac * 100.0
             );
-            assert!(frac <= 0.005, "{name}: {a:?} vs {b:?}: {:.3}% pixels differ", frac * 100.0);
+            match bound {
+                Identical => assert!(max <= 1, "{name}: {a:?} vs {b:?}: max difference {max}/255 > 1/255"),
+                Near => {
+                    assert!(frac <= 0.005, "{name}: {a:?} vs {b:?}: {:.3}% pixels differ", frac * 100.0)
+                }
+            }
         }
     }
 }
@@ -60,20 +78,20 @@ fn analytic_scenes_agree_across_backends() {
     ];
     for (name, text) in cases {
         let scene = common::scene_from_toml(&format!("backends_{}", name.replace(' ', "_")), &text);
-        assert_agree(name, &render_all(&scene, 160, 90, Mode::Hybrid));
+        assert_agree(name, &render_all(&scene, 160, 90, Mode::Hybrid), Identical);
     }
 }
 
 #[test]
 fn pure_ray_tracing_agrees_across_backends() {
     let scene = common::scene_from_toml("backends_rt", AGREEMENT);
-    assert_agree("agreement (pure RT)", &render_all(&scene, 160, 90, Mode::Rt));
+    assert_agree("agreement (pure RT)", &render_all(&scene, 160, 90, Mode::Rt), Identical);
 }
 
 #[test]
 fn sponza_with_spheres_agrees_across_backends() {
     let scene = Scene::load(&common::repo_path("assets/sponza_spheres.toml")).unwrap();
-    assert_agree("sponza_spheres", &render_all(&scene, 160, 90, Mode::Hybrid));
+    assert_agree("sponza_spheres", &render_all(&scene, 160, 90, Mode::Hybrid), Near);
 }
 
 #[test]
@@ -83,7 +101,7 @@ fn alpha_mask_and_transmission_models_agree_across_backends() {
         "gltf/TransmissionTest/glTF/TransmissionTest.gltf",
     ] {
         let scene = Scene::load(&common::shared_asset(rel)).unwrap();
-        assert_agree(rel, &render_all(&scene, 160, 90, Mode::Hybrid));
+        assert_agree(rel, &render_all(&scene, 160, 90, Mode::Hybrid), Near);
     }
 }
 
@@ -93,14 +111,15 @@ fn alpha_mask_and_transmission_models_agree_across_backends() {
 #[test]
 fn without_ray_tracing_extensions_the_compute_backend_runs() {
     let scene = common::scene_from_toml("backends_nort", AGREEMENT);
-    let ctx =
-        GpuOptions { validation: true, disable_ray_tracing: true, ..Default::default() }.context().unwrap();
+    let ctx = common::validated(
+        GpuOptions { validation: true, disable_ray_tracing: true, ..Default::default() }.context().unwrap(),
+    );
     assert!(ctx.accel.is_none() && ctx.rt_pipeline.is_none());
     let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: 160, height: 90 }).unwrap();
     let frame = r.render(&ctx, &scene, &scene.cameras[0], &RenderSettings::default()).unwrap();
     assert_eq!(r.shading_config().unwrap().backend, Some(Backend::Compute));
     r.destroy(&ctx);
-    common::assert_validation_clean(&ctx);
+    drop(ctx);
 
     // Same image as the ray-query backend on the RT-enabled device.
     let reference = common::render_scene(
@@ -109,11 +128,16 @@ fn without_ray_tracing_extensions_the_compute_backend_runs() {
         90,
         &RenderSettings { backend: Backend::Query, ..Default::default() },
     );
-    assert_agree("no-rt compute vs query", &[(Backend::Compute, frame), (Backend::Query, reference)]);
+    assert_agree(
+        "no-rt compute vs query",
+        &[(Backend::Compute, frame), (Backend::Query, reference)],
+        Identical,
+    );
 
     // Asking for a hardware backend there is a clear error, not a crash.
-    let ctx =
-        GpuOptions { validation: true, disable_ray_tracing: true, ..Default::default() }.context().unwrap();
+    let ctx = common::validated(
+        GpuOptions { validation: true, disable_ray_tracing: true, ..Default::default() }.context().unwrap(),
+    );
     let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: 32, height: 18 }).unwrap();
     let err = r
         .render(

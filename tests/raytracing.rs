@@ -321,7 +321,7 @@ fn hybrid_matches_pure_ray_tracing() {
         excluded * 100.0
     );
     assert!(psnr >= 40.0, "hybrid and pure RT disagree: PSNR {psnr:.1} dB");
-    common::check_golden(&hybrid, "spheres_hybrid_160x90", 35.0);
+    common::check_golden(&hybrid, "spheres_hybrid_160x90");
 }
 
 /// Snell's window: from inside a block of glass (IOR 1.5) looking up at its

@@ -11,6 +11,8 @@ use ash::{ext, vk};
 pub const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
 /// Counts of validation messages by severity; tests assert these stay zero.
+/// Shared through an `Arc` that outlives the instance: read them after the
+/// context is dropped to include teardown (leaked objects).
 #[derive(Debug, Default)]
 pub struct ValidationCounters {
     pub errors: AtomicU32,
@@ -84,15 +86,21 @@ impl Instance {
 
         let layers = unsafe { entry.enumerate_instance_layer_properties()? };
         let has_layer = |name: &CStr| layers.iter().any(|l| l.layer_name_as_c_str() == Ok(name));
-        let exts = unsafe { entry.enumerate_instance_extension_properties(None)? };
-        let has_debug_utils = exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
-
+        let mut exts = unsafe { entry.enumerate_instance_extension_properties(None)? };
         let mut layer_names = Vec::new();
         if opts.validation {
             if !has_layer(VALIDATION_LAYER) {
                 bail!("validation requested but VK_LAYER_KHRONOS_validation is not installed (Debian: vulkan-validationlayers)");
             }
             layer_names.push(VALIDATION_LAYER.as_ptr());
+            // The layer itself may be what provides debug utils.
+            exts.extend(unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }?);
+        }
+        let has_debug_utils = exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
+        if opts.validation && !has_debug_utils {
+            // Without a messenger nothing would be counted: the run would
+            // look clean whatever the layer found.
+            bail!("validation requested but VK_EXT_debug_utils is unavailable, so validation messages cannot be counted");
         }
         let mut ext_names = opts.surface_extensions.clone();
         if has_debug_utils {
@@ -141,6 +149,9 @@ impl Instance {
         }
 
         let debug_utils = has_debug_utils.then(|| ext::debug_utils::Instance::new(&entry, &raw));
+        // Lives until Drop, so teardown's messages (leaked objects reported by
+        // vkDestroyDevice) are counted too; vkDestroyInstance's go to the
+        // create-info messenger chained above.
         let messenger = match (&debug_utils, opts.validation) {
             (Some(du), true) => {
                 let info = vk::DebugUtilsMessengerCreateInfoEXT::default()

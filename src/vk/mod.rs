@@ -133,8 +133,24 @@ impl Context {
         Ok(ctx)
     }
 
+    /// The validation counters; they outlive the context, and only a read
+    /// after it is dropped includes teardown (see [`Context::finish`]).
     pub fn validation_counters(&self) -> Arc<ValidationCounters> {
         self.instance.counters.clone()
+    }
+
+    /// Destroys the context, then fails if the validation layer reported any
+    /// error during its life or its teardown (objects leaked at
+    /// vkDestroyDevice / vkDestroyInstance).
+    pub fn finish(self) -> Result<()> {
+        let counters = self.validation_counters();
+        drop(self);
+        match counters.errors() {
+            0 => Ok(()),
+            n => anyhow::bail!(
+                "the Vulkan validation layer reported {n} error(s), teardown included; see the log above"
+            ),
+        }
     }
 
     /// Gives a Vulkan object a debug name (shown by validation, RenderDoc, Nsight).
