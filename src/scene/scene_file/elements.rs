@@ -148,6 +148,11 @@ pub(super) fn procedural(o: &ObjectDef, kind: PrimitiveKind) -> Result<Primitive
             ensure!(o.size.is_none(), "a sphere takes `radius`, not `size`");
             let (slices, stacks) = (o.slices.unwrap_or(64), o.stacks.unwrap_or(32));
             ensure!(slices >= 3 && stacks >= 2, "a sphere needs slices >= 3 and stacks >= 2");
+            // Bounds the vertex allocation (slices * stacks) for any input.
+            ensure!(
+                slices <= 4096 && stacks <= 4096,
+                "a sphere allows at most 4096 slices and 4096 stacks (got {slices} and {stacks})"
+            );
             primitives::uv_sphere(positive(o.radius.unwrap_or(0.5), "radius")?, slices, stacks)
         }
     })
