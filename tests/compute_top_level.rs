@@ -26,7 +26,6 @@ use ash::vk;
 use hybrid_rt::accel::bvh::{Bvh, BvhNode};
 use hybrid_rt::accel::compute_bvh::ComputeBvh;
 use hybrid_rt::accel::dynamic::RebuildPolicy;
-use hybrid_rt::app::GpuOptions;
 use hybrid_rt::gpu::GpuScene;
 use hybrid_rt::metrics::diff_stats;
 use hybrid_rt::render::frame::{Access, Use};
@@ -89,13 +88,6 @@ size = [3.0, 3.0]
     (scene, anim)
 }
 
-fn sync_validated_context() -> Context {
-    let _ = env_logger::builder().is_test(true).try_init();
-    GpuOptions { validation: true, sync_validation: true, ..Default::default() }
-        .context()
-        .expect("create a Vulkan context with synchronization validation")
-}
-
 fn contains(outer: &BvhNode, inner: &BvhNode) -> bool {
     (0..3).all(|k| outer.min[k] <= inner.min[k] && outer.max[k] >= inner.max[k])
 }
@@ -109,7 +101,7 @@ fn gap(a: &BvhNode, b: &BvhNode) -> f32 {
 #[test]
 fn gpu_top_level_contains_the_host_fit_over_the_refit_roots() {
     let (mut scene, anim) = scene();
-    let ctx = sync_validated_context();
+    let ctx = common::sync_validated_context();
     let mut gpu = GpuScene::upload(&ctx, &scene).unwrap();
     let mut skinning = Skinning::new(&ctx, &scene, &gpu).unwrap().expect("a skinned scene");
     let mut bvh = ComputeBvh::build(&ctx, &scene, &gpu).unwrap();
@@ -230,7 +222,7 @@ fn in_frame_update_renders_like_the_reference_paths() {
     let (loaded, anim) = scene();
     let camera = loaded.cameras[0].clone();
     let extent = vk::Extent2D { width: W, height: H };
-    let ctx = sync_validated_context();
+    let ctx = common::sync_validated_context();
     // Pure ray tracing: camera rays go through the top level too (in hybrid
     // mode the rasterizer draws what the camera sees).
     let compute = RenderSettings { backend: Backend::Compute, mode: Mode::Rt, ..Default::default() };

@@ -4,19 +4,11 @@
 //! validation on every backend in both modes.
 mod common;
 
-use hybrid_rt::app::GpuOptions;
 use hybrid_rt::render::shading::{Backend, Mode};
 use hybrid_rt::render::{DebugView, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
 
 const BACKENDS: [Backend; 3] = [Backend::Query, Backend::Pipeline, Backend::Compute];
-
-fn sync_validated_context() -> hybrid_rt::vk::Context {
-    let _ = env_logger::builder().is_test(true).try_init();
-    GpuOptions { validation: true, sync_validation: true, ..Default::default() }
-        .context()
-        .expect("create a Vulkan context with synchronization validation")
-}
 
 /// A frame's recorded passes (with the timings' names) and allocated targets.
 fn frame_of(
@@ -38,7 +30,7 @@ fn frame_of(
 
 #[test]
 fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
-    let ctx = sync_validated_context();
+    let ctx = common::sync_validated_context();
     let scene = Scene::load(&common::repo_path("assets/default.toml")).unwrap();
     for backend in BACKENDS {
         let hybrid = RenderSettings { backend, ..Default::default() };

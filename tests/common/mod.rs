@@ -197,3 +197,11 @@ pub fn pixel_ray(cam: &hybrid_rt::scene::Camera, w: u32, h: u32, x: u32, y: u32)
     let rot = glam::Mat3::from_mat4(cam.view()).transpose();
     (cam.position(), (rot * dv).normalize())
 }
+
+/// A context with validation and synchronization validation on.
+pub fn sync_validated_context() -> hybrid_rt::vk::Context {
+    let _ = env_logger::builder().is_test(true).try_init();
+    GpuOptions { validation: true, sync_validation: true, ..Default::default() }
+        .context()
+        .expect("create a Vulkan context with synchronization validation")
+}
