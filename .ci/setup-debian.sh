@@ -7,8 +7,45 @@
 set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
 
+# The mirror this machine already uses for bookworm (deb822 .sources or one-line
+# sources.list), so backports come from the same place (a local mirror or proxy);
+# deb.debian.org only when no bookworm source is configured at all.
+debian_mirror() {
+  local uri files
+  shopt -s nullglob
+  files=("$APT_ETC"/sources.list.d/*.sources)
+  uri=""
+  [ "${#files[@]}" -gt 0 ] && uri=$(awk '
+    /^[[:space:]]*#/ { next }
+    /^[[:space:]]*$/ { if (uris != "" && suites ~ /(^| )bookworm( |$)/) { print uris; exit } uris=""; suites=""; next }
+    /^URIs:/ { uris=$2 }
+    /^Suites:/ { $1=""; suites=$0 " " }
+    END { if (uris != "" && suites ~ /(^| )bookworm( |$)/) print uris }
+  ' "${files[@]}" | head -n1 || true)
+  if [ -z "$uri" ]; then
+    files=("$APT_ETC"/sources.list "$APT_ETC"/sources.list.d/*.list)
+    uri=$(cat "${files[@]}" 2>/dev/null |
+      awk '$1 == "deb" { i = 2; if ($2 ~ /^\[/) { while (i <= NF && $i !~ /\]$/) i++; i++ }
+                         if ($(i+1) == "bookworm") { print $i; exit } }' || true)
+  fi
+  shopt -u nullglob
+  echo "${uri:-http://deb.debian.org/debian}"
+}
+
+# True when some source already provides bookworm-backports.
+backports_configured() {
+  grep -rqsE '(^|[[:space:]])bookworm-backports([[:space:]]|$)' "$APT_ETC"/sources.list "$APT_ETC"/sources.list.d/
+}
+
 pkgs=(libvulkan1 vulkan-tools vulkan-validationlayers cmake ninja-build python3 g++ git
       xvfb xauth libx11-6 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0)
+
+# APT_ETC: only for tests of the mirror detection (tests/setup_script.rs).
+APT_ETC=${APT_ETC:-/etc/apt}
+if [ "${1:-}" = "--print-mirror" ]; then
+  debian_mirror
+  exit 0
+fi
 
 need_install=0
 for p in "${pkgs[@]}"; do
@@ -20,10 +57,12 @@ if dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null | grep -q '^25\
 fi
 
 if [ "$need_install" = 1 ] || [ "$lvp_ok" = 0 ]; then
-  if [ ! -f /etc/apt/sources.list.d/bookworm-backports.sources ]; then
-    cat > /etc/apt/sources.list.d/bookworm-backports.sources <<'SRC'
+  if [ ! -f /etc/apt/sources.list.d/bookworm-backports.sources ] && ! backports_configured; then
+    mirror=$(debian_mirror)
+    echo "setup: adding bookworm-backports from $mirror"
+    cat > /etc/apt/sources.list.d/bookworm-backports.sources <<SRC
 Types: deb
-URIs: http://deb.debian.org/debian
+URIs: $mirror
 Suites: bookworm-backports
 Components: main
 Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg
