@@ -19,7 +19,7 @@ use hybrid_rt::render::shading::{Backend, Mode};
 use hybrid_rt::render::{FrameOutput, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
 
-const BACKENDS: [Backend; 3] = [Backend::Query, Backend::Pipeline, Backend::Compute];
+use common::BACKENDS;
 
 fn render_all(scene: &Scene, w: u32, h: u32, mode: Mode) -> Vec<(Backend, FrameOutput)> {
     let mut out = Vec::new();

@@ -8,7 +8,7 @@ use hybrid_rt::render::shading::{Backend, Mode};
 use hybrid_rt::render::{DebugView, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
 
-const BACKENDS: [Backend; 3] = [Backend::Query, Backend::Pipeline, Backend::Compute];
+use common::BACKENDS;
 
 /// A frame's recorded passes (with the timings' names) and allocated targets.
 fn frame_of(

@@ -11,7 +11,7 @@ use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::animation::find_animation;
 use hybrid_rt::scene::Scene;
 
-const BACKENDS: [Backend; 3] = [Backend::Query, Backend::Pipeline, Backend::Compute];
+use common::BACKENDS;
 
 fn load(model: &str) -> (Scene, usize) {
     let scene = Scene::load(&common::shared_asset(model)).unwrap();

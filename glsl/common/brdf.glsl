@@ -27,9 +27,14 @@ float v_smith_ggx_correlated(float n_v, float n_l, float a2) {
     return 0.5 / max(gv + gl, 1e-12);
 }
 
+// Schlick's Fresnel with the grazing reflectance f90 derived from f0 (as in
+// Filament): 1 for every real material (f0 >= 0.02, IOR >= 1.33), falling
+// to 0 as f0 -> 0, so an IOR-1 interface (f0 = 0) reflects nothing even at
+// grazing angles, as the exact dielectric Fresnel says.
 vec3 f_schlick(vec3 f0, float v_h) {
     float f = pow(clamp(1.0 - v_h, 0.0, 1.0), 5.0);
-    return f0 + (1.0 - f0) * f;
+    float f90 = clamp(dot(f0, vec3(50.0 / 3.0)), 0.0, 1.0);
+    return f0 + (f90 - f0) * f;
 }
 
 vec3 surface_f0(Surface s) {

@@ -8,6 +8,7 @@
 #include "scene.glsl"
 #include "env.glsl"
 #include "brdf.glsl"
+#include "fresnel.glsl"
 #include "lights.glsl"
 #include "offset.glsl"
 #include "trace.glsl"
@@ -34,18 +35,6 @@ vec3 trace_shadow(vec3 o, vec3 d, float tmax) { return vec3(1.0); }
 #endif
 
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
-
-// Exact unpolarized Fresnel reflectance of a dielectric interface; eta =
-// n_incident / n_transmitted; 1 under total internal reflection.
-float fresnel_dielectric(float cos_i, float eta) {
-    cos_i = clamp(cos_i, 0.0, 1.0);
-    float sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-    if (sin2_t >= 1.0) return 1.0;
-    float cos_t = sqrt(1.0 - sin2_t);
-    float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return clamp(0.5 * (rs * rs + rp * rp), 0.0, 1.0);
-}
 
 // Direct light from every punctual light; with SHADOWS, each light that
 // casts shadows is tested with a transmittance ray. `gn` is the unit
@@ -139,8 +128,8 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
         push_branch(offset_ray(s.position, gn), rd, w * rw, depth + 1u);
     }
     if (refract_on && fr < 1.0) {
-        vec3 td = refract(-v, s.normal, eta);
-        if (dot(td, gn) >= 0.0) td = refract(-v, gn, eta);
+        vec3 td = refract_dir(-v, s.normal, eta);
+        if (dot(td, gn) >= 0.0) td = refract_dir(-v, gn, eta);
         push_branch(offset_ray(s.position, -gn), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u);
     }
 }

@@ -69,6 +69,18 @@ shared! {
     id TOP_FIT_BLAS_NODES = 3;
     id TOP_FIT_ORDER = 4;
 
+    // The shading probe (glsl/probes/shading.comp): tests evaluate the
+    // compiled shading functions through it. One set; PROBE_* ops.
+    id SET_PROBE = 0;
+    id PROBE_IN = 0;
+    id PROBE_OUT = 1;
+    uint PROBE_FRESNEL = 0;
+    uint PROBE_SCHLICK = 1;
+    uint PROBE_BRDF = 2;
+    uint PROBE_OFFSET = 3;
+    uint PROBE_REFRACT = 4;
+    uint PROBE_GGX = 5;
+
     // Specialization constants.
     id SPEC_ALPHA_TEST = 0;
     id SPEC_SHADOWS = 1;

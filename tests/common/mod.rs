@@ -2,6 +2,7 @@
 //! golden-image comparison.
 #![allow(dead_code)]
 
+pub mod probe;
 pub mod scenes;
 
 use std::path::PathBuf;
@@ -168,6 +169,13 @@ pub fn scene_from_toml(name: &str, toml: &str) -> hybrid_rt::scene::Scene {
     std::fs::rename(&tmp, &path).unwrap();
     hybrid_rt::scene::Scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e:#}"))
 }
+
+/// The ray backends lavapipe offers: every cross-backend test runs all three.
+pub const BACKENDS: [hybrid_rt::render::shading::Backend; 3] = [
+    hybrid_rt::render::shading::Backend::Query,
+    hybrid_rt::render::shading::Backend::Pipeline,
+    hybrid_rt::render::shading::Backend::Compute,
+];
 
 /// Renders `scene` from its first camera with a validated context and checks
 /// the frame is finite and validation stayed clean.

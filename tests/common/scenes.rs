@@ -2,20 +2,37 @@
 //! set-ups whose correct image is known in closed form.
 #![allow(dead_code)]
 
-use glam::Vec3;
+use glam::{EulerRot, Quat, Vec3};
 
-/// A similarity transform applied to a whole scene: x -> x * scale + offset.
+/// A similarity transform applied to a whole scene:
+/// x -> tilt(x * scale) + offset, `tilt_deg` in the scene files' convention
+/// (about world X, then Y, then Z).
 #[derive(Clone, Copy, Debug)]
 pub struct Frame {
     pub scale: f32,
     pub offset: Vec3,
+    pub tilt_deg: Vec3,
 }
 
 impl Frame {
-    pub const IDENTITY: Frame = Frame { scale: 1.0, offset: Vec3::ZERO };
+    pub const IDENTITY: Frame = Frame::at(1.0, Vec3::ZERO);
+    pub const fn at(scale: f32, offset: Vec3) -> Frame {
+        Frame { scale, offset, tilt_deg: Vec3::ZERO }
+    }
+    fn tilt(&self) -> Quat {
+        let r = self.tilt_deg * (std::f32::consts::PI / 180.0);
+        Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
+    }
     fn p(&self, v: [f32; 3]) -> String {
-        let v = Vec3::from(v) * self.scale + self.offset;
+        let v = self.tilt() * (Vec3::from(v) * self.scale) + self.offset;
         format!("[{:.9e}, {:.9e}, {:.9e}]", v.x, v.y, v.z)
+    }
+    /// An object rotation `deg` (scene-file convention) composed with the tilt.
+    fn r(&self, deg: [f32; 3]) -> String {
+        let d = Vec3::from(deg) * (std::f32::consts::PI / 180.0);
+        let q = self.tilt() * Quat::from_euler(EulerRot::ZYX, d.z, d.y, d.x);
+        let (z, y, x) = q.to_euler(EulerRot::ZYX);
+        format!("[{:.9e}, {:.9e}, {:.9e}]", x.to_degrees(), y.to_degrees(), z.to_degrees())
     }
     fn s(&self, v: f32) -> String {
         format!("{:.9e}", v * self.scale)
@@ -56,6 +73,7 @@ name = "ground"
 primitive = "plane"
 size = [{g}, {g}]
 translation = {origin}
+rotation_deg = {flat}
 material = "ground"
 
 [[object]]
@@ -63,6 +81,7 @@ name = "occluder"
 primitive = "plane"
 size = [{one}, {one}]
 translation = {occ}
+rotation_deg = {flat}
 material = "occluder"
 "#,
         cam = f.p([2.5, 7.0, 2.5]),
@@ -74,6 +93,7 @@ material = "occluder"
         origin = f.p([0.0, 0.0, 0.0]),
         one = f.s(1.0),
         occ = f.p([0.0, 2.0, 0.0]),
+        flat = f.r([0.0, 0.0, 0.0]),
     )
 }
 

@@ -1,0 +1,60 @@
+#version 460
+// Evaluates the shading functions the renderer uses (BRDF, Fresnel,
+// refraction, ray offset) on host-given inputs, so tests can check the
+// compiled GLSL itself against closed forms (tests/shading_closed_form.rs).
+// Not part of any frame.
+#extension GL_EXT_scalar_block_layout : require
+#include "../common/types.glsl"
+#include "../common/brdf.glsl"
+#include "../common/fresnel.glsl"
+#include "../common/offset.glsl"
+
+layout(local_size_x = 64) in;
+
+struct ProbeCase {
+    uint op;
+    float a;
+    float b;
+    float c;
+    vec4 p;
+    vec4 q;
+    vec4 r;
+};
+
+layout(scalar, set = SET_PROBE, binding = PROBE_IN) readonly buffer Cases { ProbeCase cases[]; };
+layout(scalar, set = SET_PROBE, binding = PROBE_OUT) writeonly buffer Results { vec4 results[]; };
+layout(push_constant) uniform Push { uint count; } pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.count) return;
+    ProbeCase k = cases[i];
+    vec4 o = vec4(0.0);
+    if (k.op == PROBE_FRESNEL) {
+        o.x = fresnel_dielectric(k.a, k.b);
+    } else if (k.op == PROBE_SCHLICK) {
+        o.xyz = f_schlick(k.p.xyz, k.a);
+    } else if (k.op == PROBE_BRDF) {
+        // Surface at the origin with normal +Z; v = q, l = r, irradiance 1.
+        Surface s;
+        s.position = vec3(0.0);
+        s.normal = vec3(0.0, 0.0, 1.0);
+        s.base_color = k.p.xyz;
+        s.metallic = k.a;
+        s.roughness = k.b;
+        s.occlusion = 1.0;
+        s.emissive = vec3(0.0);
+        s.transmission = k.c;
+        s.ior = k.p.w;
+        o.xyz = brdf_eval(s, k.q.xyz, k.r.xyz, vec3(1.0));
+    } else if (k.op == PROBE_GGX) {
+        // a = n.h, b = alpha², p.xy = (n.v, n.l).
+        o.x = d_ggx(k.a, k.b);
+        o.y = v_smith_ggx_correlated(k.p.x, k.p.y, k.b);
+    } else if (k.op == PROBE_OFFSET) {
+        o.xyz = offset_ray(k.p.xyz, k.q.xyz);
+    } else if (k.op == PROBE_REFRACT) {
+        o.xyz = refract_dir(k.p.xyz, k.q.xyz, k.a);
+    }
+    results[i] = o;
+}
