@@ -198,13 +198,28 @@ pub fn render_command(
     hdr_out: Option<&Path>,
     strict: bool,
 ) -> Result<()> {
+    with_context(gpu, |ctx| {
+        let frame = render_once(ctx, job)?;
+        print_timings(&frame.timings);
+        let written = write_outputs(&frame, out, hdr_out, strict);
+        // A validation error explains a broken frame better than its pixels.
+        check_validation(ctx)?;
+        written.map(|_| ())
+    })
+}
+
+/// Runs `f` with a new context, then destroys the context and fails if the
+/// validation layer reported anything during its life or teardown (objects
+/// leaked at vkDestroyDevice), on the error path too: an error exit must
+/// leave nothing behind either.
+pub fn with_context<R>(gpu: &GpuOptions, f: impl FnOnce(&Context) -> Result<R>) -> Result<R> {
     let ctx = gpu.context()?;
-    let frame = render_once(&ctx, job)?;
-    print_timings(&frame.timings);
-    let written = write_outputs(&frame, out, hdr_out, strict);
-    // A validation error explains a broken frame better than its pixels.
-    check_validation(&ctx)?;
-    written.map(|_| ())
+    let result = f(&ctx);
+    match (result, ctx.finish()) {
+        (Ok(v), Ok(())) => Ok(v),
+        (Err(e), Ok(())) | (Ok(_), Err(e)) => Err(e),
+        (Err(e), Err(teardown)) => Err(e.context(format!("{teardown:#}"))),
+    }
 }
 
 /// Pixels whose radiance has a NaN or Inf component: how many, and the
@@ -525,8 +540,11 @@ pub fn bench_command(
     warmup: usize,
     variants: &[BenchVariant],
 ) -> Result<()> {
-    let ctx = gpu.context()?;
-    let reports = bench(&ctx, job, frames.max(1), warmup, variants)?;
+    with_context(gpu, |ctx| bench_with(ctx, job, frames, warmup, variants))
+}
+
+fn bench_with(ctx: &Context, job: &RenderJob, frames: usize, warmup: usize, variants: &[BenchVariant]) -> Result<()> {
+    let reports = bench(ctx, job, frames.max(1), warmup, variants)?;
     for r in &reports {
         println!("{}", r.table());
     }
@@ -552,7 +570,7 @@ pub fn bench_command(
             );
         }
     }
-    check_validation(&ctx)
+    check_validation(ctx)
 }
 
 /// What refitting costs in tree quality, and what a CPU refit would cost in

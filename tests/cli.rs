@@ -433,3 +433,35 @@ fn synchronization_validation_is_clean() {
         assert!(out.status.success(), "{model}: {}", String::from_utf8_lossy(&out.stderr));
     }
 }
+
+/// Error exits after the device exists (a scene that fails to load, an
+/// output that cannot be written after the frame was rendered) under
+/// validation: a clear error, and no validation message, teardown included
+/// (no leaked Vulkan object).
+#[test]
+fn error_exits_after_device_creation_leak_nothing() {
+    let dir = tmp("error_exit");
+    std::fs::write(dir.join("bad.toml"), "[[object]]\nname = 1\n").unwrap();
+    // A file where the output's directory should be.
+    std::fs::write(dir.join("blocker"), b"").unwrap();
+    let cases: [(Vec<std::ffi::OsString>, &str); 2] = [
+        (vec!["--scene".into(), dir.join("bad.toml").into()], "bad.toml"),
+        (
+            vec![
+                "--scene".into(),
+                common::repo_path("assets/default.toml").into(),
+                "--out".into(),
+                dir.join("blocker").join("x.png").into(),
+            ],
+            "blocker",
+        ),
+    ];
+    for (args, needle) in cases {
+        let out = bin().args(["render", "--width", "32", "--height", "18"]).args(&args).output().unwrap();
+        assert_clean_failure(&out, &[needle]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains("VK_LAYER_KHRONOS_validation is on"), "validation was not on:\n{stderr}");
+        let messages: Vec<&str> = stderr.lines().filter(|l| l.contains(" vulkan]") || l.contains("VUID")).collect();
+        assert!(messages.is_empty(), "validation messages on the error path: {messages:#?}");
+    }
+}

@@ -132,6 +132,8 @@ intensity = 5.0
 [[material]]
 name = "m"
 roughness = 0.3
+[environment]
+hdr = "seed.hdr"
 [[object]]
 name = "ball"
 primitive = "sphere"
@@ -184,10 +186,39 @@ fn load_bounded(path: &Path) -> Result<(), String> {
 
 struct Seed {
     file: &'static str,
+    /// The file loaded to read this one (an image is read through the scene
+    /// that references it); None: the file itself.
+    via: Option<&'static str>,
     bytes: Vec<u8>,
     /// Huge-count variants (whole files).
     huge: Vec<Vec<u8>>,
 }
+
+/// A 4x4 RGBA PNG and a 4x2 Radiance .hdr, encoded by the image crate.
+fn png() -> Vec<u8> {
+    let px: Vec<u8> = (0..64u8).map(|i| i.wrapping_mul(37)).collect();
+    let mut out = std::io::Cursor::new(Vec::new());
+    image::RgbaImage::from_raw(4, 4, px).unwrap().write_to(&mut out, image::ImageFormat::Png).unwrap();
+    out.into_inner()
+}
+
+fn hdr() -> Vec<u8> {
+    let px: Vec<image::Rgb<f32>> = (0..8).map(|i| image::Rgb([i as f32 * 0.5, 1.0, 1e4])).collect();
+    let mut out = Vec::new();
+    image::codecs::hdr::HdrEncoder::new(&mut out).encode(&px, 4, 2).unwrap();
+    out
+}
+
+/// A glTF whose material's base colour is seed.png.
+const TEXTURED_GLTF: &str = r#"{"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+"nodes": [{"mesh": 0}],
+"meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+"materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+"textures": [{"source": 0}], "images": [{"uri": "seed.png"}],
+"buffers": [{"uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/", "byteLength": 60}],
+"bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+"accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+  {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}]}"#;
 
 fn seeds() -> Vec<Seed> {
     let data = format!("data:application/octet-stream;base64,{}", base64(&bin()));
@@ -197,25 +228,45 @@ fn seeds() -> Vec<Seed> {
     vec![
         Seed {
             file: "seed.gltf",
+            via: None,
             bytes: json.clone().into(),
             huge: huge_counts(&json, &counts).into_iter().map(Into::into).collect(),
         },
         Seed {
             file: "seed.glb",
+            via: None,
             bytes: glb(&glb_json, &bin()),
             huge: huge_counts(&glb_json, &counts).iter().map(|j| glb(j, &bin())).collect(),
         },
         Seed {
             file: "seed.obj",
+            via: None,
             bytes: OBJ.into(),
             huge: huge_counts(OBJ, &["f ", "/"]).into_iter().map(Into::into).collect(),
         },
         Seed {
             file: "seed.toml",
+            via: None,
             bytes: TOML.into(),
             huge: huge_counts(TOML, &["slices = ", "stacks = "]).into_iter().map(Into::into).collect(),
         },
+        Seed { file: "textured.gltf", via: None, bytes: TEXTURED_GLTF.into(), huge: Vec::new() },
+        // Image decoders: corrupted texture and environment files, read
+        // through the scenes that reference them.
+        Seed { file: "seed.png", via: Some("textured.gltf"), bytes: png(), huge: Vec::new() },
+        Seed { file: "seed.hdr", via: Some("seed.toml"), bytes: hdr(), huge: huge_hdr() },
     ]
+}
+
+/// .hdr headers claiming huge sizes (the decoder must not allocate them).
+fn huge_hdr() -> Vec<Vec<u8>> {
+    let valid = hdr();
+    let header_end = valid.windows(2).position(|w| w == b"\n-").unwrap() + 1;
+    let body = &valid[valid[header_end..].iter().position(|b| *b == b'\n').unwrap() + header_end + 1..];
+    ["-Y 2 +X 4000000000", "-Y 2000000000 +X 4", "-Y 65536 +X 65536", "-Y 0 +X 4", "-Y 2 +X -4"]
+        .iter()
+        .map(|size| [&valid[..header_end], size.as_bytes(), b"\n", body].concat())
+        .collect()
 }
 
 /// Named inputs that once panicked, hung or over-allocated.
@@ -238,8 +289,8 @@ fn corrupted_inputs_never_panic_hang_or_over_allocate() {
         std::fs::write(dir.join(seed.file), &seed.bytes).unwrap();
     }
     for seed in &seeds {
-        Scene::load(&dir.join(seed.file))
-            .unwrap_or_else(|e| panic!("seed {} does not load: {e:#}", seed.file));
+        let load = seed.via.unwrap_or(seed.file);
+        Scene::load(&dir.join(load)).unwrap_or_else(|e| panic!("seed {} ({load}) does not load: {e:#}", seed.file));
     }
     const SEED: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut rng = XorShift(SEED);
@@ -276,10 +327,10 @@ fn corrupted_inputs_never_panic_hang_or_over_allocate() {
         let path: PathBuf = dir.join(file);
         std::fs::write(&path, bytes).unwrap();
         CASE.store(index, Ordering::Relaxed);
-        if let Err(why) = load_bounded(&path) {
+        let original = seeds.iter().find(|s| s.file == *file).unwrap();
+        if let Err(why) = load_bounded(&dir.join(original.via.unwrap_or(file))) {
             failures.push(format!("case {index} ({name}, PRNG seed {SEED:#x}): {why}"));
         }
-        let original = seeds.iter().find(|s| s.file == *file).unwrap();
         std::fs::write(&path, &original.bytes).unwrap();
     }
     assert!(

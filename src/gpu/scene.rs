@@ -70,15 +70,19 @@ impl GpuScene {
         let (vertices, indices, ranges, skinned, skinned_bounds) = upload_geometry(ctx, scene)?;
 
         let mut samplers = Vec::new();
+        let max_dim = ctx.caps.limits.max_image_dimension_2d;
+        let fitted: Vec<(vk::Extent2D, std::borrow::Cow<[u8]>)> =
+            scene.textures.iter().map(|t| fit_texture(t, max_dim)).collect();
         let descs: Vec<TextureDesc> = scene
             .textures
             .iter()
+            .zip(&fitted)
             .enumerate()
-            .map(|(i, t)| TextureDesc {
+            .map(|(i, (t, (extent, texels)))| TextureDesc {
                 name: format!("texture {i} '{}'", t.name),
                 format: if t.srgb { vk::Format::R8G8B8A8_SRGB } else { vk::Format::R8G8B8A8_UNORM },
-                extent: vk::Extent2D { width: t.width, height: t.height },
-                texels: &t.rgba8,
+                extent: *extent,
+                texels,
                 mipmaps: t.sampler.mipmaps,
             })
             .collect();
@@ -324,14 +328,52 @@ fn build_draws(scene: &Scene, ranges: &[Vec<PrimitiveRange>], skinned: &[Primiti
         .collect()
 }
 
+/// A texture's texels at a size the device can hold: larger than
+/// maxImageDimension2D, it is downscaled (aspect kept, triangle filter)
+/// with a warning rather than handed to the driver.
+fn fit_texture(t: &crate::scene::Texture, max_dim: u32) -> (vk::Extent2D, std::borrow::Cow<'_, [u8]>) {
+    let extent = vk::Extent2D { width: t.width, height: t.height };
+    let largest = t.width.max(t.height);
+    if largest <= max_dim || max_dim == 0 {
+        return (extent, std::borrow::Cow::Borrowed(&t.rgba8));
+    }
+    let scale = max_dim as f64 / largest as f64;
+    let (w, h) = (((t.width as f64 * scale) as u32).max(1), ((t.height as f64 * scale) as u32).max(1));
+    log::warn!(
+        "texture '{}': {}x{} exceeds this device's maxImageDimension2D ({max_dim}); downscaled to {w}x{h}",
+        t.name,
+        t.width,
+        t.height
+    );
+    let Some(img) = image::RgbaImage::from_raw(t.width, t.height, t.rgba8.clone()) else {
+        return (extent, std::borrow::Cow::Borrowed(&t.rgba8)); // loader guarantees the size
+    };
+    let small = image::imageops::resize(&img, w, h, image::imageops::FilterType::Triangle);
+    (vk::Extent2D { width: w, height: h }, std::borrow::Cow::Owned(small.into_raw()))
+}
+
 fn tex_index(t: &Option<TextureRef>) -> i32 {
     t.map(|t| t.texture as i32).unwrap_or(-1)
 }
 
+/// Emitted radiance is limited to half's range: the primary hit's emissive
+/// G-buffer target is RGBA16F, where more would become Inf, while secondary
+/// hits read this buffer; clamping here, where every material passes, makes
+/// both modes and every bounce shade the same value.
+pub const MAX_EMISSIVE: f32 = HALF_MAX;
+
 fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
+    let emissive = m.emissive.map(|e| e.min(MAX_EMISSIVE));
+    if emissive != m.emissive {
+        log::warn!(
+            "material '{}': emissive {:?} clamped to {MAX_EMISSIVE} (the G-buffer's half-float range)",
+            m.name,
+            m.emissive
+        );
+    }
     GpuMaterial {
         base_color: m.base_color,
-        emissive: m.emissive,
+        emissive,
         metallic: m.metallic,
         roughness: m.roughness,
         normal_scale: m.normal_scale,
@@ -447,9 +489,12 @@ fn create_sampler(ctx: &Context, d: &SamplerDesc) -> Result<vk::Sampler> {
     Ok(s)
 }
 
-/// Uploads the equirectangular map as RGBA16F (filterable everywhere; values
-/// above half's range are clamped) and returns its mean radiance. Without a
-/// map a 1x1 black texture keeps the descriptor valid.
+/// Uploads the equirectangular map and returns its mean radiance. RGBA16F
+/// holds ordinary maps; a map with texels beyond half's range (a sun of
+/// 1e5, RGBE values up to ~1.7e38) goes up as RGBA32F where the device
+/// filters it, so misses and the mean see the same radiance; else it is
+/// clamped to 65504 with a warning and the mean is taken over the clamped
+/// values. Without a map a 1x1 black texture keeps the descriptor valid.
 fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3)> {
     let env = &scene.environment;
     let Some(map) = &env.map else {
@@ -463,33 +508,54 @@ fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3)> {
         )?;
         return Ok((img, env.color * env.intensity));
     };
-    let mut texels = Vec::with_capacity(map.rgb.len() / 3 * 8);
-    let mut sum = Vec3::ZERO;
-    let mut weight = 0.0f64;
-    for y in 0..map.height {
-        // Solid angle of a row is proportional to sin(theta).
-        let w = (std::f32::consts::PI * (y as f32 + 0.5) / map.height as f32).sin();
-        for x in 0..map.width {
-            let i = ((y * map.width + x) * 3) as usize;
-            let c = Vec3::new(map.rgb[i], map.rgb[i + 1], map.rgb[i + 2]);
-            let c = if c.is_finite() { c.max(Vec3::ZERO) } else { Vec3::ZERO };
-            sum += c * w;
-            weight += w as f64;
-            for v in [c.x, c.y, c.z, 1.0] {
+    let sanitized = |v: f32| if v.is_finite() { v.max(0.0) } else { 0.0 };
+    let over_half = map.rgb.iter().filter(|v| sanitized(**v) > HALF_MAX).count();
+    let wide = over_half > 0 && filters_linearly(ctx, vk::Format::R32G32B32A32_SFLOAT);
+    if over_half > 0 && !wide {
+        log::warn!(
+            "environment map: {over_half} channel values above 65504 clamped (this device cannot filter RGBA32F)"
+        );
+    }
+    let (format, texel_bytes) =
+        if wide { (vk::Format::R32G32B32A32_SFLOAT, 16) } else { (vk::Format::R16G16B16A16_SFLOAT, 8) };
+    let mut texels = Vec::with_capacity(map.rgb.len() / 3 * texel_bytes);
+    let texels_of = map.rgb.chunks_exact(3).map(|c| Vec3::new(sanitized(c[0]), sanitized(c[1]), sanitized(c[2])));
+    for c in texels_of.clone() {
+        for v in [c.x, c.y, c.z, 1.0] {
+            if wide {
+                texels.extend_from_slice(&v.to_le_bytes());
+            } else {
                 texels.extend_from_slice(&f32_to_f16(v).to_le_bytes());
             }
         }
     }
-    let mean = sum / weight.max(1e-12) as f32 * env.intensity;
-    let img = Image::texture(
-        ctx,
-        "environment map",
-        vk::Format::R16G16B16A16_SFLOAT,
-        vk::Extent2D { width: map.width, height: map.height },
-        &texels,
-        false,
-    )?;
+    let stored = |c: Vec3| if wide { c } else { c.min(Vec3::splat(HALF_MAX)) };
+    let mean = equirect_mean(texels_of.map(stored), map.width, map.height) * env.intensity;
+    let img = Image::texture(ctx, "environment map", format, vk::Extent2D { width: map.width, height: map.height }, &texels, false)?;
     Ok((img, mean))
+}
+
+const HALF_MAX: f32 = 65504.0;
+
+fn filters_linearly(ctx: &Context, format: vk::Format) -> bool {
+    let props = unsafe { ctx.instance.raw.get_physical_device_format_properties(ctx.physical_device, format) };
+    props.optimal_tiling_features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
+}
+
+/// Solid-angle weighted mean of an equirectangular map's texels (row
+/// weight sin θ), summed in f64: texels near the RGBE maximum (~1.7e38)
+/// overflow an f32 sum to Inf, which made the ambient term NaN and the
+/// whole frame black. The result is clamped to the largest finite f32.
+pub fn equirect_mean(texels: impl Iterator<Item = Vec3>, width: u32, height: u32) -> Vec3 {
+    let mut sum = glam::DVec3::ZERO;
+    let mut weight = 0.0f64;
+    for (i, c) in texels.enumerate() {
+        let y = i as u32 / width.max(1);
+        let w = (std::f64::consts::PI * (y as f64 + 0.5) / height.max(1) as f64).sin();
+        sum += c.as_dvec3() * w;
+        weight += w;
+    }
+    (sum / weight.max(1e-12)).min(glam::DVec3::splat(f32::MAX as f64)).as_vec3()
 }
 
 /// IEEE half from f32: round to nearest, overflow clamps to the largest
@@ -518,6 +584,19 @@ pub fn f32_to_f16(v: f32) -> u16 {
 #[cfg(test)]
 mod tests {
     use super::f32_to_f16;
+
+    #[test]
+    fn environment_mean_survives_texels_near_the_rgbe_maximum() {
+        // Two rows of 2: one texel at 1.7e38 in every channel. An f32 sum
+        // of sin-weighted texels overflows; the f64 one gives the mean.
+        let big = glam::Vec3::splat(1.7e38);
+        let texels = [big, glam::Vec3::ZERO, big, big];
+        let m = super::equirect_mean(texels.into_iter(), 2, 2);
+        assert!(m.is_finite(), "{m}");
+        assert!((m.x / 1.7e38 - 0.75).abs() < 1e-6, "{m}");
+        let ones = super::equirect_mean([glam::Vec3::ONE; 6].into_iter(), 3, 2);
+        assert!((ones - glam::Vec3::ONE).abs().max_element() < 1e-6);
+    }
 
     #[test]
     fn half_conversion() {

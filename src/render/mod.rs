@@ -138,35 +138,63 @@ fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buff
     let buffer = |name, bytes| {
         Buffer::new(ctx, name, px * bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)
     };
-    Ok((buffer("readback ldr", 4)?, buffer("readback hdr", 16)?))
+    let ldr = buffer("readback ldr", 4)?;
+    match buffer("readback hdr", 16) {
+        Ok(hdr) => Ok((ldr, hdr)),
+        Err(e) => {
+            let mut ldr = ldr;
+            ldr.destroy(ctx);
+            Err(e)
+        }
+    }
 }
 
 impl Renderer {
     pub fn new(ctx: &Context, scene: &Scene, extent: vk::Extent2D) -> Result<Renderer> {
+        ctx.caps.limits.check_extent(extent.width, extent.height)?;
         let gpu = GpuScene::upload(ctx, scene)?;
-        let (readback_ldr, readback_hdr) = readback_buffers(ctx, extent)?;
-        let skinning = Skinning::new(ctx, scene, &gpu)?;
-        Ok(Renderer {
-            skinning,
+        // Everything after the upload is created into a renderer that owns it
+        // from the start, so a failure part-way destroys what exists (an
+        // error exit leaks no Vulkan object).
+        let mut r = Renderer {
+            skinning: None,
             rebuild_policy: RebuildPolicy::default(),
-            update_cmd: ctx.allocate_command_buffer("scene update")?,
-            update_timer: GpuTimer::new(ctx, 8)?,
+            update_cmd: vk::CommandBuffer::null(),
+            update_timer: GpuTimer::empty(),
             update_timings: Vec::new(),
             update_counts: [0; 2],
             pending_update: false,
             gpu,
-            targets: Targets::new(ctx, extent, &[])?,
+            targets: Targets::empty(extent),
             extent,
             needs: SceneNeeds::of(scene),
             config: None,
             passes: Vec::new(),
             tracer: None,
-            timer: GpuTimer::new(ctx, 16)?,
-            cmd: ctx.allocate_command_buffer("frame")?,
-            readback_ldr,
-            readback_hdr,
+            timer: GpuTimer::empty(),
+            cmd: vk::CommandBuffer::null(),
+            readback_ldr: Buffer::null(),
+            readback_hdr: Buffer::null(),
             frame_index: 0,
-        })
+        };
+        match r.create_resources(ctx, scene) {
+            Ok(()) => Ok(r),
+            Err(e) => {
+                r.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    fn create_resources(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        (self.readback_ldr, self.readback_hdr) = readback_buffers(ctx, self.extent)?;
+        self.skinning = Skinning::new(ctx, scene, &self.gpu)?;
+        self.update_cmd = ctx.allocate_command_buffer("scene update")?;
+        self.update_timer = GpuTimer::new(ctx, 8)?;
+        self.targets = Targets::new(ctx, self.extent, &[])?;
+        self.timer = GpuTimer::new(ctx, 16)?;
+        self.cmd = ctx.allocate_command_buffer("frame")?;
+        Ok(())
     }
 
     pub fn extent(&self) -> vk::Extent2D {
@@ -504,7 +532,11 @@ impl Renderer {
     pub fn destroy(&mut self, ctx: &Context) {
         unsafe {
             let _ = ctx.device.device_wait_idle();
-            ctx.device.free_command_buffers(ctx.command_pool, &[self.cmd, self.update_cmd]);
+            let cmds: Vec<vk::CommandBuffer> =
+                [self.cmd, self.update_cmd].into_iter().filter(|c| *c != vk::CommandBuffer::null()).collect();
+            if !cmds.is_empty() {
+                ctx.device.free_command_buffers(ctx.command_pool, &cmds);
+            }
         }
         self.update_timer.destroy(ctx);
         if let Some(mut s) = self.skinning.take() {

@@ -12,7 +12,8 @@ use crate::gpu::shared::{
     SPEC_COUNT_RAYS, SPEC_MAX_DEPTH, SPEC_MIN_WEIGHT, SPEC_REFLECTIONS, SPEC_REFRACTIONS, SPEC_SHADOWS,
 };
 use crate::scene::{LightKind, Scene};
-use crate::vk::Context;
+use crate::vk::limits::Limits;
+use crate::vk::{Context, RtEnables};
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Mode {
@@ -81,6 +82,10 @@ pub struct SceneNeeds {
     pub shadows: bool,
     pub reflections: bool,
     pub refractions: bool,
+    /// Triangles of the largest primitive (one BLAS each) and the instance
+    /// count (TLAS entries), checked against the driver's limits.
+    pub largest_primitive_triangles: u64,
+    pub instances: u64,
 }
 
 impl SceneNeeds {
@@ -97,8 +102,60 @@ impl SceneNeeds {
                 let mat = &scene.materials[m];
                 mat.transmission > 0.0 && mat.metallic < 1.0
             }),
+            largest_primitive_triangles: scene
+                .instances
+                .iter()
+                .map(|i| scene.meshes[i.mesh].primitives[i.primitive].indices.len() as u64 / 3)
+                .max()
+                .unwrap_or(0),
+            instances: scene.instances.len() as u64,
         }
     }
+}
+
+/// The backend for `requested` on a device with `rt` enabled. The hardware
+/// backends must hold the scene within the driver's acceleration-structure
+/// limits (lavapipe before Mesa 25.2.7: 2^24 - 1 triangles per BLAS): `auto`
+/// falls back to the compute BVH with a warning, an explicit request fails
+/// with the numbers, before any driver call could crash on them.
+pub fn pick_backend(requested: Backend, rt: &RtEnables, limits: &Limits, needs: &SceneNeeds) -> Result<Backend> {
+    let too_big = if needs.largest_primitive_triangles > limits.max_primitive_count {
+        Some(format!(
+            "a mesh primitive has {} triangles, more than this driver's acceleration-structure limit \
+             (maxPrimitiveCount {})",
+            needs.largest_primitive_triangles, limits.max_primitive_count
+        ))
+    } else if needs.instances > limits.max_instance_count {
+        Some(format!(
+            "the scene has {} instances, more than this driver's limit (maxInstanceCount {})",
+            needs.instances, limits.max_instance_count
+        ))
+    } else {
+        None
+    };
+    let hardware = |name: &str, ext: &str, available: bool, backend: Backend| -> Result<Backend> {
+        if !available {
+            bail!("--backend {name}: the device has no usable {ext} (see `info`)");
+        }
+        if let Some(why) = &too_big {
+            bail!("--backend {name}: {why}; split the mesh or use --backend compute");
+        }
+        Ok(backend)
+    };
+    Ok(match requested {
+        Backend::Query => hardware("query", "VK_KHR_ray_query", rt.ray_query, Backend::Query)?,
+        Backend::Pipeline => {
+            hardware("pipeline", "VK_KHR_ray_tracing_pipeline", rt.ray_tracing_pipeline, Backend::Pipeline)?
+        }
+        Backend::Auto if (rt.ray_query || rt.ray_tracing_pipeline) && too_big.is_some() => {
+            log::warn!("{}: using the compute BVH backend", too_big.unwrap_or_default());
+            Backend::Compute
+        }
+        Backend::Auto if rt.ray_query => Backend::Query,
+        Backend::Auto if rt.ray_tracing_pipeline => Backend::Pipeline,
+        Backend::Auto => Backend::Compute,
+        b => b,
+    })
 }
 
 fn light_is_on(l: &crate::scene::Light) -> bool {
@@ -147,18 +204,7 @@ impl ShadingConfig {
         let backend = if !traces {
             None
         } else {
-            Some(match backend {
-                Backend::Query if !ctx.rt.ray_query => {
-                    bail!("--backend query: the device has no usable VK_KHR_ray_query (see `info`)")
-                }
-                Backend::Pipeline if !ctx.rt.ray_tracing_pipeline => {
-                    bail!("--backend pipeline: the device has no usable VK_KHR_ray_tracing_pipeline (see `info`)")
-                }
-                Backend::Auto if ctx.rt.ray_query => Backend::Query,
-                Backend::Auto if ctx.rt.ray_tracing_pipeline => Backend::Pipeline,
-                Backend::Auto => Backend::Compute,
-                b => b,
-            })
+            Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs)?)
         };
         Ok(ShadingConfig { mode, effects, backend, debug_view, needs })
     }
@@ -205,5 +251,48 @@ impl ShadingConfig {
             self.backend.map(|b| format!("{b:?}").to_lowercase()).unwrap_or_else(|| "none".into()),
             if on.is_empty() { "none".to_string() } else { on.join(", ") }
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn needs(triangles: u64, instances: u64) -> SceneNeeds {
+        SceneNeeds {
+            shadows: true,
+            reflections: false,
+            refractions: false,
+            largest_primitive_triangles: triangles,
+            instances,
+        }
+    }
+
+    #[test]
+    fn backends_respect_the_acceleration_structure_limits() {
+        let rt = RtEnables { acceleration_structure: true, ray_query: true, ray_tracing_pipeline: true };
+        let limits = Limits {
+            max_image_dimension_2d: 16384,
+            max_compute_work_group_count: [65535; 3],
+            max_primitive_count: (1 << 24) - 1,
+            max_instance_count: 1 << 24,
+        };
+        let fits = needs(1000, 10);
+        assert_eq!(pick_backend(Backend::Auto, &rt, &limits, &fits).unwrap(), Backend::Query);
+        assert_eq!(pick_backend(Backend::Pipeline, &rt, &limits, &fits).unwrap(), Backend::Pipeline);
+        // One triangle over lavapipe's old 2^24 - 1 limit.
+        let huge = needs(1 << 24, 10);
+        assert_eq!(pick_backend(Backend::Auto, &rt, &limits, &huge).unwrap(), Backend::Compute);
+        assert_eq!(pick_backend(Backend::Compute, &rt, &limits, &huge).unwrap(), Backend::Compute);
+        for b in [Backend::Query, Backend::Pipeline] {
+            let e = pick_backend(b, &rt, &limits, &huge).unwrap_err().to_string();
+            assert!(e.contains("16777216 triangles") && e.contains("maxPrimitiveCount 16777215"), "{e}");
+        }
+        let many = needs(10, (1 << 24) + 1);
+        let e = pick_backend(Backend::Query, &rt, &limits, &many).unwrap_err().to_string();
+        assert!(e.contains("maxInstanceCount"), "{e}");
+        let none = RtEnables { acceleration_structure: false, ray_query: false, ray_tracing_pipeline: false };
+        assert_eq!(pick_backend(Backend::Auto, &none, &limits, &huge).unwrap(), Backend::Compute);
+        assert!(pick_backend(Backend::Query, &none, &limits, &fits).unwrap_err().to_string().contains("VK_KHR_ray_query"));
     }
 }

@@ -39,6 +39,23 @@ impl std::ops::Deref for Target {
     }
 }
 
+impl Target {
+    fn new(ctx: &Context, desc: &'static TargetDesc, usage: vk::ImageUsageFlags, extent: vk::Extent2D) -> Result<Target> {
+        let storage = usage.contains(vk::ImageUsageFlags::STORAGE);
+        Ok(match desc.storage_format.filter(|_| storage) {
+            Some(view_format) => {
+                let image = Image::new_2d_mutable(ctx, desc.name, desc.format, view_format, extent, usage)?;
+                let view = image.extra_view.expect("mutable image has a storage view");
+                Target { desc, image, storage_view: view }
+            }
+            None => {
+                let image = Image::new_2d(ctx, desc.name, desc.format, extent, 1, usage)?;
+                Target { desc, storage_view: image.view, image }
+            }
+        })
+    }
+}
+
 pub struct Targets {
     pub extent: vk::Extent2D,
     targets: Vec<Target>,
@@ -57,6 +74,11 @@ fn usage(access: Access) -> vk::ImageUsageFlags {
 }
 
 impl Targets {
+    /// No images yet.
+    pub fn empty(extent: vk::Extent2D) -> Targets {
+        Targets { extent, targets: Vec::new() }
+    }
+
     /// Allocates every image that `uses` name, once each.
     pub fn new(ctx: &Context, extent: vk::Extent2D, uses: &[Use]) -> Result<Targets> {
         let mut wanted: Vec<(&'static TargetDesc, vk::ImageUsageFlags)> = Vec::new();
@@ -67,24 +89,17 @@ impl Targets {
                 None => wanted.push((t, usage(u.access))),
             }
         }
-        let mut targets = Vec::new();
+        let mut out = Targets::empty(extent);
         for (desc, usage) in wanted {
-            let storage = usage.contains(vk::ImageUsageFlags::STORAGE);
-            let target = match desc.storage_format.filter(|_| storage) {
-                Some(view_format) => {
-                    let image =
-                        Image::new_2d_mutable(ctx, desc.name, desc.format, view_format, extent, usage)?;
-                    let view = image.extra_view.expect("mutable image has a storage view");
-                    Target { desc, image, storage_view: view }
+            match Target::new(ctx, desc, usage, extent) {
+                Ok(t) => out.targets.push(t),
+                Err(e) => {
+                    out.destroy(ctx); // what was allocated before the failure
+                    return Err(e);
                 }
-                None => {
-                    let image = Image::new_2d(ctx, desc.name, desc.format, extent, 1, usage)?;
-                    Target { desc, storage_view: image.view, image }
-                }
-            };
-            targets.push(target);
+            }
         }
-        Ok(Targets { extent, targets })
+        Ok(out)
     }
 
     pub fn get(&self, desc: &TargetDesc) -> Option<&Target> {

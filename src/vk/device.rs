@@ -21,6 +21,7 @@ pub struct Capabilities {
     pub timestamp_period_ns: f32,
     pub timestamps: bool,
     pub graphics_queue_family: u32,
+    pub limits: super::limits::Limits,
     /// Why the device is unusable, if it is.
     pub unusable: Option<String>,
 }
@@ -141,6 +142,7 @@ pub fn query_capabilities(instance: &ash::Instance, pd: vk::PhysicalDevice, inde
         timestamp_period_ns: props.limits.timestamp_period,
         timestamps,
         graphics_queue_family: gfx.unwrap_or(0) as u32,
+        limits: super::limits::Limits::query(instance, pd, has_as),
         unusable,
     }
 }

@@ -18,6 +18,11 @@ pub struct Buffer {
 }
 
 impl Buffer {
+    /// A buffer that owns nothing (a placeholder; `destroy` is a no-op).
+    pub fn null() -> Buffer {
+        Buffer { raw: vk::Buffer::null(), allocation: None, size: 0, address: 0 }
+    }
+
     pub fn new(
         ctx: &Context,
         name: &str,

@@ -3,6 +3,7 @@
 
 pub mod device;
 pub mod instance;
+pub mod limits;
 pub mod memory;
 pub mod pipeline;
 pub mod rt_pipeline;
