@@ -543,7 +543,13 @@ pub fn bench_command(
     with_context(gpu, |ctx| bench_with(ctx, job, frames, warmup, variants))
 }
 
-fn bench_with(ctx: &Context, job: &RenderJob, frames: usize, warmup: usize, variants: &[BenchVariant]) -> Result<()> {
+fn bench_with(
+    ctx: &Context,
+    job: &RenderJob,
+    frames: usize,
+    warmup: usize,
+    variants: &[BenchVariant],
+) -> Result<()> {
     let reports = bench(ctx, job, frames.max(1), warmup, variants)?;
     for r in &reports {
         println!("{}", r.table());

@@ -461,7 +461,8 @@ fn error_exits_after_device_creation_leak_nothing() {
         assert_clean_failure(&out, &[needle]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.contains("VK_LAYER_KHRONOS_validation is on"), "validation was not on:\n{stderr}");
-        let messages: Vec<&str> = stderr.lines().filter(|l| l.contains(" vulkan]") || l.contains("VUID")).collect();
+        let messages: Vec<&str> =
+            stderr.lines().filter(|l| l.contains(" vulkan]") || l.contains("VUID")).collect();
         assert!(messages.is_empty(), "validation messages on the error path: {messages:#?}");
     }
 }

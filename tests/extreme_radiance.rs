@@ -17,7 +17,9 @@ fn hdr_map(name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> f32) -> PathBuf {
     let pixels: Vec<image::Rgb<f32>> =
         (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| image::Rgb([f(x, y); 3])).collect();
     let file = std::fs::File::create(&path).unwrap();
-    image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file)).encode(&pixels, w as usize, h as usize).unwrap();
+    image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
+        .encode(&pixels, w as usize, h as usize)
+        .unwrap();
     path
 }
 
@@ -132,6 +134,7 @@ material = "mirror"
     assert_eq!(max, hybrid_rt::gpu::scene::MAX_EMISSIVE, "the lamp's radiance");
     let (worst, _) = hybrid_rt::metrics::diff_stats(&hybrid.ldr, &rt.ldr, 4, 1);
     assert!(worst <= 1, "hybrid and pure RT differ by {worst}/255 on a 1e6 emitter");
-    let rel = hybrid.hdr.iter().zip(&rt.hdr).map(|(a, b)| (a - b).abs() / a.abs().max(1.0)).fold(0.0f32, f32::max);
+    let rel =
+        hybrid.hdr.iter().zip(&rt.hdr).map(|(a, b)| (a - b).abs() / a.abs().max(1.0)).fold(0.0f32, f32::max);
     assert!(rel < 1e-3, "HDR differs between modes by {rel} (relative)");
 }

@@ -10,6 +10,9 @@ use std::time::Duration;
 
 use hybrid_rt::scene::Scene;
 
+mod common;
+use common::base64;
+
 /// Refuses any single allocation over 256 MiB (the seeds are a few hundred
 /// bytes, so only an unchecked count can ask for that) after saying which
 /// case asked; the refusal aborts the test.
@@ -58,22 +61,6 @@ impl XorShift {
     fn below(&mut self, n: usize) -> usize {
         (self.next() % n.max(1) as u64) as usize
     }
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let n = chunk.iter().enumerate().fold(0u32, |n, (i, &b)| n | (b as u32) << (16 - 8 * i));
-        for i in 0..4 {
-            out.push(if i <= chunk.len() {
-                ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
 }
 
 /// Triangle positions, u16 indices (+2 padding), key times, translations.
@@ -290,7 +277,8 @@ fn corrupted_inputs_never_panic_hang_or_over_allocate() {
     }
     for seed in &seeds {
         let load = seed.via.unwrap_or(seed.file);
-        Scene::load(&dir.join(load)).unwrap_or_else(|e| panic!("seed {} ({load}) does not load: {e:#}", seed.file));
+        Scene::load(&dir.join(load))
+            .unwrap_or_else(|e| panic!("seed {} ({load}) does not load: {e:#}", seed.file));
     }
     const SEED: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut rng = XorShift(SEED);

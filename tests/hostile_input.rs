@@ -5,27 +5,14 @@ use std::path::PathBuf;
 
 use hybrid_rt::scene::Scene;
 
+mod common;
+use common::base64;
+
 fn temp_dir(test: &str) -> PathBuf {
     let dir = std::env::temp_dir().join("hybrid-rt-tests").join(format!("hostile-{test}"));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let n = chunk.iter().enumerate().fold(0u32, |n, (i, &b)| n | (b as u32) << (16 - 8 * i));
-        for i in 0..4 {
-            out.push(if i <= chunk.len() {
-                ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char
-            } else {
-                '='
-            });
-        }
-    }
-    out
 }
 
 /// Triangle positions (36 bytes), u16 indices (6 + 2 padding), two key

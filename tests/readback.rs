@@ -54,6 +54,9 @@ fn odd_sizes_read_back_without_padding_or_shear() {
                 checked += 1;
             }
         }
-        assert!(checked as f64 >= 0.8 * (w * h) as f64 || w * h < 4, "{w}x{h}: only {checked} pixels checked");
+        assert!(
+            checked as f64 >= 0.8 * (w * h) as f64 || w * h < 4,
+            "{w}x{h}: only {checked} pixels checked"
+        );
     }
 }

@@ -26,7 +26,10 @@ fn mirror_comes_from_deb822_sources() {
     // A backports file sorting first must not be taken for the bookworm source.
     let backports = "Types: deb\nURIs: http://other.example.org/debian\nSuites: bookworm-backports\n";
     assert_eq!(
-        mirror_for(&[("sources.list.d/a-backports.sources", backports), ("sources.list.d/debian.sources", sources)]),
+        mirror_for(&[
+            ("sources.list.d/a-backports.sources", backports),
+            ("sources.list.d/debian.sources", sources)
+        ]),
         "http://mirror.example.org/debian"
     );
 }

@@ -3,7 +3,7 @@
 //! normal and grazing incidence and at the critical angle, Schlick against
 //! the exact dielectric Fresnel within a stated error, GGX normalisation,
 //! white-furnace tests of the BRDF, refraction by Snell's law, and the
-//! self-intersection offset on both of its branches.
+//! self-intersection offset (ULPs of the triangle extent).
 mod common;
 
 use std::f64::consts::PI;
@@ -212,30 +212,37 @@ fn white_furnace() {
 }
 
 /// The offset origin must be strictly on the normal's side of the surface
-/// point, by a few ULPs of its magnitude (never 0, never huge); tests both
-/// the integer-ULP branch (|p| >= 1/32) and the small-float branch.
+/// point, by 16 ULPs of the larger of the point's and its triangle's
+/// coordinates (never 0, never more): near the origin, far from it, and at
+/// a small point on a large triangle, where the triangle's magnitude rules.
 #[test]
-fn ray_offset_leaves_the_surface_on_both_branches() {
+fn ray_offset_leaves_the_surface_by_ulps_of_the_triangle_extent() {
     let normals = [[0.0f32, 0.0, 1.0], [0.577_350_3, -0.577_350_3, 0.577_350_3], [-0.267, 0.802, -0.534]];
-    let points = [[0.0f32, 0.0, 0.0], [1e-3, -2e-3, 1e-4], [1.0, -2.0, 3.0], [1e5, -3e4, 1e5], [-1e6, 1e6, 2e6]];
+    let points =
+        [[0.0f32, 0.0, 0.0], [1e-3, -2e-3, 1e-4], [1.0, -2.0, 3.0], [1e5, -3e4, 1e5], [-1e6, 1e6, 2e6]];
+    let extents = [0.0f32, 1e-6, 2e4];
     let mut cases = Vec::new();
     for p in points {
         for n in normals {
-            cases.push(Case::offset(p, n));
+            for e in extents {
+                cases.push(Case::offset(p, n, e));
+            }
         }
     }
     let got = run(&cases);
     let mut k = 0;
     for p in points {
         for n in normals {
-            let o = got[k];
-            k += 1;
-            let d: f64 = (0..3).map(|i| (o[i] as f64 - p[i] as f64) * n[i] as f64).sum();
-            let mag = p.iter().fold(0.0f64, |m, v| m.max(v.abs() as f64));
-            // ~256 ULPs in the integer branch; 1/65536 in the float branch.
-            let ulp = (mag * f32::EPSILON as f64).max(1.0 / 65536.0);
-            assert!(d > 0.0, "offset of {p:?} along {n:?} does not leave the surface: {o:?}");
-            assert!(d < 1024.0 * ulp, "offset of {p:?} along {n:?} moved {d}, > 1024 ULP ({ulp})");
+            for e in extents {
+                let o = got[k];
+                k += 1;
+                let d: f64 = (0..3).map(|i| (o[i] as f64 - p[i] as f64) * n[i] as f64).sum();
+                let m = p.iter().fold(e, |m, v| m.max(v.abs())).max(1e-30);
+                let ulp = (f32::from_bits(m.to_bits() + 1) - m) as f64;
+                let what = format!("offset of {p:?} (extent {e}) along {n:?}: moved {d}, ULP {ulp}");
+                assert!(d >= 15.0 * ulp, "{what}: less than 15 ULPs");
+                assert!(d <= 17.0 * ulp, "{what}: more than 17 ULPs");
+            }
         }
     }
 }

@@ -6,6 +6,7 @@
 
 struct Surface {
     vec3 position;
+    float extent;     // largest |world coordinate| of its triangle (ray offsets)
     vec3 normal;      // shading normal, unit, facing the viewer's side
     vec3 base_color;
     float metallic;

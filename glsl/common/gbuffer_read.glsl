@@ -8,6 +8,7 @@
 #include "scene.glsl"
 #include "brdf.glsl"
 #include "primary_hit.glsl"
+#include "offset.glsl"
 
 layout(set = SET_PASS, binding = GB_ALBEDO) uniform sampler2D gb_albedo;
 layout(set = SET_PASS, binding = GB_NORMAL) uniform sampler2D gb_normal;
@@ -34,6 +35,7 @@ bool read_primary(ivec2 px, out PrimaryHit p) {
     vec4 mat = texelFetch(gb_material, px, 0);
     TriangleWorld tri = triangle_world(p.instance, hit.y);
     p.s.position = interpolate(tri, plane_barycentrics(tri, frame.camera_pos, p.dir));
+    p.s.extent = triangle_extent(tri.p0, tri.p1, tri.p2);
     vec3 tn = cross(tri.p1 - tri.p0, tri.p2 - tri.p0);
     tn = dot(tn, tn) > 0.0 ? normalize(tn) : -p.dir;
     p.back_face = dot(tn, p.dir) > 0.0;

@@ -8,6 +8,7 @@
 #define MAT_SAMPLE(index, uv, fallback) sample_tex_lod(index, uv, 0.0, fallback)
 #endif
 #include "material.glsl"
+#include "offset.glsl"
 
 struct RayHit {
     uint instance;
@@ -80,6 +81,7 @@ Surface hit_surface(RayHit h, vec3 ray_o, vec3 ray_d, out vec3 geo_normal, out b
     Surface s;
     // From the triangle, not from o + t*d: the point lies on the surface.
     s.position = p0 * w.x + p1 * w.y + p2 * w.z;
+    s.extent = triangle_extent(p0, p1, p2);
     vec3 gn = cross(p1 - p0, p2 - p0);
     gn = dot(gn, gn) > 0.0 ? normalize(gn) : vec3(0.0, 1.0, 0.0);
     back_face = dot(gn, ray_d) > 0.0;

@@ -52,7 +52,7 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
                 // behind the geometry: the surface itself occludes it.
                 contrib = vec3(0.0);
             } else {
-                vec3 o = offset_ray(s.position, light_side ? gn : -gn);
+                vec3 o = offset_ray(s.position, light_side ? gn : -gn, s.extent);
                 float tmax = light.type == LIGHT_DIRECTIONAL ? RAY_TMAX : ls.distance * (1.0 - 1e-4);
                 count_ray(RAY_KIND_SHADOW);
                 contrib *= trace_shadow(o, ls.l, tmax);
@@ -125,12 +125,12 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
         if (!mirror) rw = vec3(fr * tm);  // total internal reflection only
         vec3 rd = reflect(-v, s.normal);
         if (dot(rd, gn) <= 0.0) rd = reflect(-v, gn);  // stay above the surface
-        push_branch(offset_ray(s.position, gn), rd, w * rw, depth + 1u);
+        push_branch(offset_ray(s.position, gn, s.extent), rd, w * rw, depth + 1u);
     }
     if (refract_on && fr < 1.0) {
         vec3 td = refract_dir(-v, s.normal, eta);
         if (dot(td, gn) >= 0.0) td = refract_dir(-v, gn, eta);
-        push_branch(offset_ray(s.position, -gn), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u);
+        push_branch(offset_ray(s.position, -gn, s.extent), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u);
     }
 }
 

@@ -38,6 +38,7 @@ void main() {
         // Surface at the origin with normal +Z; v = q, l = r, irradiance 1.
         Surface s;
         s.position = vec3(0.0);
+        s.extent = 0.0;
         s.normal = vec3(0.0, 0.0, 1.0);
         s.base_color = k.p.xyz;
         s.metallic = k.a;
@@ -52,7 +53,7 @@ void main() {
         o.x = d_ggx(k.a, k.b);
         o.y = v_smith_ggx_correlated(k.p.x, k.p.y, k.b);
     } else if (k.op == PROBE_OFFSET) {
-        o.xyz = offset_ray(k.p.xyz, k.q.xyz);
+        o.xyz = offset_ray(k.p.xyz, k.q.xyz, k.p.w);
     } else if (k.op == PROBE_REFRACT) {
         o.xyz = refract_dir(k.p.xyz, k.q.xyz, k.a);
     }

@@ -519,7 +519,8 @@ fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3)> {
     let (format, texel_bytes) =
         if wide { (vk::Format::R32G32B32A32_SFLOAT, 16) } else { (vk::Format::R16G16B16A16_SFLOAT, 8) };
     let mut texels = Vec::with_capacity(map.rgb.len() / 3 * texel_bytes);
-    let texels_of = map.rgb.chunks_exact(3).map(|c| Vec3::new(sanitized(c[0]), sanitized(c[1]), sanitized(c[2])));
+    let texels_of =
+        map.rgb.chunks_exact(3).map(|c| Vec3::new(sanitized(c[0]), sanitized(c[1]), sanitized(c[2])));
     for c in texels_of.clone() {
         for v in [c.x, c.y, c.z, 1.0] {
             if wide {
@@ -531,14 +532,22 @@ fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3)> {
     }
     let stored = |c: Vec3| if wide { c } else { c.min(Vec3::splat(HALF_MAX)) };
     let mean = equirect_mean(texels_of.map(stored), map.width, map.height) * env.intensity;
-    let img = Image::texture(ctx, "environment map", format, vk::Extent2D { width: map.width, height: map.height }, &texels, false)?;
+    let img = Image::texture(
+        ctx,
+        "environment map",
+        format,
+        vk::Extent2D { width: map.width, height: map.height },
+        &texels,
+        false,
+    )?;
     Ok((img, mean))
 }
 
 const HALF_MAX: f32 = 65504.0;
 
 fn filters_linearly(ctx: &Context, format: vk::Format) -> bool {
-    let props = unsafe { ctx.instance.raw.get_physical_device_format_properties(ctx.physical_device, format) };
+    let props =
+        unsafe { ctx.instance.raw.get_physical_device_format_properties(ctx.physical_device, format) };
     props.optimal_tiling_features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
 }
 

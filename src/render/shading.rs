@@ -118,7 +118,12 @@ impl SceneNeeds {
 /// limits (lavapipe before Mesa 25.2.7: 2^24 - 1 triangles per BLAS): `auto`
 /// falls back to the compute BVH with a warning, an explicit request fails
 /// with the numbers, before any driver call could crash on them.
-pub fn pick_backend(requested: Backend, rt: &RtEnables, limits: &Limits, needs: &SceneNeeds) -> Result<Backend> {
+pub fn pick_backend(
+    requested: Backend,
+    rt: &RtEnables,
+    limits: &Limits,
+    needs: &SceneNeeds,
+) -> Result<Backend> {
     let too_big = if needs.largest_primitive_triangles > limits.max_primitive_count {
         Some(format!(
             "a mesh primitive has {} triangles, more than this driver's acceleration-structure limit \
@@ -201,11 +206,8 @@ impl ShadingConfig {
             ..wanted
         };
         let traces = mode == Mode::Rt || effects.shadows || effects.reflections || effects.refractions;
-        let backend = if !traces {
-            None
-        } else {
-            Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs)?)
-        };
+        let backend =
+            if !traces { None } else { Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs)?) };
         Ok(ShadingConfig { mode, effects, backend, debug_view, needs })
     }
 
@@ -293,6 +295,9 @@ mod tests {
         assert!(e.contains("maxInstanceCount"), "{e}");
         let none = RtEnables { acceleration_structure: false, ray_query: false, ray_tracing_pipeline: false };
         assert_eq!(pick_backend(Backend::Auto, &none, &limits, &huge).unwrap(), Backend::Compute);
-        assert!(pick_backend(Backend::Query, &none, &limits, &fits).unwrap_err().to_string().contains("VK_KHR_ray_query"));
+        assert!(pick_backend(Backend::Query, &none, &limits, &fits)
+            .unwrap_err()
+            .to_string()
+            .contains("VK_KHR_ray_query"));
     }
 }

@@ -40,7 +40,12 @@ impl std::ops::Deref for Target {
 }
 
 impl Target {
-    fn new(ctx: &Context, desc: &'static TargetDesc, usage: vk::ImageUsageFlags, extent: vk::Extent2D) -> Result<Target> {
+    fn new(
+        ctx: &Context,
+        desc: &'static TargetDesc,
+        usage: vk::ImageUsageFlags,
+        extent: vk::Extent2D,
+    ) -> Result<Target> {
         let storage = usage.contains(vk::ImageUsageFlags::STORAGE);
         Ok(match desc.storage_format.filter(|_| storage) {
             Some(view_format) => {

@@ -20,7 +20,14 @@ impl Camera {
         let forward = (target - position).try_normalize().unwrap_or(Vec3::NEG_Z);
         // Pick an up vector that is not parallel to the view direction.
         let up = if forward.y.abs() > 0.999 { Vec3::Z } else { Vec3::Y };
-        let view = Mat4::look_at_rh(position, position + forward, up);
+        Camera::look_at_up(name, position, target, up, yfov, znear)
+    }
+
+    /// `look_at` with an explicit up vector (camera roll; scenes not aligned
+    /// with +Y). `up` must not be parallel to the view direction.
+    pub fn look_at_up(name: &str, position: Vec3, target: Vec3, up: Vec3, yfov: f32, znear: f32) -> Camera {
+        let forward = (target - position).try_normalize().unwrap_or(Vec3::NEG_Z);
+        let view = Mat4::look_at_rh(position, position + forward, up.normalize());
         Camera { name: name.into(), world: view.inverse(), yfov, znear }
     }
 

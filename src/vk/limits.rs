@@ -43,7 +43,9 @@ impl Limits {
             anyhow::bail!("resolution {width}x{height} exceeds this device's maxImageDimension2D ({max})");
         }
         let groups = [width.div_ceil(8), height.div_ceil(8)];
-        if groups[0] > self.max_compute_work_group_count[0] || groups[1] > self.max_compute_work_group_count[1] {
+        if groups[0] > self.max_compute_work_group_count[0]
+            || groups[1] > self.max_compute_work_group_count[1]
+        {
             anyhow::bail!(
                 "resolution {width}x{height} needs {}x{} compute work groups, more than this device allows ({:?})",
                 groups[0],

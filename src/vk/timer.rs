@@ -18,7 +18,13 @@ pub struct GpuTimer {
 impl GpuTimer {
     /// A timer that owns nothing yet (placeholder until `new` succeeds).
     pub fn empty() -> GpuTimer {
-        GpuTimer { pool: vk::QueryPool::null(), capacity: 0, names: Vec::new(), period_ns: 1.0, enabled: false }
+        GpuTimer {
+            pool: vk::QueryPool::null(),
+            capacity: 0,
+            names: Vec::new(),
+            period_ns: 1.0,
+            enabled: false,
+        }
     }
 
     pub fn new(ctx: &Context, capacity: u32) -> Result<GpuTimer> {

@@ -6,7 +6,9 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 use hybrid_rt::gpu::shared;
 use hybrid_rt::vk::memory::Buffer;
-use hybrid_rt::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
+use hybrid_rt::vk::pipeline::{
+    bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization,
+};
 
 /// One input of the probe (the shader's `ProbeCase`, scalar layout).
 #[repr(C)]
@@ -31,7 +33,15 @@ impl Case {
     /// brdf_eval on a surface with normal +Z: base colour, metallic,
     /// roughness, transmission, ior; view `v`, light `l` (unit).
     #[allow(clippy::too_many_arguments)]
-    pub fn brdf(base: f32, metallic: f32, roughness: f32, transmission: f32, ior: f32, v: [f32; 3], l: [f32; 3]) -> Case {
+    pub fn brdf(
+        base: f32,
+        metallic: f32,
+        roughness: f32,
+        transmission: f32,
+        ior: f32,
+        v: [f32; 3],
+        l: [f32; 3],
+    ) -> Case {
         Case {
             op: shared::PROBE_BRDF,
             a: metallic,
@@ -46,8 +56,15 @@ impl Case {
     pub fn ggx(n_h: f32, a2: f32, n_v: f32, n_l: f32) -> Case {
         Case { op: shared::PROBE_GGX, a: n_h, b: a2, p: [n_v, n_l, 0.0, 0.0], ..Default::default() }
     }
-    pub fn offset(p: [f32; 3], n: [f32; 3]) -> Case {
-        Case { op: shared::PROBE_OFFSET, p: [p[0], p[1], p[2], 0.0], q: [n[0], n[1], n[2], 0.0], ..Default::default() }
+    /// offset_ray(p, n, extent): `extent` is the largest |coordinate| of the
+    /// triangle `p` lies on.
+    pub fn offset(p: [f32; 3], n: [f32; 3], extent: f32) -> Case {
+        Case {
+            op: shared::PROBE_OFFSET,
+            p: [p[0], p[1], p[2], extent],
+            q: [n[0], n[1], n[2], 0.0],
+            ..Default::default()
+        }
     }
     pub fn refract(i: [f32; 3], n: [f32; 3], eta: f32) -> Case {
         Case {
@@ -65,11 +82,18 @@ pub fn run(cases: &[Case]) -> Vec<[f32; 4]> {
     assert!(!cases.is_empty());
     let ctx = super::validated_context();
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-    let mut input = Buffer::new(&ctx, "probe cases", std::mem::size_of_val(cases) as u64, usage, MemoryLocation::CpuToGpu)
-        .unwrap();
+    let mut input = Buffer::new(
+        &ctx,
+        "probe cases",
+        std::mem::size_of_val(cases) as u64,
+        usage,
+        MemoryLocation::CpuToGpu,
+    )
+    .unwrap();
     input.write(0, bytemuck::cast_slice(cases)).unwrap();
     let mut output =
-        Buffer::new(&ctx, "probe results", (cases.len() * 16) as u64, usage, MemoryLocation::GpuToCpu).unwrap();
+        Buffer::new(&ctx, "probe results", (cases.len() * 16) as u64, usage, MemoryLocation::GpuToCpu)
+            .unwrap();
     let mut set = DescriptorSet::storage_buffers(
         &ctx,
         "probe",

@@ -34,6 +34,11 @@ impl Frame {
         let (z, y, x) = q.to_euler(EulerRot::ZYX);
         format!("[{:.9e}, {:.9e}, {:.9e}]", x.to_degrees(), y.to_degrees(), z.to_degrees())
     }
+    /// A direction: tilted, not scaled or moved.
+    fn dir(&self, v: [f32; 3]) -> String {
+        let v = self.tilt() * Vec3::from(v);
+        format!("[{:.9e}, {:.9e}, {:.9e}]", v.x, v.y, v.z)
+    }
     fn s(&self, v: f32) -> String {
         format!("{:.9e}", v * self.scale)
     }
@@ -51,6 +56,7 @@ color = [0.0, 0.0, 0.0]
 [[camera]]
 position = {cam}
 target = {target}
+up = {up}
 yfov_deg = 60
 znear = {znear}
 
@@ -86,6 +92,7 @@ material = "occluder"
 "#,
         cam = f.p([2.5, 7.0, 2.5]),
         target = f.p([0.0, 0.0, 0.0]),
+        up = f.dir([0.0, 1.0, 0.0]),
         znear = f.s(0.05),
         light = f.p([0.0, 4.0, 0.0]),
         intensity = 50.0 * f.scale * f.scale,

@@ -98,7 +98,17 @@ impl Builder<'_> {
         ensure!(yfov > 0.0 && yfov < 180.0, "{}: yfov_deg {yfov} is outside (0, 180)", context());
         let znear = c.znear.unwrap_or(0.05);
         ensure!(znear > 0.0 && znear.is_finite(), "{}: znear must be positive", context());
-        Ok(Camera::look_at(&name, position, target, yfov.to_radians(), znear))
+        let Some(up) = c.up else {
+            return Ok(Camera::look_at(&name, position, target, yfov.to_radians(), znear));
+        };
+        let up = finite3(up, "up").with_context(context)?;
+        let forward = (target - position).normalize();
+        ensure!(
+            up.length() > 0.0 && up.normalize().cross(forward).length() > 1e-3,
+            "{}: up {up} is zero or parallel to the view direction",
+            context()
+        );
+        Ok(Camera::look_at_up(&name, position, target, up, yfov.to_radians(), znear))
     }
 
     fn camera_path(&self, keys: Vec<CameraKeyDef>) -> Result<Vec<CameraKey>> {

@@ -35,6 +35,7 @@ pub(super) struct CameraDef {
     pub(super) name: Option<String>,
     pub(super) position: Spanned<[f32; 3]>,
     pub(super) target: [f32; 3],
+    pub(super) up: Option<[f32; 3]>,
     pub(super) yfov_deg: Option<f32>,
     pub(super) znear: Option<f32>,
 }

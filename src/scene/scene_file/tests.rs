@@ -600,3 +600,19 @@ fn armadillo_scene_loads() {
     let height = scene.bounds.extent().y;
     assert!(height > 1.4 && height < 3.0, "height {height}");
 }
+
+#[test]
+fn camera_up_rolls_the_view_and_is_validated() {
+    let scene = |up: &str| {
+        format!("[[camera]]\nposition = [0, 0, 5]\ntarget = [0, 0, 0]\n{up}\n[[object]]\nname = \"box\"\nprimitive = \"cube\"\n")
+    };
+    let rolled = Scene::load(&write("camera_up", "scene.toml", &scene("up = [1, 0, 0]"))).unwrap();
+    // Camera +Y (its up) is world +X; it still looks down world -Z.
+    let world = rolled.cameras[0].world;
+    assert!((world.y_axis.truncate() - Vec3::X).length() < 1e-6, "{world}");
+    assert!((world.z_axis.truncate() - Vec3::Z).length() < 1e-6, "{world}");
+    let e = error_of("camera_up_parallel", &scene("up = [0, 0, -2]"));
+    assert!(e.contains("camera 'camera 0'") && e.contains("parallel"), "{e}");
+    let e = error_of("camera_up_nan", &scene("up = [nan, 1, 0]"));
+    assert!(e.contains("up"), "{e}");
+}
