@@ -4,8 +4,8 @@
 #define HIT_GLSL
 #include "scene.glsl"
 #ifndef MAT_SAMPLE
-// Secondary hits have no derivatives; sample the finest level.
-#define MAT_SAMPLE(index, uv, fallback) sample_tex_lod(index, uv, 0.0, fallback)
+// Rays have no derivatives: the ray cone sets the level (scene.glsl).
+#define MAT_SAMPLE(index, uv, fallback) sample_tex_cone(index, uv, fallback)
 #endif
 #include "material.glsl"
 #include "offset.glsl"
@@ -44,7 +44,7 @@ float hit_alpha(uint instance, uint primitive, vec2 b) {
     Instance inst = instances[instance];
     Material m = materials[inst.material];
     vec2 uv = hit_uv(hit_vertices(inst, primitive), b);
-    return m.base_color.a * MAT_SAMPLE(m.tex_base_color, uv, vec4(1.0)).a;
+    return m.base_color.a * sample_tex_lod(m.tex_base_color, uv, 0.0, vec4(1.0)).a;
 }
 
 // Whether a candidate hit counts for visibility (alpha MASK / BLEND cut-outs).
@@ -61,16 +61,29 @@ vec3 occluder_transmittance(uint instance, uint primitive, vec2 b) {
     Instance inst = instances[instance];
     Material m = materials[inst.material];
     vec2 uv = hit_uv(hit_vertices(inst, primitive), b);
-    vec4 base = m.base_color * MAT_SAMPLE(m.tex_base_color, uv, vec4(1.0));
+    vec4 base = m.base_color * sample_tex_lod(m.tex_base_color, uv, 0.0, vec4(1.0));
     if (m.alpha_mode != ALPHA_OPAQUE && base.a < m.alpha_cutoff) return vec3(1.0);
-    float tr = clamp(m.transmission * MAT_SAMPLE(m.tex_transmission, uv, vec4(1.0)).r, 0.0, 1.0);
+    float tr = clamp(m.transmission * sample_tex_lod(m.tex_transmission, uv, 0.0, vec4(1.0)).r, 0.0, 1.0);
     return base.rgb * tr;
+}
+
+// Mip-level base of a hit (see g_hit_lod): half the log2 ratio of the
+// triangle's uv area to its world area, plus log2 of the cone's width over
+// the cosine to the ray. 0 width (no cone): the finest level.
+float cone_lod(HitVertices hv, vec3 e1, vec3 e2, vec3 gn, vec3 ray_d, float cone_width) {
+    vec2 t1 = hv.v1.uv - hv.v0.uv;
+    vec2 t2 = hv.v2.uv - hv.v0.uv;
+    float uv_area = abs(t1.x * t2.y - t2.x * t1.y);
+    float world_area = length(cross(e1, e2));
+    if (!(uv_area > 0.0 && world_area > 0.0 && cone_width > 0.0)) return -64.0;
+    float cosine = max(abs(dot(gn, ray_d)), 1e-3);
+    return 0.5 * log2(uv_area / world_area) + log2(cone_width / cosine);
 }
 
 // Full surface at a hit. `geo_normal` is the world-space geometric normal
 // (unit, on the side the ray came from); the shading normal is flipped to
-// the same side.
-Surface hit_surface(RayHit h, vec3 ray_o, vec3 ray_d, out vec3 geo_normal, out bool back_face) {
+// the same side. `cone_width`: the ray cone's width at the hit (texture LOD).
+Surface hit_surface(RayHit h, vec3 ray_o, vec3 ray_d, float cone_width, out vec3 geo_normal, out bool back_face) {
     Instance inst = instances[h.instance];
     Material m = materials[inst.material];
     HitVertices hv = hit_vertices(inst, h.primitive);
@@ -93,6 +106,7 @@ Surface hit_surface(RayHit h, vec3 ray_o, vec3 ray_d, out vec3 geo_normal, out b
     vec2 uv = hv.v0.uv * w.x + hv.v1.uv * w.y + hv.v2.uv * w.z;
     vec4 t4 = hv.v0.tangent * w.x + hv.v1.tangent * w.y + hv.v2.tangent * w.z;
     vec4 tangent = vec4(mat3(inst.world) * t4.xyz, hv.v0.tangent.w);
+    g_hit_lod = cone_lod(hv, p1 - p0, p2 - p0, gn, ray_d, cone_width);
     float alpha;
     material_eval(m, uv, s, alpha);
     s.normal = apply_normal_map(m, uv, n, tangent);

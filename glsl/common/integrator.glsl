@@ -63,22 +63,32 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
     return c;
 }
 
+// A ray cone (texture LOD): width at the ray's origin and spread angle.
+// Reflection and refraction keep the spread (the planar approximation:
+// surface curvature is not tracked), so the width grows linearly with the
+// total path length, as for a pixel footprint seen in a flat mirror.
+struct Cone {
+    float width;
+    float spread;
+};
+
 struct Branch {
     vec3 origin;
     vec3 dir;
     vec3 weight;
     uint depth;
+    Cone cone;
 };
 
 #define STACK_SIZE 16
 Branch g_stack[STACK_SIZE];
 int g_sp = 0;
 
-void push_branch(vec3 o, vec3 d, vec3 w, uint depth) {
+void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone) {
     // Importance cutoff: branches that can change the pixel by less than
     // MIN_WEIGHT of their radiance are not traced.
     if (g_sp < STACK_SIZE && max3(w) >= MIN_WEIGHT && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
-        g_stack[g_sp] = Branch(o, normalize(d), w, depth);
+        g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone);
         g_sp++;
     }
 }
@@ -108,8 +118,8 @@ vec3 ambient_light(Surface s, bool mirror) {
 }
 
 // Pushes the reflection and refraction branches `s` spawns (weight `w`,
-// at `depth`); `nv` from face_viewer.
-void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w, uint depth) {
+// at `depth`, the ray cone `cone` at s); `nv` from face_viewer.
+void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w, uint depth, Cone cone) {
     bool can_branch = depth < MAX_DEPTH;
     float tm = s.transmission * (1.0 - s.metallic);
     bool mirror = is_mirror(s, depth);
@@ -125,22 +135,22 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
         if (!mirror) rw = vec3(fr * tm);  // total internal reflection only
         vec3 rd = reflect(-v, s.normal);
         if (dot(rd, gn) <= 0.0) rd = reflect(-v, gn);  // stay above the surface
-        push_branch(offset_ray(s.position, gn, s.extent), rd, w * rw, depth + 1u);
+        push_branch(offset_ray(s.position, gn, s.extent), rd, w * rw, depth + 1u, cone);
     }
     if (refract_on && fr < 1.0) {
         vec3 td = refract_dir(-v, s.normal, eta);
         if (dot(td, gn) >= 0.0) td = refract_dir(-v, gn, eta);
-        push_branch(offset_ray(s.position, -gn, s.extent), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u);
+        push_branch(offset_ray(s.position, -gn, s.extent), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u, cone);
     }
 }
 
 // Radiance leaving a secondary hit `s` towards v, times `w`; pushes the
 // branches it spawns. The primary hit is split over the direct, specular
 // and composite passes instead, which compute the same terms.
-vec3 shade(Surface s, vec3 v, vec3 gn, bool back_face, vec3 w, uint depth) {
+vec3 shade(Surface s, vec3 v, vec3 gn, bool back_face, vec3 w, uint depth, Cone cone) {
     float nv = face_viewer(s, v);
     vec3 c = s.emissive + direct_light(s, v, gn) + ambient_light(s, is_mirror(s, depth));
-    push_branches(s, v, nv, gn, back_face, w, depth);
+    push_branches(s, v, nv, gn, back_face, w, depth, cone);
     return w * c;
 }
 
@@ -155,8 +165,9 @@ vec3 trace_branches() {
         if (trace_closest(b.origin, b.dir, RAY_TMAX, h)) {
             vec3 gn;
             bool back_face;
-            Surface s = hit_surface(h, b.origin, b.dir, gn, back_face);
-            radiance += shade(s, -b.dir, gn, back_face, b.weight, b.depth);
+            Cone at_hit = Cone(b.cone.width + b.cone.spread * h.t, b.cone.spread);
+            Surface s = hit_surface(h, b.origin, b.dir, at_hit.width, gn, back_face);
+            radiance += shade(s, -b.dir, gn, back_face, b.weight, b.depth, at_hit);
         } else {
             radiance += b.weight * environment(b.dir);
         }

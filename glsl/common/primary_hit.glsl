@@ -28,6 +28,12 @@ vec3 camera_ray_dir(vec2 pixel) {
     return normalize(transpose(mat3(frame.view)) * dv);
 }
 
+// Spread angle of one pixel's ray cone (its apex angle): the pixel's
+// height seen from the camera.
+float pixel_spread_angle() {
+    return atan(2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y)));
+}
+
 // Barycentrics (b1, b2) of the ray/triangle-plane intersection, clamped into
 // the triangle so the point is on the surface even for edge pixels whose
 // centre the rasterizer covered by the tie-breaking rule.

@@ -19,6 +19,21 @@ vec4 sample_tex(int index, vec2 uv, vec4 fallback) {
     return index < 0 ? fallback : texture(textures[nonuniformEXT(index)], uv);
 }
 
+// Texture level of detail at ray hits (ray cones, Akenine-Möller et al.,
+// "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray
+// Tracing Gems ch. 20): the mip level is g_hit_lod, set per hit from the
+// cone's footprint and the triangle's texel density, plus log2 of the
+// texture's size. Rays have no screen-space derivatives; without this every
+// secondary hit samples mip 0 and textures seen in mirrors, through glass
+// or by pure-RT camera rays sparkle.
+float g_hit_lod = 0.0;
+
+vec4 sample_tex_cone(int index, vec2 uv, vec4 fallback) {
+    if (index < 0) return fallback;
+    vec2 size = vec2(textureSize(textures[nonuniformEXT(index)], 0));
+    return textureLod(textures[nonuniformEXT(index)], uv, g_hit_lod + 0.5 * log2(size.x * size.y));
+}
+
 vec4 sample_tex_lod(int index, vec2 uv, float lod, vec4 fallback) {
     return index < 0 ? fallback : textureLod(textures[nonuniformEXT(index)], uv, lod);
 }

@@ -29,7 +29,7 @@ void primary_pixel(ivec2 px) {
     }
     vec3 gn;
     bool back_face;
-    Surface s = hit_surface(h, frame.camera_pos, dir, gn, back_face);
+    Surface s = hit_surface(h, frame.camera_pos, dir, pixel_spread_angle() * h.t, gn, back_face);
     imageStore(gb_albedo, px, vec4(srgb_encode(s.base_color), s.occlusion));
     imageStore(gb_normal, px, vec4(s.normal, s.roughness));
     imageStore(gb_material, px, vec4(s.metallic, s.transmission, clamp((s.ior - 1.0) * 0.5, 0.0, 1.0), 0.0));

@@ -13,6 +13,9 @@ void specular_pixel(ivec2 px) {
     if (outside_frame(px) || !read_primary(px, p)) return;
     vec3 v = -p.dir;
     float nv = face_viewer(p.s, v);
-    push_branches(p.s, v, nv, p.gn, p.back_face, vec3(1.0), 0u);
+    // The pixel's cone at the primary hit.
+    float spread = pixel_spread_angle();
+    Cone cone = Cone(spread * distance(frame.camera_pos, p.s.position), spread);
+    push_branches(p.s, v, nv, p.gn, p.back_face, vec3(1.0), 0u, cone);
     imageStore(specular_out, px, vec4(trace_branches(), 1.0));
 }
