@@ -159,67 +159,45 @@ impl ComputeBvh {
             nodes.push(EMPTY_NODE);
             prims.push(0);
         }
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let blas_nodes = Buffer::with_data(ctx, "BVH BLAS nodes", bytemuck::cast_slice(&nodes), storage)?;
-        let blas_prims =
-            Buffer::with_data(ctx, "BVH BLAS triangle order", bytemuck::cast_slice(&prims), storage)?;
-        let staging = if skinned.is_empty() {
-            None
-        } else {
-            let src = vk::BufferUsageFlags::TRANSFER_SRC;
-            Some(Buffer::new(ctx, "BVH rebuild staging", staging_size, src, MemoryLocation::CpuToGpu)?)
-        };
-        let refit = if skinned.is_empty() {
-            None
-        } else {
-            let refs: Vec<_> =
-                skinned.iter().map(|s| (&s.blas.bvh, s.blas.node_offset, s.blas.prim_offset)).collect();
-            Some(ComputeRefit::new(ctx, gpu, &refs, &blas_nodes, &blas_prims)?)
-        };
-
-        let n = scene.instances.len().max(1);
-        let tlas_nodes = host_buffer(ctx, "BVH top-level nodes", 2 * n * std::mem::size_of::<BvhNode>())?;
-        let tlas_prims = host_buffer(ctx, "BVH top-level instance order", 4 * n)?;
-        let instances = host_buffer(ctx, "BVH instances", n * std::mem::size_of::<GpuBvhInstance>())?;
-        let top_refit = if refit.is_some() {
-            Some(TopLevelRefit::new(ctx, n, &tlas_nodes, &tlas_prims, &instances, &blas_nodes)?)
-        } else {
-            None
-        };
-        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
-        let set = DescriptorSet::new(ctx, "trace set (compute BVH)", &[sb, sb, sb, sb, sb])?;
-        for (i, b) in [&blas_nodes, &blas_prims, &tlas_nodes, &tlas_prims, &instances].iter().enumerate() {
-            set.write_buffer(ctx, i as u32, b.raw);
-        }
+        // Every GPU object lands in `bvh` as it is made, so an error half-way
+        // destroys what exists.
         let mut bvh = ComputeBvh {
             blas,
             skinned,
-            refit,
-            top_refit,
-            staging,
+            refit: None,
+            top_refit: None,
+            staging: None,
             uploads: (Vec::new(), Vec::new()),
-            blas_nodes,
-            blas_prims,
-            tlas_nodes,
-            tlas_prims,
-            instances,
+            blas_nodes: Buffer::null(),
+            blas_prims: Buffer::null(),
+            tlas_nodes: Buffer::null(),
+            tlas_prims: Buffer::null(),
+            instances: Buffer::null(),
             tlas: Bvh::default(),
-            set,
+            set: DescriptorSet::null(),
             build_ms: 0.0,
             triangles,
             rebuild_ms: 0.0,
             top_level_ms: 0.0,
         };
+        if let Err(e) = bvh.create_buffers(ctx, scene, gpu, &nodes, &prims, staging_size) {
+            bvh.destroy(ctx);
+            return Err(e);
+        }
         // Fit the skinned trees (and the top level) to the GPU's vertices:
         // the CPU pose they were built from may differ in the last bit. A
         // load-time submission, not part of any frame.
-        bvh.write_top_level(scene)?;
+        let fitted = bvh.write_top_level(scene).and_then(|()| {
+            ctx.one_shot("refit skinned BVHs", |cmd| {
+                bvh.record_update(ctx, cmd);
+                Ok(())
+            })
+        });
         let updates = vec![Update::Refit; bvh.skinned.len()];
-        ctx.one_shot("refit skinned BVHs", |cmd| {
-            bvh.record_update(ctx, cmd);
-            Ok(())
-        })?;
-        bvh.finish_update(&updates, &RebuildPolicy::default())?;
+        if let Err(e) = fitted.and_then(|()| bvh.finish_update(&updates, &RebuildPolicy::default())) {
+            bvh.destroy(ctx);
+            return Err(e);
+        }
         bvh.build_ms = t0.elapsed().as_secs_f64() * 1e3;
         log::info!(
             "compute BVH: {} triangles in {} nodes, built in {:.0} ms ({:.2} Mtri/s), triangle-weighted SAH cost {:.1}, top level over {} instances, {} refit each frame",
@@ -421,6 +399,55 @@ impl ComputeBvh {
             weight += n;
         }
         (sum / weight.max(1.0)) as f32
+    }
+
+    /// The GPU half of `build`: node and triangle-order buffers, refit
+    /// passes, top-level buffers and the trace set.
+    fn create_buffers(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        gpu: &GpuScene,
+        nodes: &[BvhNode],
+        prims: &[u32],
+        staging_size: u64,
+    ) -> Result<()> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        self.blas_nodes = Buffer::with_data(ctx, "BVH BLAS nodes", bytemuck::cast_slice(nodes), storage)?;
+        self.blas_prims =
+            Buffer::with_data(ctx, "BVH BLAS triangle order", bytemuck::cast_slice(prims), storage)?;
+        if !self.skinned.is_empty() {
+            let src = vk::BufferUsageFlags::TRANSFER_SRC;
+            self.staging =
+                Some(Buffer::new(ctx, "BVH rebuild staging", staging_size, src, MemoryLocation::CpuToGpu)?);
+            let refs: Vec<_> =
+                self.skinned.iter().map(|s| (&s.blas.bvh, s.blas.node_offset, s.blas.prim_offset)).collect();
+            self.refit = Some(ComputeRefit::new(ctx, gpu, &refs, &self.blas_nodes, &self.blas_prims)?);
+        }
+        let n = scene.instances.len().max(1);
+        self.tlas_nodes = host_buffer(ctx, "BVH top-level nodes", 2 * n * std::mem::size_of::<BvhNode>())?;
+        self.tlas_prims = host_buffer(ctx, "BVH top-level instance order", 4 * n)?;
+        self.instances = host_buffer(ctx, "BVH instances", n * std::mem::size_of::<GpuBvhInstance>())?;
+        if self.refit.is_some() {
+            self.top_refit = Some(TopLevelRefit::new(
+                ctx,
+                n,
+                &self.tlas_nodes,
+                &self.tlas_prims,
+                &self.instances,
+                &self.blas_nodes,
+            )?);
+        }
+        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
+        self.set = DescriptorSet::new(ctx, "trace set (compute BVH)", &[sb, sb, sb, sb, sb])?;
+        for (i, b) in
+            [&self.blas_nodes, &self.blas_prims, &self.tlas_nodes, &self.tlas_prims, &self.instances]
+                .iter()
+                .enumerate()
+        {
+            self.set.write_buffer(ctx, i as u32, b.raw);
+        }
+        Ok(())
     }
 
     pub fn destroy(&mut self, ctx: &Context) {

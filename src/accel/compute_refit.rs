@@ -70,16 +70,48 @@ impl ComputeRefit {
             });
             order_len += order_capacity(r.index_count / 3);
         }
+        // Objects land in `refit` as they are made: an error destroys them.
+        let mut refit = ComputeRefit {
+            jobs: Buffer::null(),
+            order: Buffer::null(),
+            roots: Buffer::null(),
+            job_list,
+            set: DescriptorSet::null(),
+            layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+        };
+        let created = refit.create(ctx, gpu, nodes, prims, order_len).and_then(|()| {
+            for (slot, (bvh, _, _)) in bvhs.iter().enumerate() {
+                refit.set_levels(slot, bvh)?;
+            }
+            Ok(())
+        });
+        if let Err(e) = created {
+            refit.destroy(ctx);
+            return Err(e);
+        }
+        Ok(refit)
+    }
+
+    fn create(
+        &mut self,
+        ctx: &Context,
+        gpu: &GpuScene,
+        nodes: &Buffer,
+        prims: &Buffer,
+        order_len: u32,
+    ) -> Result<()> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let host = |name: &str, bytes: u64, location| Buffer::new(ctx, name, bytes, storage, location);
-        let jobs = host("BVH refit jobs", (job_list.len() * 32) as u64, MemoryLocation::CpuToGpu)?;
-        let order = host("BVH refit level order", order_len as u64 * 4, MemoryLocation::CpuToGpu)?;
-        let roots = host(
+        let jobs = self.job_list.len();
+        self.jobs = host("BVH refit jobs", (jobs * 32) as u64, MemoryLocation::CpuToGpu)?;
+        self.order = host("BVH refit level order", order_len as u64 * 4, MemoryLocation::CpuToGpu)?;
+        self.roots = host(
             "BVH refit roots",
-            (job_list.len() * std::mem::size_of::<BvhNode>()) as u64,
+            (jobs * std::mem::size_of::<BvhNode>()) as u64,
             MemoryLocation::GpuToCpu,
         )?;
-        let set = DescriptorSet::storage_buffers(
+        self.set = DescriptorSet::storage_buffers(
             ctx,
             "BVH refit set",
             &[
@@ -87,18 +119,14 @@ impl ComputeRefit {
                 (REFIT_PRIMS, prims.raw),
                 (REFIT_VERTICES, gpu.vertices.raw),
                 (REFIT_INDICES, gpu.indices.raw),
-                (REFIT_JOBS, jobs.raw),
-                (REFIT_ORDER, order.raw),
-                (REFIT_ROOTS, roots.raw),
+                (REFIT_JOBS, self.jobs.raw),
+                (REFIT_ORDER, self.order.raw),
+                (REFIT_ROOTS, self.roots.raw),
             ],
         )?;
-        let layout = pipeline_layout(ctx, "BVH refit layout", &[set.layout], 0)?;
-        let pipeline = compute_pipeline(ctx, "anim/bvh_refit.comp", layout, &Specialization::new(&[]))?;
-        let mut refit = ComputeRefit { jobs, order, roots, job_list, set, layout, pipeline };
-        for (slot, (bvh, _, _)) in bvhs.iter().enumerate() {
-            refit.set_levels(slot, bvh)?;
-        }
-        Ok(refit)
+        self.layout = pipeline_layout(ctx, "BVH refit layout", &[self.set.layout], 0)?;
+        self.pipeline = compute_pipeline(ctx, "anim/bvh_refit.comp", self.layout, &Specialization::new(&[]))?;
+        Ok(())
     }
 
     /// Writes the level order of `slot`'s (new) tree. The GPU must be idle.

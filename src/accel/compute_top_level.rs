@@ -47,21 +47,37 @@ impl TopLevelRefit {
         // Every node plus the level boundaries of the deepest allowed tree.
         let capacity = (2 * instances.max(1) - 1) + MAX_DEPTH + 2;
         let order = super::compute_bvh::host_buffer(ctx, "BVH top-level refit order", 4 * capacity)?;
-        let set = DescriptorSet::storage_buffers(
-            ctx,
-            "BVH top-level refit set",
-            &[
-                (TOP_FIT_NODES, tlas_nodes.raw),
-                (TOP_FIT_PRIMS, tlas_prims.raw),
-                (TOP_FIT_INSTANCES, records.raw),
-                (TOP_FIT_BLAS_NODES, blas_nodes.raw),
-                (TOP_FIT_ORDER, order.raw),
-            ],
-        )?;
-        let push = std::mem::size_of::<Levels>() as u32;
-        let layout = pipeline_layout(ctx, "BVH top-level refit layout", &[set.layout], push)?;
-        let pipeline = compute_pipeline(ctx, "anim/tlas_refit.comp", layout, &Specialization::new(&[]))?;
-        Ok(TopLevelRefit { order, levels: Levels::default(), set, layout, pipeline })
+        // Objects land in `fit` as they are made: an error destroys them.
+        let mut fit = TopLevelRefit {
+            order,
+            levels: Levels::default(),
+            set: DescriptorSet::null(),
+            layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+        };
+        let created = (|| {
+            fit.set = DescriptorSet::storage_buffers(
+                ctx,
+                "BVH top-level refit set",
+                &[
+                    (TOP_FIT_NODES, tlas_nodes.raw),
+                    (TOP_FIT_PRIMS, tlas_prims.raw),
+                    (TOP_FIT_INSTANCES, records.raw),
+                    (TOP_FIT_BLAS_NODES, blas_nodes.raw),
+                    (TOP_FIT_ORDER, fit.order.raw),
+                ],
+            )?;
+            let push = std::mem::size_of::<Levels>() as u32;
+            fit.layout = pipeline_layout(ctx, "BVH top-level refit layout", &[fit.set.layout], push)?;
+            fit.pipeline =
+                compute_pipeline(ctx, "anim/tlas_refit.comp", fit.layout, &Specialization::new(&[]))?;
+            anyhow::Ok(())
+        })();
+        if let Err(e) = created {
+            fit.destroy(ctx);
+            return Err(e);
+        }
+        Ok(fit)
     }
 
     /// Takes the level order of a new top-level topology (None: the top

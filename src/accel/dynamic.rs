@@ -108,7 +108,16 @@ impl DynamicBlases {
     /// Creates and builds one BLAS per skinned slot (`gpu.skinned`), whose
     /// vertices must already hold a pose.
     pub fn new(ctx: &Context, gpu: &GpuScene, bounds: &[Aabb], align: u64) -> Result<DynamicBlases> {
-        let mut blases = Vec::new();
+        // Objects land in `d` as they are made: an error destroys them.
+        let mut d = DynamicBlases { blases: Vec::new(), scratch: None, scratch_address: 0 };
+        if let Err(e) = d.create(ctx, gpu, bounds, align) {
+            d.destroy(ctx);
+            return Err(e);
+        }
+        Ok(d)
+    }
+
+    fn create(&mut self, ctx: &Context, gpu: &GpuScene, bounds: &[Aabb], align: u64) -> Result<()> {
         let mut scratch_size = 0u64;
         for (slot, r) in gpu.skinned.iter().enumerate() {
             let sizes = blas_sizes(ctx, gpu, r, FLAGS);
@@ -119,7 +128,7 @@ impl DynamicBlases {
                 sizes.acceleration_structure_size,
             )?;
             let need = sizes.build_scratch_size.max(sizes.update_scratch_size);
-            blases.push(DynamicBlas {
+            self.blases.push(DynamicBlas {
                 accel,
                 range: *r,
                 scratch_offset: scratch_size,
@@ -134,14 +143,13 @@ impl DynamicBlases {
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
             MemoryLocation::GpuOnly,
         )?;
-        let scratch_address = scratch.address.div_ceil(align) * align;
-        let d = DynamicBlases { blases, scratch: Some(scratch), scratch_address };
-        let all = vec![Update::Rebuild; d.blases.len()];
+        self.scratch_address = scratch.address.div_ceil(align) * align;
+        self.scratch = Some(scratch);
+        let all = vec![Update::Rebuild; self.blases.len()];
         ctx.one_shot("build skinned BLASes", |cmd| {
-            d.record(ctx, cmd, gpu, &all);
+            self.record(ctx, cmd, gpu, &all);
             Ok(())
-        })?;
-        Ok(d)
+        })
     }
 
     /// Records this frame's refits / rebuilds (one entry per slot) in one

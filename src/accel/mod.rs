@@ -60,12 +60,14 @@ impl AccelStruct {
                 | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
             MemoryLocation::GpuOnly,
         )?;
-        let raw = unsafe {
+        let mut buffer = buffer;
+        let created = unsafe {
             loader.create_acceleration_structure(
                 &vk::AccelerationStructureCreateInfoKHR::default().buffer(buffer.raw).size(size).ty(ty),
                 None,
-            )?
+            )
         };
+        let raw = created.inspect_err(|_| buffer.destroy(ctx))?;
         ctx.name(raw, name);
         let address = unsafe {
             loader.get_acceleration_structure_device_address(
@@ -183,14 +185,37 @@ pub struct SceneAccel {
 
 impl SceneAccel {
     pub fn build(ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<SceneAccel> {
+        // Everything created lands in `accel` at once, so an error half-way
+        // destroys what exists.
+        let mut accel = SceneAccel {
+            tlas: AccelStruct {
+                raw: vk::AccelerationStructureKHR::null(),
+                buffer: Buffer::null(),
+                address: 0,
+            },
+            blases: Vec::new(),
+            dynamic: None,
+            instances: Buffer::null(),
+            scratch: Scratch { buffer: None, align: scratch_alignment(ctx) },
+            build_ms: 0.0,
+        };
+        match accel.fill(ctx, scene, gpu) {
+            Ok(()) => Ok(accel),
+            Err(e) => {
+                accel.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    fn fill(&mut self, ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<()> {
         let t0 = std::time::Instant::now();
         let loader = ctx.accel.as_ref().context("acceleration structures are not enabled")?;
-        let mut scratch = Scratch { buffer: None, align: scratch_alignment(ctx) };
 
         // 1. Size and create every BLAS.
         let flags = vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
             | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION;
-        let mut blases: Vec<Vec<Option<AccelStruct>>> = Vec::new();
+        let blases = &mut self.blases;
         let mut jobs = Vec::new(); // (mesh, prim, scratch size)
                                    // Primitives drawn only skinned (or not at all) get no static BLAS.
         let used = scene.rigidly_instanced();
@@ -203,12 +228,19 @@ impl SceneAccel {
                 }
                 let sizes = blas_sizes(ctx, gpu, r, flags);
                 let name = format!("BLAS '{}' #{p}", scene.meshes[m].name);
-                row.push(Some(AccelStruct::new(
+                let blas = AccelStruct::new(
                     ctx,
                     &name,
                     vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
                     sizes.acceleration_structure_size,
-                )?));
+                );
+                match blas {
+                    Ok(b) => row.push(Some(b)),
+                    Err(e) => {
+                        blases.push(row);
+                        return Err(e);
+                    }
+                }
                 jobs.push((m, p, sizes.build_scratch_size));
             }
             blases.push(row);
@@ -217,7 +249,8 @@ impl SceneAccel {
         // 2. Build them one after another through one scratch buffer, then
         //    query compacted sizes.
         let max_scratch = jobs.iter().map(|j| j.2).max().unwrap_or(0);
-        let scratch_addr = scratch.address(ctx, max_scratch)?;
+        let scratch_addr = self.scratch.address(ctx, max_scratch)?;
+        let blases = &mut self.blases;
         let query_pool = unsafe {
             ctx.device.create_query_pool(
                 &vk::QueryPoolCreateInfo::default()
@@ -231,7 +264,7 @@ impl SceneAccel {
             vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR
                 | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
         );
-        ctx.one_shot("build BLASes", |cmd| {
+        let built = ctx.one_shot("build BLASes", |cmd| {
             unsafe { ctx.device.cmd_reset_query_pool(cmd, query_pool, 0, jobs.len().max(1) as u32) };
             for (m, p, _) in &jobs {
                 let r = &gpu.ranges[*m][*p];
@@ -262,38 +295,45 @@ impl SceneAccel {
                 };
             }
             Ok(())
-        })?;
+        });
 
         // 3. Compact: copy each BLAS into a buffer of its compacted size.
         let mut compacted = vec![0u64; jobs.len()];
-        if !jobs.is_empty() {
-            unsafe {
-                ctx.device.get_query_pool_results(
-                    query_pool,
-                    0,
-                    &mut compacted,
-                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-                )?
-            };
-        }
+        let queried = built.and_then(|()| {
+            if !jobs.is_empty() {
+                unsafe {
+                    ctx.device.get_query_pool_results(
+                        query_pool,
+                        0,
+                        &mut compacted,
+                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                    )?
+                };
+            }
+            Ok(())
+        });
         unsafe { ctx.device.destroy_query_pool(query_pool, None) };
+        queried?;
         let (mut before, mut after) = (0u64, 0u64);
+        // The uncompacted BLASes; destroyed whether compaction works or not.
         let mut olds = Vec::new();
-        for ((m, p, _), size) in jobs.iter().zip(&compacted) {
-            let old = blases[*m][*p].take().unwrap();
-            let name = format!("BLAS '{}' #{p} (compacted)", scene.meshes[*m].name);
-            let new = AccelStruct::new(
-                ctx,
-                &name,
-                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
-                (*size).max(256),
-            )?;
-            before += old.buffer.size;
-            after += new.buffer.size;
-            blases[*m][*p] = Some(new);
-            olds.push((old, (*m, *p)));
-        }
-        if !olds.is_empty() {
+        let compaction = (|| {
+            for ((m, p, _), size) in jobs.iter().zip(&compacted) {
+                let name = format!("BLAS '{}' #{p} (compacted)", scene.meshes[*m].name);
+                let new = AccelStruct::new(
+                    ctx,
+                    &name,
+                    vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                    (*size).max(256),
+                )?;
+                let old = blases[*m][*p].replace(new).unwrap();
+                before += old.buffer.size;
+                after += blases[*m][*p].as_ref().unwrap().buffer.size;
+                olds.push((old, (*m, *p)));
+            }
+            if olds.is_empty() {
+                return Ok(());
+            }
             ctx.one_shot("compact BLASes", |cmd| {
                 for (old, (m, p)) in &olds {
                     let info = vk::CopyAccelerationStructureInfoKHR::default()
@@ -303,14 +343,15 @@ impl SceneAccel {
                     unsafe { loader.cmd_copy_acceleration_structure(cmd, &info) };
                 }
                 Ok(())
-            })?;
-        }
+            })
+        })();
         for (mut old, _) in olds {
             old.destroy(ctx);
         }
+        compaction?;
 
         // 4. TLAS over all instances.
-        let instances = Buffer::new(
+        self.instances = Buffer::new(
             ctx,
             "TLAS instances",
             (scene.instances.len().max(1) * std::mem::size_of::<vk::AccelerationStructureInstanceKHR>())
@@ -319,32 +360,20 @@ impl SceneAccel {
                 | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
             MemoryLocation::CpuToGpu,
         )?;
-        let mut accel = SceneAccel {
-            tlas: AccelStruct {
-                raw: vk::AccelerationStructureKHR::null(),
-                buffer: Buffer { raw: vk::Buffer::null(), allocation: None, size: 0, address: 0 },
-                address: 0,
-            },
-            blases,
-            dynamic: None,
-            instances,
-            scratch,
-            build_ms: 0.0,
-        };
         if !gpu.skinned.is_empty() {
-            accel.dynamic = Some(DynamicBlases::new(ctx, gpu, &gpu.skinned_bounds, accel.scratch.align)?);
+            self.dynamic = Some(DynamicBlases::new(ctx, gpu, &gpu.skinned_bounds, self.scratch.align)?);
         }
-        accel.build_tlas(ctx, scene)?;
-        accel.build_ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.build_tlas(ctx, scene)?;
+        self.build_ms = t0.elapsed().as_secs_f64() * 1e3;
         log::info!(
             "acceleration structures: {} BLASes ({:.1} MiB -> {:.1} MiB compacted), TLAS over {} instances, {:.0} ms",
             jobs.len(),
             before as f64 / 1048576.0,
             after as f64 / 1048576.0,
             scene.instances.len(),
-            accel.build_ms
+            self.build_ms
         );
-        Ok(accel)
+        Ok(())
     }
 
     /// Writes the instance records and (re)builds the TLAS, waiting for it.

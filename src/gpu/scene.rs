@@ -67,9 +67,55 @@ pub struct GpuScene {
 impl GpuScene {
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<GpuScene> {
         let t0 = std::time::Instant::now();
-        let (vertices, indices, ranges, skinned, skinned_bounds) = upload_geometry(ctx, scene)?;
+        // Every object created lands in `gs` at once, so a failure half-way
+        // (out of memory, a driver error) destroys what exists: an error
+        // exit leaks nothing.
+        let mut gs = GpuScene::empty();
+        if let Err(e) = gs.fill(ctx, scene) {
+            gs.destroy(ctx);
+            return Err(e);
+        }
+        log::info!(
+            "uploaded scene: {} triangles, {} instances, {} materials, {} textures, {:.1} MiB GPU memory, {:.0} ms",
+            scene.triangle_count(),
+            scene.instances.len(),
+            scene.materials.len(),
+            scene.textures.len(),
+            ctx.allocated_bytes() as f64 / (1024.0 * 1024.0),
+            t0.elapsed().as_secs_f64() * 1e3
+        );
+        Ok(gs)
+    }
 
-        let mut samplers = Vec::new();
+    /// Owns nothing yet; `destroy` is a no-op on it.
+    fn empty() -> GpuScene {
+        GpuScene {
+            vertices: Buffer::null(),
+            indices: Buffer::null(),
+            materials: Buffer::null(),
+            instances: Buffer::null(),
+            lights: Buffer::null(),
+            frame: Buffer::null(),
+            ray_counters: Buffer::null(),
+            textures: Vec::new(),
+            samplers: Vec::new(),
+            env_map: Image::null(),
+            env_sampler: vk::Sampler::null(),
+            set: DescriptorSet::null(),
+            ranges: Vec::new(),
+            skinned: Vec::new(),
+            skinned_bounds: Vec::new(),
+            draws: Vec::new(),
+            light_count: 0,
+            env_mean: Vec3::ZERO,
+        }
+    }
+
+    fn fill(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        let (vertices, indices, ranges, skinned, skinned_bounds) = upload_geometry(ctx, scene)?;
+        (self.vertices, self.indices) = (vertices, indices);
+        (self.ranges, self.skinned, self.skinned_bounds) = (ranges, skinned, skinned_bounds);
+
         let max_dim = ctx.caps.limits.max_image_dimension_2d;
         let fitted: Vec<(vk::Extent2D, std::borrow::Cow<[u8]>)> =
             scene.textures.iter().map(|t| fit_texture(t, max_dim)).collect();
@@ -86,53 +132,52 @@ impl GpuScene {
                 mipmaps: t.sampler.mipmaps,
             })
             .collect();
-        let textures =
+        self.textures =
             Image::textures(ctx, &descs).with_context(|| format!("uploading {} textures", descs.len()))?;
         for t in &scene.textures {
-            if !samplers.iter().any(|(d, _)| *d == t.sampler) {
-                samplers.push((t.sampler, create_sampler(ctx, &t.sampler)?));
+            if !self.samplers.iter().any(|(d, _)| *d == t.sampler) {
+                let sampler = create_sampler(ctx, &t.sampler)?;
+                self.samplers.push((t.sampler, sampler));
             }
         }
 
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
-        let materials = Buffer::with_data(
+        self.materials = Buffer::with_data(
             ctx,
             "materials",
             bytemuck::cast_slice(&materials),
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
-
-        let mut instances = Buffer::new(
+        self.instances = Buffer::new(
             ctx,
             "instances",
             (scene.instances.len().max(1) * std::mem::size_of::<GpuInstance>()) as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let mut lights = Buffer::new(
+        self.lights = Buffer::new(
             ctx,
             "lights",
             (scene.lights.len().max(1) * std::mem::size_of::<GpuLight>()) as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let frame = Buffer::new(
+        self.frame = Buffer::new(
             ctx,
             "frame uniforms",
             std::mem::size_of::<GpuFrame>() as u64,
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-
-        let ray_counters = Buffer::new(
+        self.ray_counters = Buffer::new(
             ctx,
             "ray counters",
             16,
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
-        let (env_map, env_mean) = upload_environment(ctx, scene)?;
-        let env_sampler = create_sampler(
+        (self.env_map, self.env_mean) = upload_environment(ctx, scene)?;
+        self.env_sampler = create_sampler(
             ctx,
             &SamplerDesc {
                 mag_filter: Filter::Linear,
@@ -156,58 +201,33 @@ impl GpuScene {
             (SCENE_ENV_MAP, Binding::one(sampled)),
             (SCENE_RAY_COUNTERS, Binding::one(storage)),
             // Bindless textures: variable-count, so the last binding.
-            (SCENE_TEXTURES, Binding { ty: sampled, count: textures.len().max(1) as u32, bindless: true }),
+            (
+                SCENE_TEXTURES,
+                Binding { ty: sampled, count: self.textures.len().max(1) as u32, bindless: true },
+            ),
         ];
         debug_assert!(layout.iter().enumerate().all(|(i, (b, _))| i as u32 == *b));
         let bindings: Vec<Binding> = layout.iter().map(|(_, b)| *b).collect();
-        let set = DescriptorSet::new(ctx, "scene set", &bindings)?;
-        set.write_buffer(ctx, SCENE_FRAME, frame.raw);
-        set.write_buffer(ctx, SCENE_VERTICES, vertices.raw);
-        set.write_buffer(ctx, SCENE_INDICES, indices.raw);
-        set.write_buffer(ctx, SCENE_MATERIALS, materials.raw);
-        set.write_buffer(ctx, SCENE_INSTANCES, instances.raw);
-        set.write_buffer(ctx, SCENE_LIGHTS, lights.raw);
-        set.write_buffer(ctx, SCENE_RAY_COUNTERS, ray_counters.raw);
+        self.set = DescriptorSet::new(ctx, "scene set", &bindings)?;
+        let set = &self.set;
+        set.write_buffer(ctx, SCENE_FRAME, self.frame.raw);
+        set.write_buffer(ctx, SCENE_VERTICES, self.vertices.raw);
+        set.write_buffer(ctx, SCENE_INDICES, self.indices.raw);
+        set.write_buffer(ctx, SCENE_MATERIALS, self.materials.raw);
+        set.write_buffer(ctx, SCENE_INSTANCES, self.instances.raw);
+        set.write_buffer(ctx, SCENE_LIGHTS, self.lights.raw);
+        set.write_buffer(ctx, SCENE_RAY_COUNTERS, self.ray_counters.raw);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        set.write_image(ctx, SCENE_ENV_MAP, 0, env_map.view, env_sampler, read);
-        for (i, (img, tex)) in textures.iter().zip(&scene.textures).enumerate() {
-            let s = samplers.iter().find(|(d, _)| *d == tex.sampler).map(|(_, s)| *s).unwrap();
+        set.write_image(ctx, SCENE_ENV_MAP, 0, self.env_map.view, self.env_sampler, read);
+        for (i, (img, tex)) in self.textures.iter().zip(&scene.textures).enumerate() {
+            let s = self.samplers.iter().find(|(d, _)| *d == tex.sampler).map(|(_, s)| *s).unwrap();
             set.write_image(ctx, SCENE_TEXTURES, i as u32, img.view, s, read);
         }
 
-        let draws = build_draws(scene, &ranges, &skinned);
-        write_instances(scene, &ranges, &skinned, &mut instances)?;
-        write_lights(scene, &mut lights)?;
-        let gs = GpuScene {
-            vertices,
-            indices,
-            materials,
-            instances,
-            lights,
-            frame,
-            ray_counters,
-            textures,
-            samplers,
-            env_map,
-            env_sampler,
-            set,
-            ranges,
-            skinned,
-            skinned_bounds,
-            draws,
-            light_count: scene.lights.len() as u32,
-            env_mean,
-        };
-        log::info!(
-            "uploaded scene: {} triangles, {} instances, {} materials, {} textures, {:.1} MiB GPU memory, {:.0} ms",
-            scene.triangle_count(),
-            scene.instances.len(),
-            scene.materials.len(),
-            scene.textures.len(),
-            ctx.allocated_bytes() as f64 / (1024.0 * 1024.0),
-            t0.elapsed().as_secs_f64() * 1e3
-        );
-        Ok(gs)
+        self.draws = build_draws(scene, &self.ranges, &self.skinned);
+        self.light_count = scene.lights.len() as u32;
+        write_instances(scene, &self.ranges, &self.skinned, &mut self.instances)?;
+        write_lights(scene, &mut self.lights)
     }
 
     /// Re-writes instance transforms and lights (animation, later issues).
@@ -301,13 +321,14 @@ fn upload_geometry(ctx: &Context, scene: &Scene) -> Result<Geometry> {
     if ctx.rt.acceleration_structure {
         usage |= vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR;
     }
-    let vertices = Buffer::with_data(ctx, "scene vertices", bytemuck::cast_slice(&vertex_data), usage)?;
+    let mut vertices = Buffer::with_data(ctx, "scene vertices", bytemuck::cast_slice(&vertex_data), usage)?;
     let indices = Buffer::with_data(
         ctx,
         "scene indices",
         bytemuck::cast_slice(&index_data),
         usage | vk::BufferUsageFlags::INDEX_BUFFER,
-    )?;
+    )
+    .inspect_err(|_| vertices.destroy(ctx))?;
     Ok((vertices, indices, ranges, skinned, skinned_bounds))
 }
 

@@ -103,38 +103,63 @@ impl Skinning {
             sources.push((inst.node, skin));
             joint_count += scene.skins[skin].joints.len() as u32;
         }
+        // GPU objects land in `sk` as they are made: an error destroys them.
+        let mut sk = Skinning {
+            jobs,
+            sources,
+            source: Buffer::null(),
+            joints: Buffer::null(),
+            bounds: Buffer::null(),
+            set: DescriptorSet::null(),
+            layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+        };
+        if let Err(e) = sk.create(ctx, gpu, &source_data, joint_count) {
+            sk.destroy(ctx);
+            return Err(e);
+        }
+        log::info!(
+            "skinning: {} skinned instances, {} bind-pose vertices, {} joints",
+            sk.jobs.len(),
+            source_data.len(),
+            joint_count
+        );
+        Ok(Some(sk))
+    }
+
+    fn create(
+        &mut self,
+        ctx: &Context,
+        gpu: &GpuScene,
+        source_data: &[SkinVertex],
+        joint_count: u32,
+    ) -> Result<()> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let source =
-            Buffer::with_data(ctx, "skinning bind pose", bytemuck::cast_slice(&source_data), storage)?;
-        let joints = Buffer::new(
+        self.source =
+            Buffer::with_data(ctx, "skinning bind pose", bytemuck::cast_slice(source_data), storage)?;
+        self.joints = Buffer::new(
             ctx,
             "skinning joint matrices",
             joint_count as u64 * 64,
             storage,
             MemoryLocation::CpuToGpu,
         )?;
-        let bounds =
-            Buffer::new(ctx, "skinned bounds", jobs.len() as u64 * 24, storage, MemoryLocation::GpuToCpu)?;
-        let set = DescriptorSet::storage_buffers(
+        let bounds_size = self.jobs.len() as u64 * 24;
+        self.bounds = Buffer::new(ctx, "skinned bounds", bounds_size, storage, MemoryLocation::GpuToCpu)?;
+        self.set = DescriptorSet::storage_buffers(
             ctx,
             "skinning set",
             &[
-                (SKIN_SOURCE, source.raw),
-                (SKIN_JOINTS, joints.raw),
+                (SKIN_SOURCE, self.source.raw),
+                (SKIN_JOINTS, self.joints.raw),
                 (SKIN_DEST, gpu.vertices.raw),
-                (SKIN_BOUNDS, bounds.raw),
+                (SKIN_BOUNDS, self.bounds.raw),
             ],
         )?;
-        let layout =
-            pipeline_layout(ctx, "skinning layout", &[set.layout], std::mem::size_of::<Job>() as u32)?;
-        let pipeline = compute_pipeline(ctx, "anim/skinning.comp", layout, &Specialization::new(&[]))?;
-        log::info!(
-            "skinning: {} skinned instances, {} bind-pose vertices, {} joints",
-            jobs.len(),
-            source_data.len(),
-            joint_count
-        );
-        Ok(Some(Skinning { jobs, sources, source, joints, bounds, set, layout, pipeline }))
+        self.layout =
+            pipeline_layout(ctx, "skinning layout", &[self.set.layout], std::mem::size_of::<Job>() as u32)?;
+        self.pipeline = compute_pipeline(ctx, "anim/skinning.comp", self.layout, &Specialization::new(&[]))?;
+        Ok(())
     }
 
     /// Writes this frame's joint matrices and resets the bounds accumulators.

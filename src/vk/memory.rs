@@ -17,6 +17,15 @@ pub struct Buffer {
     pub address: vk::DeviceAddress,
 }
 
+/// Device memory from the allocator, or the failure a test injected
+/// (`Context::alloc_fault`).
+fn allocate(ctx: &Context, desc: &AllocationCreateDesc) -> Result<Allocation> {
+    if ctx.alloc_fault.hit() {
+        anyhow::bail!("out of device memory (injected by a test)");
+    }
+    Ok(ctx.allocator.lock().unwrap().allocate(desc)?)
+}
+
 impl Buffer {
     /// A buffer that owns nothing (a placeholder; `destroy` is a no-op).
     pub fn null() -> Buffer {
@@ -36,18 +45,18 @@ impl Buffer {
         }
         .with_context(|| format!("create buffer '{name}'"))?;
         let req = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
-        let allocation = ctx
-            .allocator
-            .lock()
-            .unwrap()
-            .allocate(&AllocationCreateDesc {
+        let allocation = allocate(
+            ctx,
+            &AllocationCreateDesc {
                 name,
                 requirements: req,
                 location,
                 linear: true,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .with_context(|| format!("allocate {size} bytes for buffer '{name}'"))?;
+            },
+        )
+        .inspect_err(|_| unsafe { ctx.device.destroy_buffer(raw, None) })
+        .with_context(|| format!("allocate {size} bytes for buffer '{name}'"))?;
         unsafe { ctx.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset())? };
         ctx.name(raw, name);
         let address = if usage.contains(vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS) {
@@ -62,7 +71,7 @@ impl Buffer {
 
     /// A device-local buffer filled from `data` through a staging copy.
     pub fn with_data(ctx: &Context, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Buffer> {
-        let buf = Buffer::new(
+        let mut buf = Buffer::new(
             ctx,
             name,
             data.len() as u64,
@@ -70,20 +79,10 @@ impl Buffer {
             MemoryLocation::GpuOnly,
         )?;
         if !data.is_empty() {
-            let mut staging = Buffer::new(
-                ctx,
-                &format!("{name} (staging)"),
-                data.len() as u64,
-                vk::BufferUsageFlags::TRANSFER_SRC,
-                MemoryLocation::CpuToGpu,
-            )?;
-            staging.write(0, data)?;
-            ctx.one_shot(&format!("upload {name}"), |cmd| {
-                let region = [vk::BufferCopy::default().size(data.len() as u64)];
-                unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buf.raw, &region) };
-                Ok(())
-            })?;
-            staging.destroy(ctx);
+            if let Err(e) = buf.upload(ctx, 0, data) {
+                buf.destroy(ctx);
+                return Err(e);
+            }
         }
         Ok(buf)
     }
@@ -102,11 +101,12 @@ impl Buffer {
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        staging.write(0, data)?;
-        let r = ctx.one_shot("upload", |cmd| {
-            let region = [vk::BufferCopy::default().dst_offset(offset).size(data.len() as u64)];
-            unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, self.raw, &region) };
-            Ok(())
+        let r = staging.write(0, data).and_then(|_| {
+            ctx.one_shot("upload", |cmd| {
+                let region = [vk::BufferCopy::default().dst_offset(offset).size(data.len() as u64)];
+                unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, self.raw, &region) };
+                Ok(())
+            })
         });
         staging.destroy(ctx);
         r
@@ -160,6 +160,20 @@ pub struct Image {
 }
 
 impl Image {
+    /// An image that owns nothing (a placeholder; `destroy` is a no-op).
+    pub fn null() -> Image {
+        Image {
+            raw: vk::Image::null(),
+            view: vk::ImageView::null(),
+            allocation: None,
+            format: vk::Format::UNDEFINED,
+            extent: vk::Extent2D::default(),
+            mip_levels: 0,
+            aspect: vk::ImageAspectFlags::empty(),
+            extra_view: None,
+        }
+    }
+
     pub fn new_2d(
         ctx: &Context,
         name: &str,
@@ -217,18 +231,18 @@ impl Image {
             format!("create image '{name}' ({format:?} {}x{})", extent.width, extent.height)
         })?;
         let req = unsafe { ctx.device.get_image_memory_requirements(raw) };
-        let allocation = ctx
-            .allocator
-            .lock()
-            .unwrap()
-            .allocate(&AllocationCreateDesc {
+        let allocation = allocate(
+            ctx,
+            &AllocationCreateDesc {
                 name,
                 requirements: req,
                 location: MemoryLocation::GpuOnly,
                 linear: false,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .with_context(|| format!("allocate image '{name}'"))?;
+            },
+        )
+        .inspect_err(|_| unsafe { ctx.device.destroy_image(raw, None) })
+        .with_context(|| format!("allocate image '{name}'"))?;
         unsafe { ctx.device.bind_image_memory(raw, allocation.memory(), allocation.offset())? };
         let make_view = |format: vk::Format, usage: vk::ImageUsageFlags| {
             let mut view_usage = vk::ImageViewUsageCreateInfo::default().usage(usage);
@@ -288,7 +302,13 @@ impl Image {
                 bytes += descs[end].texels.len();
                 end += 1;
             }
-            images.extend(Image::upload_batch(ctx, &descs[start..end])?);
+            match Image::upload_batch(ctx, &descs[start..end]) {
+                Ok(batch) => images.extend(batch),
+                Err(e) => {
+                    images.iter_mut().for_each(|i| i.destroy(ctx));
+                    return Err(e);
+                }
+            }
             start = end;
         }
         Ok(images)
@@ -304,7 +324,11 @@ impl Image {
             let usage = vk::ImageUsageFlags::SAMPLED
                 | vk::ImageUsageFlags::TRANSFER_DST
                 | vk::ImageUsageFlags::TRANSFER_SRC;
-            images.push(Image::new_2d(ctx, &d.name, d.format, e, levels, usage)?);
+            let created = Image::new_2d(ctx, &d.name, d.format, e, levels, usage);
+            // A failure destroys the images of this batch made so far.
+            let created =
+                created.inspect_err(|_| images.iter_mut().for_each(|i: &mut Image| i.destroy(ctx)))?;
+            images.push(created);
             // Buffer-to-image copies want offsets aligned to the texel size (4).
             offsets.push(size);
             size += (d.texels.len() as u64).div_ceil(16) * 16;
@@ -315,7 +339,8 @@ impl Image {
             size,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
-        )?;
+        )
+        .inspect_err(|_| images.iter_mut().for_each(|i| i.destroy(ctx)))?;
         let r = (|| {
             for (d, &o) in descs.iter().zip(&offsets) {
                 staging.write(o as usize, d.texels)?;

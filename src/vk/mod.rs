@@ -50,6 +50,27 @@ pub struct Context {
     pub rt_pipeline: Option<khr::ray_tracing_pipeline::Device>,
     /// Synchronization validation is on: nothing may hide a missing barrier.
     pub sync_validation: bool,
+    /// Fault injection for tests of error paths (off unless armed).
+    pub alloc_fault: AllocationFault,
+}
+
+/// Makes the n-th buffer or image allocation from now fail, as running out
+/// of device memory would: tests walk every failure point of a code path
+/// and check, with validation on, that each error leaves nothing behind.
+#[derive(Default)]
+pub struct AllocationFault(std::sync::atomic::AtomicU64);
+
+impl AllocationFault {
+    /// Fail the `n`-th allocation from now (n >= 1); 0 disarms.
+    pub fn arm(&self, n: u64) {
+        self.0.store(n, std::sync::atomic::Ordering::SeqCst);
+    }
+
+    /// Counts one allocation; true when it is the one to fail.
+    pub(crate) fn hit(&self) -> bool {
+        use std::sync::atomic::Ordering::SeqCst;
+        self.0.fetch_update(SeqCst, SeqCst, |n| (n > 0).then(|| n - 1)) == Ok(1)
+    }
 }
 
 impl Context {
@@ -128,6 +149,7 @@ impl Context {
             accel,
             rt_pipeline,
             sync_validation: opts.validation && opts.sync_validation,
+            alloc_fault: AllocationFault::default(),
         };
         ctx.name(ctx.queue, "main queue");
         ctx.name(ctx.command_pool, "main command pool");

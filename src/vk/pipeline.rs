@@ -130,6 +130,16 @@ pub struct DescriptorSet {
 }
 
 impl DescriptorSet {
+    /// A set that owns nothing (a placeholder; `destroy` is a no-op).
+    pub fn null() -> DescriptorSet {
+        DescriptorSet {
+            layout: vk::DescriptorSetLayout::null(),
+            pool: vk::DescriptorPool::null(),
+            set: vk::DescriptorSet::null(),
+            bindings: Vec::new(),
+        }
+    }
+
     /// Bindings numbered 0, 1, 2, ... in order.
     pub fn new(ctx: &Context, name: &str, bindings: &[Binding]) -> Result<DescriptorSet> {
         let numbered: Vec<(u32, Binding)> =

@@ -107,7 +107,19 @@ impl RtPipeline {
         }
         let pipeline = r.map_err(|(_, e)| e).context("create ray-tracing pipeline")?[0];
         ctx.name(pipeline, shaders.raygen);
+        Self::with_sbt(ctx, loader, shaders, pipeline, groups.len(), &props)
+            .inspect_err(|_| unsafe { ctx.device.destroy_pipeline(pipeline, None) })
+    }
 
+    /// Builds the shader binding table of `pipeline`.
+    fn with_sbt(
+        ctx: &Context,
+        loader: &khr::ray_tracing_pipeline::Device,
+        shaders: &RtShaders,
+        pipeline: vk::Pipeline,
+        group_count: usize,
+        props: &vk::PhysicalDeviceRayTracingPipelinePropertiesKHR,
+    ) -> Result<RtPipeline> {
         // Shader binding table: each region starts at the base alignment,
         // records are the handle size rounded up to the handle alignment.
         let handle = props.shader_group_handle_size as u64;
@@ -117,8 +129,8 @@ impl RtPipeline {
             loader.get_ray_tracing_shader_group_handles(
                 pipeline,
                 0,
-                groups.len() as u32,
-                groups.len() * handle as usize,
+                group_count as u32,
+                group_count * handle as usize,
             )?
         };
         let (n_miss, n_hit) = (shaders.miss.len() as u64, shaders.hit_groups.len() as u64);
@@ -149,7 +161,7 @@ impl RtPipeline {
             MemoryLocation::CpuToGpu,
         )?;
         let start = align_up(sbt.address, base);
-        sbt.write((start - sbt.address) as usize, &data)?;
+        sbt.write((start - sbt.address) as usize, &data).inspect_err(|_| sbt.destroy(ctx))?;
         let region = |off: u64, stride: u64, size: u64| vk::StridedDeviceAddressRegionKHR {
             device_address: start + off,
             stride,

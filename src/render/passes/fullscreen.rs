@@ -74,19 +74,34 @@ impl FullScreen {
                 (i.binding, Binding::one(ty))
             })
             .collect();
-        let set = DescriptorSet::numbered(ctx, &format!("{name} set"), &bindings)?;
         let tracer = match shader {
             Shader::Traced(_) => Some(
                 init.tracer.ok_or_else(|| anyhow::anyhow!("pass {name} traces rays but no tracer exists"))?,
             ),
             Shader::Compute(_) => None,
         };
+        let mut set = DescriptorSet::numbered(ctx, &format!("{name} set"), &bindings)?;
         let mut sets = vec![init.gpu.set.layout, set.layout];
         sets.extend(tracer.map(|t| t.set().layout));
-        let layout = pipeline_layout(ctx, &format!("{name} layout"), &sets, 0)?;
+        // What exists is destroyed when a later step fails.
+        let layout = match pipeline_layout(ctx, &format!("{name} layout"), &sets, 0) {
+            Ok(l) => l,
+            Err(e) => {
+                set.destroy(ctx);
+                return Err(e);
+            }
+        };
         let kernel = match (shader, tracer) {
-            (Shader::Traced(s), Some(t)) => t.kernel(ctx, s, layout, spec)?,
-            (Shader::Compute(s), _) | (Shader::Traced(s), None) => Kernel::compute(ctx, s, layout, spec)?,
+            (Shader::Traced(s), Some(t)) => t.kernel(ctx, s, layout, spec),
+            (Shader::Compute(s), _) | (Shader::Traced(s), None) => Kernel::compute(ctx, s, layout, spec),
+        };
+        let kernel = match kernel {
+            Ok(k) => k,
+            Err(e) => {
+                unsafe { ctx.device.destroy_pipeline_layout(layout, None) };
+                set.destroy(ctx);
+                return Err(e);
+            }
         };
         let sampler = unsafe {
             ctx.device.create_sampler(
@@ -96,10 +111,18 @@ impl FullScreen {
                     .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
                     .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE),
                 None,
-            )?
+            )
         };
-        ctx.name(sampler, &format!("{name} point sampler"));
-        let pass = FullScreen { io, set, layout, kernel, sampler, traced: tracer.is_some() };
+        let mut pass =
+            FullScreen { io, set, layout, kernel, sampler: vk::Sampler::null(), traced: tracer.is_some() };
+        match sampler {
+            Ok(s) => pass.sampler = s,
+            Err(e) => {
+                pass.destroy(ctx);
+                return Err(e.into());
+            }
+        }
+        ctx.name(pass.sampler, &format!("{name} point sampler"));
         pass.bind(ctx, init.targets);
         Ok(Box::new(pass))
     }
