@@ -84,6 +84,7 @@ fn tiny_report_checks_its_numbers_and_files() {
     let csv = std::fs::read_to_string(dir.join("report.csv")).unwrap();
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    assert_eq!(header[..7].join(","), "knob,value,backend,ms_median,ms_p95,flip_mean,psnr");
     assert_eq!(header[..7].join(","), CSV_HEADER);
     let rows: Vec<Vec<String>> = lines.map(split_csv).collect();
     assert_eq!(rows.len(), 2, "{csv}");

@@ -191,8 +191,14 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
     let (scene, _) = load_posed(&opts.job)?;
     let camera = opts.job.camera.resolve(&scene)?;
     let base = Variant { settings: opts.job.settings, scale: 1.0 };
-    let reference = opts.reference_variant();
-    resolve_shading(ctx, &scene, &reference.settings).context("the reference settings cannot run")?;
+    // `auto` resolved to the backend it picks, so equal frames dedupe.
+    let concrete = |mut v: Variant| -> Result<Variant> {
+        if let Some(b) = resolve_shading(ctx, &scene, &v.settings)?.backend {
+            v.settings.backend = b;
+        }
+        Ok(v)
+    };
+    let reference = concrete(opts.reference_variant()).context("the reference settings cannot run")?;
 
     // Every setting, deduplicated: the reference first, then the checks,
     // then each knob's values.
@@ -207,10 +213,14 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         }
     };
     index_of(&mut variants, reference, "reference".into());
-    let convergence = index_of(&mut variants, opts.convergence_variant(), "convergence check".into());
-    let with_mode = |m: Mode| Variant { settings: RenderSettings { mode: m, ..base.settings }, ..base };
-    let hybrid = index_of(&mut variants, with_mode(Mode::Hybrid), "self-check hybrid".into());
-    let rt = index_of(&mut variants, with_mode(Mode::Rt), "self-check rt".into());
+    let convergence = concrete(opts.convergence_variant())?;
+    let convergence = index_of(&mut variants, convergence, "convergence check".into());
+    let with_mode =
+        |m: Mode| concrete(Variant { settings: RenderSettings { mode: m, ..base.settings }, ..base });
+    let hybrid = with_mode(Mode::Hybrid).context("the base settings cannot run")?;
+    let hybrid = index_of(&mut variants, hybrid, "self-check hybrid".into());
+    let rt = with_mode(Mode::Rt).context("the base settings cannot run in rt mode")?;
+    let rt = index_of(&mut variants, rt, "self-check rt".into());
     let mut planned: Vec<(&'static str, String, usize)> = Vec::new();
     let mut skipped = Vec::new();
     for sel in &opts.knobs {
@@ -222,14 +232,15 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         for value in values {
             let mut v = base;
             (knob.apply)(&mut v, &value)?;
-            if let Err(e) = resolve_shading(ctx, &scene, &v.settings) {
-                if knob.skip_unavailable && sel.values.is_none() {
+            let v = match concrete(v) {
+                Ok(v) => v,
+                Err(e) if knob.skip_unavailable && sel.values.is_none() => {
                     log::info!("report: {} {value} skipped: {e:#}", knob.name);
                     skipped.push(format!("{} {value}: {e:#}", knob.name));
                     continue;
                 }
-                return Err(e.context(format!("report: {} {value} cannot run", knob.name)));
-            }
+                Err(e) => return Err(e.context(format!("report: {} {value} cannot run", knob.name))),
+            };
             let i = index_of(&mut variants, v, format!("{} {value}", knob.name));
             planned.push((knob.name, value, i));
         }
