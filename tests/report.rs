@@ -108,6 +108,7 @@ fn tiny_report_checks_its_numbers_and_files() {
     assert!(md.contains("## Reference") && md.contains("pure-RT mode"), "{md}");
     assert!(md.contains("max depth 16, min weight 0.001"), "{md}");
     assert!(md.contains("Self-check: hybrid vs rt at equal settings"), "{md}");
+    assert!(md.contains("tone-mapped: largest 8-bit channel difference"), "{md}");
     assert!(md.contains("| max-depth | 0 |") && md.contains("| max-depth | 1 |"), "{md}");
 
     // The worst setting's error map (reference size) and the plot decode.
@@ -144,6 +145,7 @@ fn compare_cli() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(stdout.contains("ꟻLIP mean 0.000000") && stdout.contains("PSNR inf dB"), "{stdout}");
+    assert!(stdout.contains("largest 8-bit channel difference 0, 0.0% of pixels differ"), "{stdout}");
 
     let map = d.join("map.png");
     let out = run(&a, &b, &["--out", map.to_str().unwrap(), "--threshold", "0.05"]);
@@ -206,4 +208,36 @@ fn bench_csv_and_ratio_words() {
         let ms: f64 = fields[median].parse().unwrap_or_else(|e| panic!("{e}: {r}"));
         assert!(ms >= 0.0, "{r}");
     }
+}
+
+/// `report` through the binary: bad --knobs and too few --frames are
+/// refused with the problem named; a tiny run shows its progress on stderr,
+/// prints the self-check and writes its files.
+#[test]
+fn report_cli() {
+    let d = tmp("cli");
+    let run = |args: &[&str]| {
+        bin().args(["report", "--width", "16", "--height", "9", "--out"]).arg(&d).args(args).output().unwrap()
+    };
+    for (args, needle) in [
+        (&["--knobs", "depth"][..], "max-depth"),
+        (&["--knobs", "max-depth=99"], "0..=64"),
+        (&["--frames", "3"], "at least 5"),
+    ] {
+        let out = run(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && !stderr.contains("panicked"), "{args:?}: {stderr}");
+        let line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("{stderr}"));
+        assert!(line.contains(needle), "{args:?}: '{needle}' not in {line}");
+    }
+    let out = run(&["--knobs", "mode=hybrid", "--frames", "5", "--warmup", "1", "--no-ray-counts"]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{stderr}");
+    // A line when each setting starts, and one with its times when it is done.
+    assert!(stderr.contains("report [1/4] reference (16x9"), "{stderr}");
+    assert!(stderr.lines().any(|l| l.starts_with("report [4/4]") && l.contains("ms median")), "{stderr}");
+    assert!(stdout.contains("self-check, hybrid vs rt at equal settings: ꟻLIP"), "{stdout}");
+    let csv = std::fs::read_to_string(d.join("report.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 2, "{csv}");
+    assert!(csv.lines().nth(1).unwrap().starts_with("mode,hybrid,"), "{csv}");
 }

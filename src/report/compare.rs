@@ -63,6 +63,8 @@ pub struct Comparison {
     pub threshold: f32,
     /// Share of pixels whose ꟻLIP error exceeds `threshold`.
     pub share_over: f64,
+    /// The 8-bit images (tone-mapped for HDR) compared value by value.
+    pub ldr: metrics::LdrDiff,
 }
 
 impl Comparison {
@@ -80,6 +82,7 @@ impl Comparison {
         if let Some(r) = self.rel_mse {
             s.push_str(&format!("relMSE {r:.6}\n"));
         }
+        s.push_str(&format!("{}\n", self.ldr.describe()));
         s
     }
 }
@@ -93,13 +96,14 @@ pub fn compare(a: &Path, b: &Path, map: Option<&Path>, threshold: f32, exposure:
         bail!("the images differ in size: {} is {wa}x{ha}, {} is {wb}x{hb}", a.display(), b.display());
     }
     let (width, height) = ia.size();
-    let (flip, psnr, rel_mse, hdr) = match (&ia, &ib) {
+    let (flip, psnr, rel_mse, hdr, ldr) = match (&ia, &ib) {
         (Loaded::Ldr(x), Loaded::Ldr(y)) => {
-            (metrics::flip(x, y)?, crate::metrics::psnr_rgb8(&x.rgb, &y.rgb, 3, None), None, false)
+            let psnr = crate::metrics::psnr_rgb8(&x.rgb, &y.rgb, 3, None);
+            (metrics::flip(x, y)?, psnr, None, false, metrics::LdrDiff::of(x, y))
         }
         (Loaded::Hdr(x), Loaded::Hdr(y)) => {
             let e = metrics::compare_hdr(x, y, exposure)?;
-            (e.map, e.psnr, Some(e.rel_mse), true)
+            (e.map, e.psnr, Some(e.rel_mse), true, e.ldr)
         }
         (Loaded::Hdr(_), Loaded::Ldr(_)) | (Loaded::Ldr(_), Loaded::Hdr(_)) => {
             let (h, l) = if matches!(ia, Loaded::Hdr(_)) { (a, b) } else { (b, a) };
@@ -122,5 +126,6 @@ pub fn compare(a: &Path, b: &Path, map: Option<&Path>, threshold: f32, exposure:
         rel_mse,
         threshold,
         share_over: flip.share_over(threshold),
+        ldr,
     })
 }

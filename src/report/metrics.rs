@@ -190,18 +190,45 @@ pub struct Errors {
     pub psnr: f64,
     pub rel_mse: f64,
     pub map: FlipMap,
+    /// The tone-mapped 8-bit images' largest channel difference and the
+    /// share of pixels that differ at all (what a small ꟻLIP is made of).
+    pub ldr: LdrDiff,
+}
+
+/// How two 8-bit images differ, channel values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LdrDiff {
+    pub max: u8,
+    pub share_differing: f64,
+}
+
+impl LdrDiff {
+    pub fn of(a: &LdrImage, b: &LdrImage) -> LdrDiff {
+        let (max, share_differing) = crate::metrics::diff_stats(&a.rgb, &b.rgb, 3, 0);
+        LdrDiff { max, share_differing }
+    }
+
+    pub fn describe(&self) -> String {
+        format!(
+            "largest 8-bit channel difference {}, {:.1}% of pixels differ",
+            self.max,
+            self.share_differing * 100.0
+        )
+    }
 }
 
 /// `test` (any size: resampled to the reference's) against `reference`,
 /// both tone-mapped with `exposure` (the reference's) for ꟻLIP.
 pub fn compare_hdr(reference: &HdrImage, test: &HdrImage, exposure: f32) -> Result<Errors> {
     let test = test.resized(reference.width, reference.height);
-    let map = flip(&reference.tone_mapped(exposure), &test.tone_mapped(exposure))?;
+    let (r, t) = (reference.tone_mapped(exposure), test.tone_mapped(exposure));
+    let map = flip(&r, &t)?;
     Ok(Errors {
         flip_mean: map.mean(),
         psnr: psnr_hdr(reference, &test),
         rel_mse: rel_mse(reference, &test),
         map,
+        ldr: LdrDiff::of(&r, &t),
     })
 }
 

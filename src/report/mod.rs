@@ -118,6 +118,7 @@ pub struct Distance {
     pub about: String,
     pub flip_mean: f64,
     pub psnr: f64,
+    pub ldr: metrics::LdrDiff,
 }
 
 pub struct Report {
@@ -291,7 +292,7 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
     let against_ref = |i: usize| metrics::compare_hdr(reference_image, &measured[i].image, exposure);
     let mut rows = Vec::new();
     for (knob, value, i) in planned {
-        let Errors { flip_mean, psnr, rel_mse, map } =
+        let Errors { flip_mean, psnr, rel_mse, map, .. } =
             against_ref(i).with_context(|| format!("comparing {knob} {value} with the reference"))?;
         rows.push(Row { knob, value, measured: i, flip_mean, psnr, rel_mse, map });
     }
@@ -314,6 +315,7 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
             ),
             flip_mean: check.flip_mean,
             psnr: check.psnr,
+            ldr: check.ldr,
         },
         convergence: Distance {
             about: format!(
@@ -323,6 +325,7 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
             ),
             flip_mean: conv.flip_mean,
             psnr: conv.psnr,
+            ldr: conv.ldr,
         },
         measured,
         rows,
