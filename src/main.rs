@@ -117,6 +117,10 @@ enum Command {
         /// Reference: ray backend [default: the --backend of the base settings].
         #[arg(long, value_enum)]
         ref_backend: Option<Backend>,
+        /// Reference: rt (camera rays traced) or hybrid (then the rows leave
+        /// out the hybrid-vs-rt difference the self-check reports).
+        #[arg(long, value_enum, default_value_t = Mode::Rt)]
+        ref_mode: Mode,
         /// Do not count rays per frame (saves a pipeline compile per setting).
         #[arg(long)]
         no_ray_counts: bool,
@@ -416,6 +420,7 @@ fn run(cli: Cli) -> Result<()> {
             ref_max_depth,
             ref_min_weight,
             ref_backend,
+            ref_mode,
             no_ray_counts,
             out,
         }) => {
@@ -427,6 +432,7 @@ fn run(cli: Cli) -> Result<()> {
                     max_depth: ref_max_depth,
                     min_weight: ref_min_weight,
                     backend: ref_backend,
+                    mode: ref_mode,
                 },
                 count_rays: !no_ray_counts,
                 ..ReportOptions::new(view.job()?, out)

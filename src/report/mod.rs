@@ -35,13 +35,16 @@ pub struct ReferenceSettings {
     pub min_weight: f32,
     /// None: the base settings' backend.
     pub backend: Option<Backend>,
+    /// Rt (camera rays) by default. Hybrid measures the other knobs without
+    /// the hybrid-vs-rt difference (the self-check) in every row.
+    pub mode: Mode,
 }
 
 impl Default for ReferenceSettings {
     /// Converged on the bundled scenes at a bounded cost: the weight cutoff
     /// keeps dielectric branching (2^depth without it) affordable.
     fn default() -> Self {
-        ReferenceSettings { max_depth: 16, min_weight: 0.001, backend: None }
+        ReferenceSettings { max_depth: 16, min_weight: 0.001, backend: None, mode: Mode::Rt }
     }
 }
 
@@ -82,7 +85,7 @@ impl ReportOptions {
         effects.max_depth = self.reference.max_depth;
         effects.min_weight = self.reference.min_weight;
         let settings = RenderSettings {
-            mode: Mode::Rt,
+            mode: self.reference.mode,
             effects,
             backend: self.reference.backend.unwrap_or(base.backend),
             ..base

@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use super::{Report, Row};
+use crate::render::shading::Mode;
 
 /// The fixed leading columns of report.csv.
 pub const CSV_HEADER: &str = "knob,value,backend,ms_median,ms_p95,flip_mean,psnr";
@@ -101,10 +102,21 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
     let _ = writeln!(s, "## Reference\n");
     let _ = writeln!(
         s,
-        "The same renderer at its most accurate affordable settings: pure-RT mode (camera rays \
-         traced), every effect on, max depth {}, min weight {}, backend {}, exposure {} \
-         ({}). It took {:.3} ms per frame (median). `reference.png` is its tone-mapped image.\n",
-        rs.max_depth, rs.min_weight, r.backend, report.reference_exposure, r.config, r.timing.median
+        "The same renderer at its most accurate affordable settings: {}, every effect on, max \
+         depth {}, min weight {}, backend {}, exposure {} ({}). It took {:.3} ms per frame \
+         (median). `reference.png` is its tone-mapped image.\n",
+        match rs.mode {
+            Mode::Rt => "pure-RT mode (camera rays traced)",
+            Mode::Hybrid =>
+                "hybrid mode (G-buffer primary hits; chosen with --ref-mode hybrid, so the \
+                             rows leave out the hybrid-vs-rt difference below)",
+        },
+        rs.max_depth,
+        rs.min_weight,
+        r.backend,
+        report.reference_exposure,
+        r.config,
+        r.timing.median
     );
     let c = &report.convergence;
     let _ = writeln!(
