@@ -133,6 +133,9 @@ pub struct Report {
     pub warmup: usize,
     /// Every distinct setting rendered; the reference first.
     pub measured: Vec<Measured>,
+    /// Index into `measured` of the base settings (in hybrid mode: every
+    /// knob's row for its base value).
+    pub base: usize,
     pub reference_exposure: f32,
     pub reference_settings: ReferenceSettings,
     /// Hybrid against pure RT at the base settings.
@@ -331,6 +334,7 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
             ldr: conv.ldr,
         },
         measured,
+        base: hybrid,
         rows,
         skipped,
     })

@@ -60,6 +60,18 @@ fn register_font() -> Result<()> {
         .map_err(|e| anyhow!(e))
 }
 
+/// ColorBrewer Set1 without its yellow (unreadable on white), then grey.
+const SERIES_COLORS: [(u8, u8, u8); 8] = [
+    (228, 26, 28),
+    (55, 126, 184),
+    (77, 175, 74),
+    (152, 78, 163),
+    (255, 127, 0),
+    (166, 86, 40),
+    (247, 129, 191),
+    (102, 102, 102),
+];
+
 const W: u32 = 1200;
 const H: u32 = 760;
 
@@ -70,11 +82,14 @@ pub fn error_vs_time(report: &Report, path: &Path) -> Result<()> {
         report.rows.iter().map(|r| (report.measured[r.measured].timing.median, r.flip_mean)).collect();
     let finite: Vec<&(f64, f64)> = points.iter().filter(|p| p.0.is_finite() && p.0 > 0.0).collect();
     let (lo, hi) = finite.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.0), hi.max(p.0)));
-    // Whole decades: the log axis puts its ticks at powers of ten.
+    // The log axis puts its ticks from the first power of ten in range on:
+    // reach down to one when the data spans none.
     let (lo, hi) = if finite.is_empty() {
         (0.1, 10.0)
     } else {
-        (10f64.powf((lo / 1.2).log10().floor()), 10f64.powf((hi * 1.2).log10().ceil()))
+        let (lo, hi) = (lo / 1.2, hi * 1.2);
+        let decade = 10f64.powf(lo.log10().ceil());
+        (if decade <= hi { lo } else { 10f64.powf(lo.log10().floor()) }, hi)
     };
     let ymax = finite.iter().fold(0.0f64, |m, p| m.max(p.1)).max(1e-4) * 1.15;
     let mut buf = vec![255u8; (W * H * 3) as usize];
@@ -125,13 +140,16 @@ fn draw(
         }
     }
     for (k, knob) in knobs.iter().enumerate() {
-        let color = Palette99::pick(k).to_rgba();
+        let (r, g, b) = SERIES_COLORS[k % SERIES_COLORS.len()];
+        let color = RGBColor(r, g, b).to_rgba();
+        // (ms, error, label): the base setting, in every series, is
+        // labelled once below.
         let series: Vec<(f64, f64, &str)> = report
             .rows
             .iter()
             .zip(points)
             .filter(|(r, p)| r.knob == *knob && p.0.is_finite() && p.0 > 0.0)
-            .map(|(r, p)| (p.0, p.1, r.value.as_str()))
+            .map(|(r, p)| (p.0, p.1, if r.measured == report.base { "" } else { r.value.as_str() }))
             .collect();
         chart
             .draw_series(LineSeries::new(series.iter().map(|p| (p.0, p.1)), color.stroke_width(2)))?
@@ -143,6 +161,17 @@ fn draw(
             EmptyElement::at((p.0, p.1))
                 + Text::new(p.2.to_string(), (8, -20), ("sans-serif", 15).into_font().color(&color))
         }))?;
+    }
+    if let Some(i) = report.rows.iter().position(|r| r.measured == report.base) {
+        let p = points[i];
+        chart
+            .draw_series(std::iter::once(
+                EmptyElement::at(p)
+                    + Rectangle::new([(-6, -6), (6, 6)], BLACK.stroke_width(2))
+                    + Text::new("base", (8, 6), ("sans-serif", 15).into_font()),
+            ))?
+            .label("base settings (in every series)")
+            .legend(|(x, y)| Rectangle::new([(x + 4, y - 6), (x + 16, y + 6)], BLACK.stroke_width(2)));
     }
     let front: Vec<(f64, f64)> = pareto_front(points).into_iter().map(|i| points[i]).collect();
     chart
