@@ -106,8 +106,8 @@ enum Command {
         /// after '=' separated by ':' (e.g. "max-depth=0:2:8,mode"); knobs:
         /// max-depth, min-weight, effects, mode, backend, resolution-scale.
         /// Default: all, with their full value lists.
-        #[arg(long, default_value = "")]
-        knobs: String,
+        #[arg(long)]
+        knobs: Option<String>,
         /// Reference: maximum recursion depth (pure-RT mode, every effect).
         #[arg(long, default_value_t = 16, value_parser = parse_max_depth, allow_hyphen_values = true)]
         ref_max_depth: u32,
@@ -427,7 +427,7 @@ fn run(cli: Cli) -> Result<()> {
             let opts = ReportOptions {
                 frames,
                 warmup,
-                knobs: report::knobs::parse_selection(&knobs).context("--knobs")?,
+                knobs: report::knobs::parse_selection(knobs.as_deref().unwrap_or("")).context("--knobs")?,
                 reference: ReferenceSettings {
                     max_depth: ref_max_depth,
                     min_weight: ref_min_weight,
