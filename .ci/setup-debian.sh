@@ -38,7 +38,8 @@ backports_configured() {
 }
 
 pkgs=(libvulkan1 vulkan-tools vulkan-validationlayers cmake ninja-build python3 g++ git
-      xvfb xauth libx11-6 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0)
+      xvfb xauth libx11-6 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0
+      fonts-dejavu-core)
 
 # APT_ETC: only for tests of the mirror detection (tests/setup_script.rs).
 APT_ETC=${APT_ETC:-/etc/apt}

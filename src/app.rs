@@ -130,7 +130,7 @@ impl RenderJob {
         }
     }
 
-    fn extent(&self) -> Result<avk::Extent2D> {
+    pub(crate) fn extent(&self) -> Result<avk::Extent2D> {
         if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
             bail!("resolution {}x{} out of range (1..=16384)", self.width, self.height);
         }
@@ -142,7 +142,7 @@ impl RenderJob {
 /// validation error count.
 /// Loads the job's scene; with an animation, also returns its index (the
 /// scene is posed at `job.time`).
-fn load_posed(job: &RenderJob) -> Result<(Scene, Option<usize>)> {
+pub(crate) fn load_posed(job: &RenderJob) -> Result<(Scene, Option<usize>)> {
     let mut scene = Scene::load(&job.scene)?;
     let anim = match &job.animation {
         Some(a) => {
@@ -335,6 +335,7 @@ pub struct PassStats {
     pub name: &'static str,
     pub min: f64,
     pub median: f64,
+    pub p95: f64,
     pub max: f64,
 }
 
@@ -343,6 +344,7 @@ pub struct BenchReport {
     pub device: String,
     /// The shading variant measured (mode, backend, effects).
     pub config: String,
+    pub variant: BenchVariant,
     pub width: u32,
     pub height: u32,
     pub frames: usize,
@@ -399,14 +401,11 @@ fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
         name,
         min: v.first().copied().unwrap_or(f64::NAN),
         median: v.get(n / 2).copied().unwrap_or(f64::NAN),
+        p95: v.get(((0.95 * n as f64).ceil() as usize).clamp(1, n) - 1).copied().unwrap_or(f64::NAN),
         max: v.last().copied().unwrap_or(f64::NAN),
     }
 }
 
-/// `bench`: for each (mode, backend) variant, counts the rays of one frame,
-/// then renders `warmup` unmeasured frames and `frames` measured frames
-/// along the scene's camera path (or from its camera), all with one renderer
-/// and one scene upload, and reports per-pass GPU times.
 /// How a benchmark keeps the acceleration structures current when the
 /// scene animates.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -430,6 +429,59 @@ pub struct BenchVariant {
     pub accel: AccelUpdate,
 }
 
+/// What one benchmark frame gave: the scene update's and the frame's pass
+/// times, and the update's refit / rebuild counts.
+struct BenchFrame {
+    update: Vec<(&'static str, f64)>,
+    timings: Vec<(&'static str, f64)>,
+    counts: [usize; 2],
+}
+
+/// Renders frame `i` of a benchmark of `variant` (warm-up frames first:
+/// the camera stays at the path's start until `warmup`).
+#[allow(clippy::too_many_arguments)]
+fn bench_frame(
+    ctx: &Context,
+    renderer: &mut Renderer,
+    scene: &mut Scene,
+    anim: Option<usize>,
+    job: &RenderJob,
+    base_camera: &Camera,
+    variant: BenchVariant,
+    i: usize,
+    (warmup, frames): (usize, usize),
+) -> Result<BenchFrame> {
+    let settings = RenderSettings { mode: variant.mode, backend: variant.backend, ..job.settings };
+    renderer.rebuild_policy = match variant.accel {
+        AccelUpdate::Policy => RebuildPolicy::default(),
+        AccelUpdate::Refit => RebuildPolicy::NEVER,
+        AccelUpdate::Rebuild | AccelUpdate::Full => RebuildPolicy::ALWAYS,
+    };
+    let t = if frames > 1 { (i.saturating_sub(warmup)) as f32 / (frames - 1) as f32 } else { 0.0 };
+    let camera = crate::scene::camera::on_path(&scene.camera_path, t, base_camera);
+    let mut update = Vec::new();
+    let mut counts = [0; 2];
+    if let Some(a) = anim {
+        // Fixed-step clock: deterministic frames.
+        scene.animate(a, job.time + i as f32 / job.fps.max(1e-3));
+        if variant.accel == AccelUpdate::Full {
+            renderer.rebuild_all_structures(ctx, scene)?;
+        } else {
+            renderer.update_scene(ctx, scene)?;
+        }
+        update = renderer.update_timings.clone();
+        counts = renderer.update_counts;
+    }
+    let out = renderer.render(ctx, scene, &camera, &settings)?;
+    Ok(BenchFrame { update, timings: out.timings, counts })
+}
+
+/// `bench`: every variant is warmed up first (one ray-counting frame, then
+/// `warmup` unmeasured frames along the path's start, so no variant absorbs
+/// the process's warm-up), then each is measured over `frames` frames
+/// along the scene's camera path (or from its camera), after one more
+/// unmeasured frame when another variant ran in between. One renderer and
+/// one scene upload for all; per-pass GPU times. Progress goes to stderr.
 pub fn bench(
     ctx: &Context,
     job: &RenderJob,
@@ -453,77 +505,90 @@ pub fn bench(
     }
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let mut reports = Vec::new();
+    let n = variants.len();
     let result: Result<()> = (|| {
-        for &BenchVariant { mode, backend, accel } in variants {
-            let settings = RenderSettings { mode, backend, ..job.settings };
-            renderer.rebuild_policy = match accel {
-                AccelUpdate::Policy => RebuildPolicy::default(),
-                AccelUpdate::Refit => RebuildPolicy::NEVER,
-                AccelUpdate::Rebuild | AccelUpdate::Full => RebuildPolicy::ALWAYS,
-            };
-            let mut counts = [0usize; 2];
+        let mut rays = Vec::new();
+        for (k, &v) in variants.iter().enumerate() {
+            eprintln!(
+                "bench: warming up {}/{n}: {:?} mode, {:?} backend, AS update {:?}",
+                k + 1,
+                v.mode,
+                v.backend,
+                v.accel
+            );
             // One counted frame: the atomics would distort the timings.
+            let settings = RenderSettings { mode: v.mode, backend: v.backend, ..job.settings };
             let counting =
                 RenderSettings { effects: Effects { count_rays: true, ..settings.effects }, ..settings };
-            let counted = renderer.render(ctx, &scene, &base_camera, &counting)?;
+            rays.push(renderer.render(ctx, &scene, &base_camera, &counting)?.ray_counts);
+            for i in 0..warmup {
+                bench_frame(ctx, &mut renderer, &mut scene, anim, job, &base_camera, v, i, (warmup, frames))?;
+            }
+        }
+        for (k, &v) in variants.iter().enumerate() {
+            eprintln!("bench: measuring {}/{n} ({frames} frames)", k + 1);
+            if n > 1 && warmup > 0 {
+                // The frame's passes follow the variant: rebuilt since its warm-up.
+                bench_frame(
+                    ctx,
+                    &mut renderer,
+                    &mut scene,
+                    anim,
+                    job,
+                    &base_camera,
+                    v,
+                    warmup - 1,
+                    (warmup, frames),
+                )?;
+            }
             let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
             let mut totals = Vec::new();
-            for i in 0..warmup + frames {
-                let t =
-                    if frames > 1 { (i.saturating_sub(warmup)) as f32 / (frames - 1) as f32 } else { 0.0 };
-                let camera = crate::scene::camera::on_path(&scene.camera_path, t, &base_camera);
-                let mut update = Vec::new();
-                if let Some(a) = anim {
-                    // Fixed-step clock: deterministic frames.
-                    scene.animate(a, job.time + i as f32 / job.fps.max(1e-3));
-                    if accel == AccelUpdate::Full {
-                        renderer.rebuild_all_structures(ctx, &scene)?;
-                    } else {
-                        renderer.update_scene(ctx, &scene)?;
-                    }
-                    update = renderer.update_timings.clone();
-                    if i >= warmup {
-                        counts[0] += renderer.update_counts[0];
-                        counts[1] += renderer.update_counts[1];
-                    }
-                }
-                let out = renderer.render(ctx, &scene, &camera, &settings)?;
-                if i < warmup {
-                    continue;
-                }
+            let mut counts = [0usize; 2];
+            for i in warmup..warmup + frames {
+                let f = bench_frame(
+                    ctx,
+                    &mut renderer,
+                    &mut scene,
+                    anim,
+                    job,
+                    &base_camera,
+                    v,
+                    i,
+                    (warmup, frames),
+                )?;
+                counts = [counts[0] + f.counts[0], counts[1] + f.counts[1]];
                 let mut total = 0.0;
-                let passes = update.iter().chain(&out.timings);
-                for (name, ms) in passes.filter(|(n, _)| *n != "readback") {
+                for &(name, ms) in f.update.iter().chain(&f.timings).filter(|(n, _)| *n != "readback") {
                     total += ms;
-                    match per_pass.iter_mut().find(|(n, _)| n == name) {
-                        Some((_, v)) => v.push(*ms),
-                        None => per_pass.push((name, vec![*ms])),
+                    match per_pass.iter_mut().find(|(n, _)| *n == name) {
+                        Some((_, v)) => v.push(ms),
+                        None => per_pass.push((name, vec![ms])),
                     }
                 }
                 totals.push(total);
             }
+            let c = renderer.shading_config().map(|c| c.describe()).unwrap_or_default();
+            let config = match anim {
+                Some(_) if v.accel == AccelUpdate::Full => {
+                    format!("{c}; AS update: Full (every structure rebuilt every frame)")
+                }
+                Some(_) => format!(
+                    "{c}; AS update: {:?} ({} refits, {} rebuilds of skinned structures)",
+                    v.accel, counts[0], counts[1]
+                ),
+                None => c,
+            };
             reports.push(BenchReport {
                 scene: job.scene.clone(),
                 device: ctx.caps.name.clone(),
-                config: {
-                    let c = renderer.shading_config().map(|c| c.describe()).unwrap_or_default();
-                    match anim {
-                        Some(_) if accel == AccelUpdate::Full => {
-                            format!("{c}; AS update: Full (every structure rebuilt every frame)")
-                        }
-                        Some(_) => format!(
-                            "{c}; AS update: {accel:?} ({} refits, {} rebuilds of skinned structures)",
-                            counts[0], counts[1]
-                        ),
-                        None => c,
-                    }
-                },
+                config,
+                variant: v,
                 width: job.width,
                 height: job.height,
                 frames,
                 passes: per_pass.into_iter().map(|(n, v)| stats(n, v)).collect(),
                 frame_total: stats("frame", totals),
-                rays_first_frame: counted.ray_counts,
+                rays_first_frame: rays[k],
             });
         }
         Ok(())
@@ -539,8 +604,57 @@ pub fn bench_command(
     frames: usize,
     warmup: usize,
     variants: &[BenchVariant],
+    csv: Option<&Path>,
 ) -> Result<()> {
-    with_context(gpu, |ctx| bench_with(ctx, job, frames, warmup, variants))
+    with_context(gpu, |ctx| bench_with(ctx, job, frames, warmup, variants, csv))
+}
+
+/// The tables of `reports` as CSV: one row per variant and pass (the
+/// frame total last), GPU ms.
+pub fn bench_csv(reports: &[BenchReport]) -> String {
+    use crate::report::write::{csv_field, csv_number};
+    let mut s = String::from(
+        "variant,mode,backend,accel_update,config,pass,ms_min,ms_median,ms_p95,ms_max,frames,width,height,\
+         rays_camera,rays_shadow,rays_secondary\n",
+    );
+    for (i, r) in reports.iter().enumerate() {
+        let v = &r.variant;
+        for p in r.passes.iter().chain(std::iter::once(&r.frame_total)) {
+            let [c, sh, sec] = r.rays_first_frame;
+            let row = [
+                (i + 1).to_string(),
+                format!("{:?}", v.mode).to_lowercase(),
+                format!("{:?}", v.backend).to_lowercase(),
+                format!("{:?}", v.accel).to_lowercase(),
+                csv_field(&r.config),
+                csv_field(p.name),
+                csv_number(p.min, 4),
+                csv_number(p.median, 4),
+                csv_number(p.p95, 4),
+                csv_number(p.max, 4),
+                r.frames.to_string(),
+                r.width.to_string(),
+                r.height.to_string(),
+                c.to_string(),
+                sh.to_string(),
+                sec.to_string(),
+            ];
+            s.push_str(&row.join(","));
+            s.push('\n');
+        }
+    }
+    s
+}
+
+/// "slower" / "faster" for a time ratio against the baseline.
+pub fn ratio_word(ratio: f64) -> &'static str {
+    if (ratio - 1.0).abs() < 0.005 {
+        "as fast"
+    } else if ratio > 1.0 {
+        "slower"
+    } else {
+        "faster"
+    }
 }
 
 fn bench_with(
@@ -549,6 +663,7 @@ fn bench_with(
     frames: usize,
     warmup: usize,
     variants: &[BenchVariant],
+    csv: Option<&Path>,
 ) -> Result<()> {
     let reports = bench(ctx, job, frames.max(1), warmup, variants)?;
     for r in &reports {
@@ -565,16 +680,22 @@ fn bench_with(
         );
     }
     if reports.len() > 1 {
-        println!("side by side (median GPU ms per frame; ratio to the first row):");
+        println!(
+            "side by side (median GPU ms per frame; ratio to the first row, every variant warmed up first):"
+        );
         let base = reports[0].frame_total.median;
-        for r in &reports {
-            println!(
-                "  {:>10.3} ms  {:>5.2}x  {}",
-                r.frame_total.median,
-                r.frame_total.median / base,
-                r.config
-            );
+        for (i, r) in reports.iter().enumerate() {
+            let ratio = r.frame_total.median / base;
+            let word = if i == 0 { "baseline" } else { ratio_word(ratio) };
+            println!("  {:>10.3} ms  {ratio:>5.2}x {word:<8}  {}", r.frame_total.median, r.config);
         }
+    }
+    if let Some(path) = csv {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        std::fs::write(path, bench_csv(&reports)).with_context(|| format!("writing {}", path.display()))?;
+        log::info!("wrote {}", path.display());
     }
     check_validation(ctx)
 }

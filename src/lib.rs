@@ -6,13 +6,14 @@
 //! composite, tone map) -> PNG / present. `vk` holds the Vulkan plumbing.
 //!
 //! Layers, lowest first: `vk`, `scene` (no GPU code), `gpu`, `accel`,
-//! `render`, then `app` and `viewer`. A layer imports only the ones below.
+//! `render`, then `app`, `report` and `viewer`. A layer imports only the ones below.
 
 pub mod accel;
 pub mod app;
 pub mod gpu;
 pub mod metrics;
 pub mod render;
+pub mod report;
 pub mod scene;
 pub mod viewer;
 pub mod vk;

@@ -1,17 +1,18 @@
-//! Command line: `info`, `render`, `bench`, `view`. With no command it opens
+//! Command line: `info`, `render`, `bench`, `report`, `compare`, `view`. With no command it opens
 //! the viewer on the bundled default scene when a display is available, else
 //! renders it headless to `out/default.png`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use clap::{error::ErrorKind, Args, CommandFactory, Parser, Subcommand};
 use glam::Vec3;
 
 use hybrid_rt::app::{self, AccelUpdate, CameraChoice, GpuOptions, RenderJob};
 use hybrid_rt::render::shading::{Backend, Effects, Mode};
 use hybrid_rt::render::{DebugView, RenderSettings};
+use hybrid_rt::report::{self, ReferenceSettings, ReportOptions};
 use hybrid_rt::viewer::{self, PresentMode, ViewerOptions};
 use hybrid_rt::vk::DeviceSelector;
 
@@ -85,6 +86,65 @@ enum Command {
         /// Measure refit, rebuild and full rebuild side by side.
         #[arg(long)]
         compare_accel_updates: bool,
+        /// Also write the tables as CSV (one row per variant and pass).
+        #[arg(long)]
+        csv: Option<PathBuf>,
+    },
+    /// Image error (ꟻLIP, PSNR) against GPU time for every quality knob:
+    /// report.md, report.csv, error_vs_time.png and error maps in --out.
+    Report {
+        #[command(flatten)]
+        view: ViewArgs,
+        /// Timed frames per setting (>= 5), after the warm-up.
+        #[arg(long, default_value_t = 10, value_parser = parse_count, allow_hyphen_values = true)]
+        frames: usize,
+        /// Unmeasured frames per setting before timing (>= 1; the first
+        /// compiles the setting's pipelines).
+        #[arg(long, default_value_t = 2, value_parser = parse_count, allow_hyphen_values = true)]
+        warmup: usize,
+        /// Knobs to sweep, comma-separated, each optionally with its values
+        /// after '=' separated by ':' (e.g. "max-depth=0:2:8,mode"); knobs:
+        /// max-depth, min-weight, effects, mode, backend, resolution-scale.
+        /// Default: all, with their full value lists.
+        #[arg(long)]
+        knobs: Option<String>,
+        /// Reference: maximum recursion depth (pure-RT mode, every effect).
+        #[arg(long, default_value_t = 16, value_parser = parse_max_depth, allow_hyphen_values = true)]
+        ref_max_depth: u32,
+        /// Reference: importance cutoff in [0, 1].
+        #[arg(long, default_value_t = 0.001, value_parser = parse_min_weight, allow_hyphen_values = true)]
+        ref_min_weight: f32,
+        /// Reference: ray backend [default: the --backend of the base settings].
+        #[arg(long, value_enum)]
+        ref_backend: Option<Backend>,
+        /// Reference: rt (camera rays traced) or hybrid (then the rows leave
+        /// out the hybrid-vs-rt difference the self-check reports).
+        #[arg(long, value_enum, default_value_t = Mode::Rt)]
+        ref_mode: Mode,
+        /// Do not count rays per frame (saves a pipeline compile per setting).
+        #[arg(long)]
+        no_ray_counts: bool,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Compare two images (PNG with PNG, or Radiance .hdr with .hdr; A is the
+    /// reference): prints ꟻLIP mean, PSNR and the share of pixels over a
+    /// ꟻLIP threshold; --out writes the per-pixel error map.
+    Compare {
+        /// Reference image.
+        a: PathBuf,
+        /// Test image.
+        b: PathBuf,
+        /// Write the ꟻLIP error map (magma colour map) to this PNG.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Per-pixel ꟻLIP error counted as visible above this, in [0, 1].
+        #[arg(long, default_value_t = 0.1, value_parser = parse_min_weight, allow_hyphen_values = true)]
+        threshold: f32,
+        /// .hdr inputs: exposure both are tone-mapped with for ꟻLIP.
+        #[arg(long, default_value_t = 1.0, value_parser = parse_exposure, allow_hyphen_values = true)]
+        exposure: f32,
     },
     /// Open an interactive window (fly/orbit camera, debug views, screenshots).
     View {
@@ -235,6 +295,9 @@ impl ViewArgs {
         if self.fps.is_some() && self.animation.is_none() {
             return Some("--fps has no effect without --animation".into());
         }
+        if self.fps.is_some() && command == "report" {
+            return Some("--fps has no effect on report (still frames at --time)".into());
+        }
         if self.fps.is_some() && command == "render" {
             return Some(
                 "--fps has no effect on render (one frame at --time; it steps bench and view)".into(),
@@ -288,8 +351,9 @@ impl Cli {
         let (name, view) = match &self.command {
             Some(Command::Render { view, .. }) => ("render", view),
             Some(Command::Bench { view, .. }) => ("bench", view),
+            Some(Command::Report { view, .. }) => ("report", view),
             Some(Command::View { view, .. }) => ("view", view),
-            Some(Command::Info) | None => return,
+            Some(Command::Info) | Some(Command::Compare { .. }) | None => return,
         };
         if let Some(p) = view.without_effect(name) {
             // The subcommand's own usage line under the message.
@@ -325,6 +389,7 @@ fn run(cli: Cli) -> Result<()> {
             compare_backends,
             accel_update,
             compare_accel_updates,
+            csv,
         }) => {
             let modes = if compare_modes { vec![Mode::Hybrid, Mode::Rt] } else { vec![view.mode] };
             let backends = if compare_backends {
@@ -345,7 +410,42 @@ fn run(cli: Cli) -> Result<()> {
                     }
                 }
             }
-            app::bench_command(&gpu, &view.job()?, frames, warmup, &variants)
+            app::bench_command(&gpu, &view.job()?, frames, warmup, &variants, csv.as_deref())
+        }
+        Some(Command::Report {
+            view,
+            frames,
+            warmup,
+            knobs,
+            ref_max_depth,
+            ref_min_weight,
+            ref_backend,
+            ref_mode,
+            no_ray_counts,
+            out,
+        }) => {
+            let opts = ReportOptions {
+                frames,
+                warmup,
+                knobs: report::knobs::parse_selection(knobs.as_deref().unwrap_or("")).context("--knobs")?,
+                reference: ReferenceSettings {
+                    max_depth: ref_max_depth,
+                    min_weight: ref_min_weight,
+                    backend: ref_backend,
+                    mode: ref_mode,
+                },
+                count_rays: !no_ray_counts,
+                ..ReportOptions::new(view.job()?, out)
+            };
+            report::report_command(&gpu, &opts)
+        }
+        Some(Command::Compare { a, b, out, threshold, exposure }) => {
+            let c = report::compare::compare(&a, &b, out.as_deref(), threshold, exposure)?;
+            print!("{}", c.summary());
+            if let Some(o) = out {
+                println!("wrote {}", o.display());
+            }
+            Ok(())
         }
         Some(Command::View { view, present_mode, frames, screenshot, test_resize }) => {
             let event_loop = viewer::open_display()?;

@@ -56,7 +56,7 @@ impl DebugView {
     }
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
     pub exposure: f32,
     pub debug_view: DebugView,

@@ -1,0 +1,198 @@
+//! The quality knobs a report sweeps: one table entry per knob, so a later
+//! feature (budget heuristic, SH bands, anti-aliasing, ...) adds itself as
+//! one more row. Each knob changes one thing of the base settings.
+
+use anyhow::{bail, Context as _, Result};
+
+use crate::render::shading::{Backend, Mode};
+use crate::render::RenderSettings;
+
+/// What one measured setting renders: the frame settings and the
+/// resolution scale (the frame is rendered at the scaled size and
+/// resampled to the reference's size before it is compared).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Variant {
+    pub settings: RenderSettings,
+    pub scale: f32,
+}
+
+/// One knob: its name on the command line and in the tables, what it is,
+/// the values a full report sweeps, and how a value changes a variant.
+pub struct Knob {
+    pub name: &'static str,
+    pub about: &'static str,
+    pub values: &'static [&'static str],
+    /// Applies `value` to the variant; an error says what was expected.
+    pub apply: fn(&mut Variant, &str) -> Result<()>,
+    /// True when a default value the device cannot run is skipped (noted in
+    /// the report) rather than an error.
+    pub skip_unavailable: bool,
+}
+
+/// The table of knobs, in report order.
+pub const KNOBS: &[Knob] = &[
+    Knob {
+        name: "max-depth",
+        about: "maximum reflection/refraction recursion depth",
+        values: &["0", "1", "2", "3", "4", "6", "8", "16"],
+        apply: |v, s| {
+            let d: u32 = s.parse().with_context(|| format!("max-depth '{s}': expected 0..=64"))?;
+            if d > 64 {
+                bail!("max-depth {d}: expected 0..=64");
+            }
+            v.settings.effects.max_depth = d;
+            Ok(())
+        },
+        skip_unavailable: false,
+    },
+    Knob {
+        name: "min-weight",
+        about: "importance cutoff: branches with a smaller weight are not traced",
+        values: &["0.1", "0.03", "0.01", "0.003", "0.001", "0"],
+        apply: |v, s| {
+            let w: f32 = s.parse().with_context(|| format!("min-weight '{s}': expected a number in [0, 1]"))?;
+            if !(0.0..=1.0).contains(&w) {
+                bail!("min-weight {w}: expected a number in [0, 1]");
+            }
+            v.settings.effects.min_weight = w;
+            Ok(())
+        },
+        skip_unavailable: false,
+    },
+    Knob {
+        name: "effects",
+        about: "secondary effects: none (raster only), shadows, +reflections, +refractions",
+        values: &["none", "shadows", "+reflections", "+refractions"],
+        apply: |v, s| {
+            let e = &mut v.settings.effects;
+            (e.shadows, e.reflections, e.refractions) = match s {
+                "none" => (false, false, false),
+                "shadows" => (true, false, false),
+                "+reflections" => (true, true, false),
+                "+refractions" => (true, true, true),
+                _ => bail!("effects '{s}': expected none, shadows, +reflections or +refractions"),
+            };
+            Ok(())
+        },
+        skip_unavailable: false,
+    },
+    Knob {
+        name: "mode",
+        about: "hybrid (G-buffer primary hits) or rt (camera rays traced)",
+        values: &["hybrid", "rt"],
+        apply: |v, s| {
+            v.settings.mode = match s {
+                "hybrid" => Mode::Hybrid,
+                "rt" => Mode::Rt,
+                _ => bail!("mode '{s}': expected hybrid or rt"),
+            };
+            Ok(())
+        },
+        skip_unavailable: false,
+    },
+    Knob {
+        name: "backend",
+        about: "ray traversal backend (those the device offers)",
+        values: &["query", "pipeline", "compute"],
+        apply: |v, s| {
+            v.settings.backend = match s {
+                "query" => Backend::Query,
+                "pipeline" => Backend::Pipeline,
+                "compute" => Backend::Compute,
+                _ => bail!("backend '{s}': expected query, pipeline or compute"),
+            };
+            Ok(())
+        },
+        skip_unavailable: true,
+    },
+    Knob {
+        name: "resolution-scale",
+        about: "render at this fraction of the width and height; error after bilinear upscaling to the reference size",
+        values: &["0.5", "0.75", "1"],
+        apply: |v, s| {
+            let f: f32 = s.parse().with_context(|| format!("resolution-scale '{s}': expected a number in (0, 1]"))?;
+            if !(f > 0.0 && f <= 1.0) {
+                bail!("resolution-scale {f}: expected a number in (0, 1]");
+            }
+            v.scale = f;
+            Ok(())
+        },
+        skip_unavailable: false,
+    },
+];
+
+pub fn find(name: &str) -> Result<&'static Knob> {
+    KNOBS.iter().find(|k| k.name == name).with_context(|| {
+        let names: Vec<_> = KNOBS.iter().map(|k| k.name).collect();
+        format!("unknown knob '{name}' (knobs: {})", names.join(", "))
+    })
+}
+
+/// A knob with the values to sweep: the table's, or the user's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KnobSelection {
+    pub knob: &'static str,
+    /// None: the knob's own values (unavailable ones skipped where allowed).
+    pub values: Option<Vec<String>>,
+}
+
+/// Parses `--knobs`: comma-separated knob names, each optionally with its
+/// values after '=' separated by ':' (`max-depth=0:2,mode`). Empty: every knob.
+pub fn parse_selection(s: &str) -> Result<Vec<KnobSelection>> {
+    let mut out: Vec<KnobSelection> = Vec::new();
+    for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let (name, values) = match part.split_once('=') {
+            Some((n, v)) => {
+                let vals: Vec<String> =
+                    v.split(':').map(|x| x.trim().to_string()).filter(|x| !x.is_empty()).collect();
+                if vals.is_empty() {
+                    bail!("--knobs {part}: no values after '='");
+                }
+                (n.trim(), Some(vals))
+            }
+            None => (part, None),
+        };
+        let knob = find(name)?;
+        if out.iter().any(|k| k.knob == knob.name) {
+            bail!("--knobs: {} given twice", knob.name);
+        }
+        // Check the values now, not after minutes of rendering.
+        for v in values.iter().flatten() {
+            (knob.apply)(&mut Variant { settings: RenderSettings::default(), scale: 1.0 }, v)?;
+        }
+        out.push(KnobSelection { knob: knob.name, values });
+    }
+    if out.is_empty() {
+        out = KNOBS.iter().map(|k| KnobSelection { knob: k.name, values: None }).collect();
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_default_value_applies() {
+        for k in KNOBS {
+            for v in k.values {
+                let mut var = Variant { settings: RenderSettings::default(), scale: 1.0 };
+                (k.apply)(&mut var, v).unwrap_or_else(|e| panic!("{} {v}: {e}", k.name));
+            }
+        }
+    }
+
+    #[test]
+    fn selection_parses_names_and_values() {
+        let s = parse_selection("max-depth=0:2, mode").unwrap();
+        assert_eq!(s[0], KnobSelection { knob: "max-depth", values: Some(vec!["0".into(), "2".into()]) });
+        assert_eq!(s[1], KnobSelection { knob: "mode", values: None });
+        assert_eq!(parse_selection("").unwrap().len(), KNOBS.len());
+        assert!(parse_selection("depth").unwrap_err().to_string().contains("max-depth"));
+        assert!(parse_selection("max-depth=99").is_err());
+        assert!(parse_selection("mode,mode").is_err());
+        let mut v = Variant { settings: RenderSettings::default(), scale: 1.0 };
+        (find("effects").unwrap().apply)(&mut v, "shadows").unwrap();
+        assert!(v.settings.effects.shadows && !v.settings.effects.reflections);
+    }
+}

@@ -1,0 +1,147 @@
+//! Rendering and timing one setting: an optional ray-counting frame,
+//! warm-up frames (the first compiles the setting's pipelines), then the
+//! timed frames, whose GPU timestamps give the median and p95 frame time
+//! and the per-pass medians.
+
+use anyhow::Result;
+use ash::vk as avk;
+
+use super::knobs::Variant;
+use super::metrics::HdrImage;
+use crate::render::shading::Effects;
+use crate::render::Renderer;
+use crate::scene::{Camera, Scene};
+use crate::vk::Context;
+
+/// GPU time of a setting over its timed frames.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Timing {
+    /// Frame time (sum of the passes, readback excluded), median and p95.
+    pub median: f64,
+    pub p95: f64,
+    /// Median ms of each pass, in frame order.
+    pub passes: Vec<(&'static str, f64)>,
+    pub frames: usize,
+}
+
+/// A rendered and timed setting.
+pub struct Measured {
+    pub variant: Variant,
+    /// The resolved configuration (mode, backend, effects that ran).
+    pub config: String,
+    /// The backend that traced rays, or "none".
+    pub backend: String,
+    pub width: u32,
+    pub height: u32,
+    pub timing: Timing,
+    /// Camera, shadow and secondary rays of one frame, when counted.
+    pub rays: Option<[u32; 3]>,
+    /// The last timed frame's radiance (at the variant's own size).
+    pub image: HdrImage,
+    /// Pixels whose radiance was NaN or Inf (set to 0 in `image`).
+    pub non_finite: usize,
+}
+
+/// The median (upper one of an even count, like `bench`) and the p95
+/// (nearest rank) of `v`.
+pub fn median_p95(v: &[f64]) -> (f64, f64) {
+    if v.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let rank = ((0.95 * s.len() as f64).ceil() as usize).clamp(1, s.len());
+    (s[s.len() / 2], s[rank - 1])
+}
+
+/// The frame extent of `variant` for a report at `width` x `height`.
+pub fn scaled_extent(width: u32, height: u32, scale: f32) -> avk::Extent2D {
+    let s = |v: u32| ((v as f32 * scale).round() as u32).max(1);
+    avk::Extent2D { width: s(width), height: s(height) }
+}
+
+/// Renders `variant` with `renderer` (made for its extent): a counted
+/// frame when `count_rays`, `warmup` frames (at least one), then `frames`
+/// timed ones.
+#[allow(clippy::too_many_arguments)]
+pub fn measure(
+    ctx: &Context,
+    renderer: &mut Renderer,
+    scene: &Scene,
+    camera: &Camera,
+    variant: &Variant,
+    warmup: usize,
+    frames: usize,
+    count_rays: bool,
+) -> Result<Measured> {
+    let settings = variant.settings;
+    let rays = if count_rays {
+        let counting = crate::render::RenderSettings {
+            effects: Effects { count_rays: true, ..settings.effects },
+            ..settings
+        };
+        Some(renderer.render(ctx, scene, camera, &counting)?.ray_counts)
+    } else {
+        None
+    };
+    for _ in 0..warmup.max(1) {
+        renderer.render(ctx, scene, camera, &settings)?;
+    }
+    let mut totals = Vec::with_capacity(frames);
+    let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    let mut last = None;
+    for _ in 0..frames.max(1) {
+        let out = renderer.render(ctx, scene, camera, &settings)?;
+        let mut total = 0.0;
+        for &(name, ms) in out.timings.iter().filter(|(n, _)| *n != "readback") {
+            total += ms;
+            match per_pass.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, v)) => v.push(ms),
+                None => per_pass.push((name, vec![ms])),
+            }
+        }
+        totals.push(total);
+        last = Some(out);
+    }
+    let out = last.expect("at least one timed frame");
+    let (median, p95) = median_p95(&totals);
+    let config = renderer.shading_config();
+    let (image, non_finite) = HdrImage::from_rgba(out.width, out.height, &out.hdr);
+    if non_finite > 0 {
+        log::warn!("{non_finite} pixel(s) with NaN or Inf radiance; compared as 0");
+    }
+    Ok(Measured {
+        variant: *variant,
+        config: config.map(|c| c.describe()).unwrap_or_default(),
+        backend: config
+            .and_then(|c| c.backend)
+            .map(|b| format!("{b:?}").to_lowercase())
+            .unwrap_or_else(|| "none".into()),
+        width: out.width,
+        height: out.height,
+        timing: Timing {
+            median,
+            p95,
+            passes: per_pass.into_iter().map(|(n, v)| (n, median_p95(&v).0)).collect(),
+            frames: totals.len(),
+        },
+        rays,
+        image,
+        non_finite,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_and_p95_by_rank() {
+        let v: Vec<f64> = (1..=20).map(f64::from).collect();
+        assert_eq!(median_p95(&v), (11.0, 19.0));
+        assert_eq!(median_p95(&[3.0, 1.0, 2.0, 5.0, 4.0]), (3.0, 5.0));
+        assert!(median_p95(&[]).0.is_nan());
+        assert_eq!(scaled_extent(32, 18, 0.5), avk::Extent2D { width: 16, height: 9 });
+        assert_eq!(scaled_extent(3, 1, 0.1), avk::Extent2D { width: 1, height: 1 });
+    }
+}

@@ -1,0 +1,391 @@
+//! `report`: image error against run time for every quality knob. One
+//! process renders the reference (the renderer at its most accurate
+//! affordable settings), then every value of every selected knob, each
+//! warmed up and timed, and compares each image with the reference.
+//! Writes `report.md`, `report.csv`, `error_vs_time.png` and an error map
+//! per knob (its worst setting). See README "Report".
+//!
+//! One technique per file: `metrics` (ꟻLIP, PSNR, relMSE), `knobs` (the
+//! knob table), `measure` (warm-up and GPU timing), `write` (tables),
+//! `plot` (the chart and the Pareto front), `compare` (two image files).
+
+pub mod compare;
+pub mod knobs;
+pub mod measure;
+pub mod metrics;
+pub mod plot;
+pub mod write;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _, Result};
+
+use crate::app::{load_posed, resolve_shading, with_context, GpuOptions, RenderJob};
+use crate::render::shading::{Backend, Mode};
+use crate::render::{RenderSettings, Renderer};
+use crate::vk::Context;
+use knobs::{KnobSelection, Variant};
+use measure::Measured;
+use metrics::{Errors, FlipMap};
+
+/// The reference's settings: pure-RT mode and every effect, with these.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReferenceSettings {
+    pub max_depth: u32,
+    pub min_weight: f32,
+    /// None: the base settings' backend.
+    pub backend: Option<Backend>,
+    /// Rt (camera rays) by default. Hybrid measures the other knobs without
+    /// the hybrid-vs-rt difference (the self-check) in every row.
+    pub mode: Mode,
+}
+
+impl Default for ReferenceSettings {
+    /// Converged on the bundled scenes at a bounded cost: the weight cutoff
+    /// keeps dielectric branching (2^depth without it) affordable.
+    fn default() -> Self {
+        ReferenceSettings { max_depth: 16, min_weight: 0.001, backend: None, mode: Mode::Rt }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct ReportOptions {
+    /// Scene, camera, size and the base settings every knob changes one thing of.
+    pub job: RenderJob,
+    /// Timed frames per setting (>= 5).
+    pub frames: usize,
+    /// Unmeasured frames before them (>= 1; the first compiles pipelines).
+    pub warmup: usize,
+    pub knobs: Vec<KnobSelection>,
+    pub reference: ReferenceSettings,
+    /// Count rays by kind in one extra frame per setting (an extra
+    /// pipeline compile per setting).
+    pub count_rays: bool,
+    pub out: PathBuf,
+}
+
+impl ReportOptions {
+    pub fn new(job: RenderJob, out: impl Into<PathBuf>) -> ReportOptions {
+        ReportOptions {
+            job,
+            frames: 10,
+            warmup: 2,
+            knobs: knobs::parse_selection("").expect("every knob"),
+            reference: ReferenceSettings::default(),
+            count_rays: true,
+            out: out.into(),
+        }
+    }
+
+    /// The reference variant.
+    pub fn reference_variant(&self) -> Variant {
+        let base = self.job.settings;
+        let mut effects = base.effects;
+        (effects.shadows, effects.reflections, effects.refractions) = (true, true, true);
+        effects.max_depth = self.reference.max_depth;
+        effects.min_weight = self.reference.min_weight;
+        let settings = RenderSettings {
+            mode: self.reference.mode,
+            effects,
+            backend: self.reference.backend.unwrap_or(base.backend),
+            ..base
+        };
+        Variant { settings, scale: 1.0 }
+    }
+
+    /// A cheaper reference (half the depth, ten times the weight cutoff):
+    /// its distance to the reference shows how converged the reference is.
+    fn convergence_variant(&self) -> Variant {
+        let mut v = self.reference_variant();
+        let e = &mut v.settings.effects;
+        e.max_depth = (e.max_depth / 2).max(1);
+        e.min_weight = if e.min_weight > 0.0 { (e.min_weight * 10.0).min(1.0) } else { 0.001 };
+        v
+    }
+}
+
+/// One setting of one knob, compared with the reference.
+pub struct Row {
+    pub knob: &'static str,
+    pub value: String,
+    /// Index into `Report::measured`.
+    pub measured: usize,
+    pub flip_mean: f64,
+    pub psnr: f64,
+    pub rel_mse: f64,
+    pub map: FlipMap,
+}
+
+/// Two settings' distance to each other (the self-check, the convergence).
+pub struct Distance {
+    pub about: String,
+    pub flip_mean: f64,
+    pub psnr: f64,
+    pub ldr: metrics::LdrDiff,
+}
+
+pub struct Report {
+    pub scene: PathBuf,
+    pub device: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: usize,
+    pub warmup: usize,
+    /// Every distinct setting rendered; the reference first.
+    pub measured: Vec<Measured>,
+    /// Index into `measured` of the base settings (in hybrid mode: every
+    /// knob's row for its base value).
+    pub base: usize,
+    pub reference_exposure: f32,
+    pub reference_settings: ReferenceSettings,
+    /// Hybrid against pure RT at the base settings.
+    pub self_check: Distance,
+    /// The reference against a cheaper one.
+    pub convergence: Distance,
+    pub rows: Vec<Row>,
+    /// Knob values not measured, with why.
+    pub skipped: Vec<String>,
+}
+
+impl Report {
+    pub fn reference(&self) -> &Measured {
+        &self.measured[0]
+    }
+
+    /// The row with the largest ꟻLIP of each knob, in knob order.
+    pub fn worst_rows(&self) -> Vec<&Row> {
+        let mut worst: Vec<&Row> = Vec::new();
+        for r in &self.rows {
+            match worst.iter_mut().find(|w| w.knob == r.knob) {
+                Some(w) if r.flip_mean > w.flip_mean => *w = r,
+                Some(_) => {}
+                None => worst.push(r),
+            }
+        }
+        worst
+    }
+}
+
+/// The renderers of a run, one per frame size, destroyed together.
+struct Renderers(Vec<Renderer>);
+
+impl Renderers {
+    fn get(&mut self, ctx: &Context, scene: &crate::scene::Scene, w: u32, h: u32) -> Result<&mut Renderer> {
+        let extent = ash::vk::Extent2D { width: w, height: h };
+        match self.0.iter().position(|r| r.extent() == extent) {
+            Some(i) => Ok(&mut self.0[i]),
+            None => {
+                self.0.push(Renderer::new(ctx, scene, extent)?);
+                Ok(self.0.last_mut().expect("just pushed"))
+            }
+        }
+    }
+
+    fn destroy(&mut self, ctx: &Context) {
+        for mut r in self.0.drain(..) {
+            r.destroy(ctx);
+        }
+    }
+}
+
+/// Runs the report's renders and comparisons (writes nothing).
+pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
+    if opts.frames < 5 {
+        bail!("report: --frames {} is too few for a p95; use at least 5", opts.frames);
+    }
+    let (width, height) = (opts.job.width, opts.job.height);
+    let _ = opts.job.extent()?;
+    let (scene, _) = load_posed(&opts.job)?;
+    let camera = opts.job.camera.resolve(&scene)?;
+    let base = Variant { settings: opts.job.settings, scale: 1.0 };
+    // `auto` resolved to the backend it picks, so equal frames dedupe.
+    let concrete = |mut v: Variant| -> Result<Variant> {
+        if let Some(b) = resolve_shading(ctx, &scene, &v.settings)?.backend {
+            v.settings.backend = b;
+        }
+        Ok(v)
+    };
+    let reference = concrete(opts.reference_variant()).context("the reference settings cannot run")?;
+
+    // Every setting, deduplicated: the reference first, then the checks,
+    // then each knob's values.
+    let mut variants: Vec<(Variant, String)> = Vec::new();
+    let index_of = |variants: &mut Vec<(Variant, String)>, v: Variant, label: String| -> usize {
+        match variants.iter().position(|(x, _)| *x == v) {
+            Some(i) => i,
+            None => {
+                variants.push((v, label));
+                variants.len() - 1
+            }
+        }
+    };
+    index_of(&mut variants, reference, "reference".into());
+    let convergence = concrete(opts.convergence_variant())?;
+    let convergence = index_of(&mut variants, convergence, "convergence check".into());
+    let with_mode =
+        |m: Mode| concrete(Variant { settings: RenderSettings { mode: m, ..base.settings }, ..base });
+    let hybrid = with_mode(Mode::Hybrid).context("the base settings cannot run")?;
+    let hybrid = index_of(&mut variants, hybrid, "self-check hybrid".into());
+    let rt = with_mode(Mode::Rt).context("the base settings cannot run in rt mode")?;
+    let rt = index_of(&mut variants, rt, "self-check rt".into());
+    let mut planned: Vec<(&'static str, String, usize)> = Vec::new();
+    let mut skipped = Vec::new();
+    for sel in &opts.knobs {
+        let knob = knobs::find(sel.knob)?;
+        let values: Vec<String> = match &sel.values {
+            Some(v) => v.clone(),
+            None => knob.values.iter().map(|s| s.to_string()).collect(),
+        };
+        for value in values {
+            let mut v = base;
+            (knob.apply)(&mut v, &value)?;
+            let v = match concrete(v) {
+                Ok(v) => v,
+                Err(e) if knob.skip_unavailable && sel.values.is_none() => {
+                    log::info!("report: {} {value} skipped: {e:#}", knob.name);
+                    skipped.push(format!("{} {value}: {e:#}", knob.name));
+                    continue;
+                }
+                Err(e) => return Err(e.context(format!("report: {} {value} cannot run", knob.name))),
+            };
+            let i = index_of(&mut variants, v, format!("{} {value}", knob.name));
+            planned.push((knob.name, value, i));
+        }
+    }
+
+    let mut renderers = Renderers(Vec::new());
+    let result: Result<Vec<Measured>> = (|| {
+        let mut measured: Vec<Measured> = Vec::new();
+        let started = std::time::Instant::now();
+        let n = variants.len();
+        for (i, (v, label)) in variants.iter().enumerate() {
+            let e = measure::scaled_extent(width, height, v.scale);
+            eprintln!(
+                "report [{}/{n}] {label} ({}x{}, {:.0} s so far)",
+                i + 1,
+                e.width,
+                e.height,
+                started.elapsed().as_secs_f64()
+            );
+            let renderer = renderers.get(ctx, &scene, e.width, e.height)?;
+            let m = measure::measure(
+                ctx,
+                renderer,
+                &scene,
+                &camera,
+                v,
+                opts.warmup,
+                opts.frames,
+                opts.count_rays,
+            )
+            .with_context(|| format!("report: measuring {label}"))?;
+            eprintln!(
+                "report [{}/{n}] {label}: {:.3} ms median, {:.3} ms p95 ({})",
+                i + 1,
+                m.timing.median,
+                m.timing.p95,
+                m.config
+            );
+            measured.push(m);
+        }
+        Ok(measured)
+    })();
+    renderers.destroy(ctx);
+    let measured = result?;
+
+    let exposure = reference.settings.exposure;
+    let reference_image = &measured[0].image;
+    let against_ref = |i: usize| metrics::compare_hdr(reference_image, &measured[i].image, exposure);
+    let mut rows = Vec::new();
+    for (knob, value, i) in planned {
+        let Errors { flip_mean, psnr, rel_mse, map, .. } =
+            against_ref(i).with_context(|| format!("comparing {knob} {value} with the reference"))?;
+        rows.push(Row { knob, value, measured: i, flip_mean, psnr, rel_mse, map });
+    }
+    let check = metrics::compare_hdr(&measured[rt].image, &measured[hybrid].image, exposure)?;
+    let conv = against_ref(convergence)?;
+    let e = &base.settings.effects;
+    Ok(Report {
+        scene: opts.job.scene.clone(),
+        device: ctx.caps.name.clone(),
+        width,
+        height,
+        frames: opts.frames,
+        warmup: opts.warmup,
+        reference_exposure: exposure,
+        reference_settings: opts.reference,
+        self_check: Distance {
+            about: format!(
+                "hybrid against rt at the base settings (max depth {}, min weight {}, {})",
+                e.max_depth, e.min_weight, measured[hybrid].config
+            ),
+            flip_mean: check.flip_mean,
+            psnr: check.psnr,
+            ldr: check.ldr,
+        },
+        convergence: Distance {
+            about: format!(
+                "the reference against max depth {}, min weight {}",
+                measured[convergence].variant.settings.effects.max_depth,
+                plot::significant(measured[convergence].variant.settings.effects.min_weight as f64, 3)
+            ),
+            flip_mean: conv.flip_mean,
+            psnr: conv.psnr,
+            ldr: conv.ldr,
+        },
+        measured,
+        base: hybrid,
+        rows,
+        skipped,
+    })
+}
+
+/// Writes every output of `report` into `dir`; returns the files written.
+pub fn write_all(report: &Report, dir: &Path) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut files = Vec::new();
+    let reference = dir.join("reference.png");
+    let r = report.reference();
+    let ldr = r.image.tone_mapped(report.reference_exposure);
+    image::RgbImage::from_raw(ldr.width, ldr.height, ldr.rgb)
+        .context("reference size")?
+        .save(&reference)
+        .with_context(|| format!("writing {}", reference.display()))?;
+    files.push(reference);
+    let mut maps = Vec::new();
+    for row in report.worst_rows() {
+        let name = write::error_map_name(row);
+        let path = dir.join(&name);
+        row.map.save_png(&path)?;
+        maps.push((row.knob, row.value.clone(), name));
+        files.push(path);
+    }
+    let plot = dir.join("error_vs_time.png");
+    plot::error_vs_time(report, &plot)?;
+    files.push(plot);
+    let csv = dir.join("report.csv");
+    std::fs::write(&csv, write::csv(report)).with_context(|| format!("writing {}", csv.display()))?;
+    files.push(csv);
+    let md = dir.join("report.md");
+    std::fs::write(&md, write::markdown(report, &maps))
+        .with_context(|| format!("writing {}", md.display()))?;
+    files.push(md);
+    Ok(files)
+}
+
+/// `report`: runs it in its own context and writes `opts.out`.
+pub fn report_command(gpu: &GpuOptions, opts: &ReportOptions) -> Result<()> {
+    with_context(gpu, |ctx| {
+        let report = run(ctx, opts)?;
+        crate::app::check_validation(ctx)?;
+        let files = write_all(&report, &opts.out)?;
+        println!(
+            "self-check, hybrid vs rt at equal settings: ꟻLIP {:.5}, PSNR {:.2} dB",
+            report.self_check.flip_mean, report.self_check.psnr
+        );
+        for f in files {
+            println!("wrote {}", f.display());
+        }
+        Ok(())
+    })
+}

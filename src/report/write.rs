@@ -1,0 +1,252 @@
+//! The report's tables: `report.md` for people, `report.csv` for tools
+//! (one row per knob setting; the first seven columns are fixed, later
+//! ones may be added after them).
+
+use std::fmt::Write as _;
+
+use super::{Report, Row};
+use crate::render::shading::Mode;
+
+/// The fixed leading columns of report.csv.
+pub const CSV_HEADER: &str = "knob,value,backend,ms_median,ms_p95,flip_mean,psnr";
+/// Columns after the fixed ones.
+const CSV_EXTRA: &str = "rel_mse,width,height,rays_camera,rays_shadow,rays_secondary,non_finite_pixels";
+
+/// One CSV field: quoted (RFC 4180) when it holds a comma, quote or line break.
+pub fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// A number for CSV: fixed digits, "inf" / "nan" spelled out, empty for None.
+pub fn csv_number(v: f64, digits: usize) -> String {
+    if v.is_nan() {
+        "nan".into()
+    } else if v.is_infinite() {
+        if v > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        format!("{v:.digits$}")
+    }
+}
+
+pub fn csv(report: &Report) -> String {
+    let mut s = format!("{CSV_HEADER},{CSV_EXTRA}\n");
+    for row in &report.rows {
+        let m = &report.measured[row.measured];
+        let rays: Vec<String> = match m.rays {
+            Some(r) => r.iter().map(|v| v.to_string()).collect(),
+            None => vec![String::new(); 3],
+        };
+        let fields = [
+            csv_field(row.knob),
+            csv_field(&row.value),
+            csv_field(&m.backend),
+            csv_number(m.timing.median, 4),
+            csv_number(m.timing.p95, 4),
+            csv_number(row.flip_mean, 6),
+            csv_number(row.psnr, 3),
+            csv_number(row.rel_mse, 6),
+            m.width.to_string(),
+            m.height.to_string(),
+            rays.join(","),
+            m.non_finite.to_string(),
+        ];
+        s.push_str(&fields.join(","));
+        s.push('\n');
+    }
+    s
+}
+
+/// The error map file of a row: `error_map_<knob>_<value>.png`, the value
+/// kept to file-name-safe characters ('+' spelled "plus").
+pub fn error_map_name(row: &Row) -> String {
+    let value: String = row
+        .value
+        .replace('+', "plus-")
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' })
+        .collect();
+    format!("error_map_{}_{value}.png", row.knob)
+}
+
+fn db(v: f64) -> String {
+    if v.is_infinite() {
+        "∞".into()
+    } else {
+        format!("{v:.2}")
+    }
+}
+
+fn rays(r: Option<[u32; 3]>) -> String {
+    match r {
+        Some([c, s, x]) => format!("{} ({c} / {s} / {x})", c as u64 + s as u64 + x as u64),
+        None => "not counted".into(),
+    }
+}
+
+/// `report.md`; `maps` are the error maps written (knob, value, file).
+pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> String {
+    let mut s = String::new();
+    let r = report.reference();
+    let rs = &report.reference_settings;
+    let _ = writeln!(s, "# Image error against GPU time: {}\n", report.scene.display());
+    let _ = writeln!(
+        s,
+        "Device {}, {}x{}, {} timed frames per setting after {} warm-up frame(s), every setting \
+         in one process run.\n",
+        report.device, report.width, report.height, report.frames, report.warmup
+    );
+    let _ = writeln!(s, "## Reference\n");
+    let _ = writeln!(
+        s,
+        "The same renderer at its most accurate affordable settings: {}, every effect on, max \
+         depth {}, min weight {}, backend {}, exposure {} ({}). It took {:.3} ms per frame \
+         (median). `reference.png` is its tone-mapped image.\n",
+        match rs.mode {
+            Mode::Rt => "pure-RT mode (camera rays traced)",
+            Mode::Hybrid =>
+                "hybrid mode (G-buffer primary hits; chosen with --ref-mode hybrid, so the \
+                             rows leave out the hybrid-vs-rt difference below)",
+        },
+        rs.max_depth,
+        rs.min_weight,
+        r.backend,
+        report.reference_exposure,
+        r.config,
+        r.timing.median
+    );
+    let c = &report.convergence;
+    let _ = writeln!(
+        s,
+        "Convergence: {}: ꟻLIP {:.5}, PSNR {} dB; tone-mapped: {} (the smaller, the closer the reference is \
+         to converged).\n",
+        c.about,
+        c.flip_mean,
+        db(c.psnr),
+        c.ldr.describe()
+    );
+    let k = &report.self_check;
+    let _ = writeln!(s, "## Self-check: hybrid vs rt at equal settings\n");
+    let _ = writeln!(
+        s,
+        "**ꟻLIP {:.5}, PSNR {} dB** — {}; tone-mapped: {}. The G-buffer is the primary hit, so the two \
+         should be (near-)identical. (LDR-ꟻLIP is not blind to one-level 8-bit differences: on \
+         flat areas they score about 0.02-0.03.)\n",
+        k.flip_mean,
+        db(k.psnr),
+        k.about,
+        k.ldr.describe()
+    );
+    let _ = writeln!(s, "## How it is measured\n");
+    let _ = writeln!(
+        s,
+        "- Time: GPU timestamps of each pass, summed per frame (readback excluded); median and \
+         p95 over the timed frames. Each setting's pipelines are compiled and warmed before it \
+         is timed.\n\
+         - ꟻLIP: NVIDIA's reference implementation (`nv-flip`), LDR-ꟻLIP at 67 pixels per \
+         degree on both images tone-mapped by this renderer's tone mapper with the reference's \
+         exposure ({}), frozen; the mean of the per-pixel error.\n\
+         - PSNR: linear radiance, peak = the reference's largest channel value; relMSE: mean of \
+         (x - ref)^2 / (ref^2 + 0.01).\n\
+         - resolution-scale: rendered at the scaled size, resampled bilinearly (linear radiance) \
+         to the reference's size, then compared.\n\
+         - rays/frame: total (camera / shadow / secondary) of one counted frame.\n",
+        report.reference_exposure
+    );
+    let mut knob_order: Vec<&'static str> = Vec::new();
+    for row in &report.rows {
+        if !knob_order.contains(&row.knob) {
+            knob_order.push(row.knob);
+        }
+    }
+    for knob in &knob_order {
+        let about = super::knobs::find(knob).map(|k| k.about).unwrap_or("");
+        let _ = writeln!(s, "## {knob}\n\n{about}.\n");
+        let _ = writeln!(
+            s,
+            "| knob | value | backend | ms median | ms p95 | ꟻLIP mean | PSNR (dB) | relMSE | rays/frame |"
+        );
+        let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---|");
+        for row in report.rows.iter().filter(|r| r.knob == *knob) {
+            let m = &report.measured[row.measured];
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.3} | {:.3} | {:.5} | {} | {:.5} | {} |",
+                row.knob,
+                row.value,
+                m.backend,
+                m.timing.median,
+                m.timing.p95,
+                row.flip_mean,
+                db(row.psnr),
+                row.rel_mse,
+                rays(m.rays)
+            );
+        }
+        s.push('\n');
+    }
+    // Per-pass breakdown: one column per pass any setting ran.
+    let mut passes: Vec<&'static str> = Vec::new();
+    for m in &report.measured {
+        for (p, _) in &m.timing.passes {
+            if !passes.contains(p) {
+                passes.push(p);
+            }
+        }
+    }
+    let _ = writeln!(s, "## Per-pass median GPU ms\n");
+    let _ = writeln!(s, "| knob | value | {} |", passes.join(" | "));
+    let _ = writeln!(s, "|---|---|{}", "---:|".repeat(passes.len()));
+    let per_pass = |m: &super::Measured| -> String {
+        let cells: Vec<String> = passes
+            .iter()
+            .map(|p| match m.timing.passes.iter().find(|(n, _)| n == p) {
+                Some((_, ms)) => format!("{ms:.3}"),
+                None => "-".into(),
+            })
+            .collect();
+        cells.join(" | ")
+    };
+    let _ = writeln!(s, "| reference | | {} |", per_pass(r));
+    for row in &report.rows {
+        let _ =
+            writeln!(s, "| {} | {} | {} |", row.knob, row.value, per_pass(&report.measured[row.measured]));
+    }
+    let _ = writeln!(s, "\n## Files\n");
+    let _ = writeln!(
+        s,
+        "- `error_vs_time.png`: ꟻLIP mean against median GPU ms (log scale), one series per knob; \
+         the black line joins the Pareto front (no other setting is both faster and closer to \
+         the reference). Lower and further left is better."
+    );
+    let _ = writeln!(s, "- `report.csv`: these rows, columns `{CSV_HEADER},{CSV_EXTRA}`.");
+    for (knob, value, file) in maps {
+        let _ = writeln!(s, "- `{file}`: per-pixel ꟻLIP error of the worst {knob} setting ({value}).");
+    }
+    if !report.skipped.is_empty() {
+        let _ = writeln!(s, "\n## Not measured\n");
+        for why in &report.skipped {
+            let _ = writeln!(s, "- {why}");
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_fields_and_numbers() {
+        assert_eq!(csv_field("max-depth"), "max-depth");
+        assert_eq!(csv_field("a,b"), "\"a,b\"");
+        assert_eq!(csv_field("say \"hi\""), "\"say \"\"hi\"\"\"");
+        assert_eq!(csv_number(1.23456, 3), "1.235");
+        assert_eq!(csv_number(f64::INFINITY, 3), "inf");
+        assert_eq!(csv_number(f64::NAN, 3), "nan");
+        assert_eq!(CSV_HEADER.split(',').count(), 7);
+    }
+}

@@ -1,0 +1,243 @@
+//! `report` on a tiny case (two knob values at 32x18 on the bundled default
+//! scene) checks its own numbers and files; `compare` and `bench --csv` end
+//! to end through the binary.
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use hybrid_rt::app::{self, RenderJob};
+use hybrid_rt::report::{self, knobs, metrics, write::CSV_HEADER, ReportOptions};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("report").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn bin() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_hybrid-rt"));
+    c.env("HYBRID_RT_VALIDATION", "1");
+    c
+}
+
+/// Splits a CSV line, honouring RFC 4180 quotes.
+fn split_csv(line: &str) -> Vec<String> {
+    let (mut fields, mut cur, mut quoted, mut chars) =
+        (Vec::new(), String::new(), false, line.chars().peekable());
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => fields.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    fields.push(cur);
+    fields
+}
+
+fn decoded_size(path: &Path) -> (u32, u32) {
+    let img = image::open(path).unwrap_or_else(|e| panic!("{} does not decode: {e}", path.display()));
+    (img.width(), img.height())
+}
+
+/// The report at 32x18 with max-depth 0 and 1: its ꟻLIP is 0 for an image
+/// against itself and positive against a shifted copy, report.csv parses
+/// with the fixed header and one row per knob value, report.md names the
+/// reference and the self-check, the error map and the plot decode.
+#[test]
+fn tiny_report_checks_its_numbers_and_files() {
+    let dir = tmp("tiny");
+    let job = RenderJob::new(app::default_scene_path().unwrap(), 32, 18);
+    let opts = ReportOptions {
+        frames: 5,
+        warmup: 1,
+        knobs: knobs::parse_selection("max-depth=0:1").unwrap(),
+        ..ReportOptions::new(job, &dir)
+    };
+    let ctx = common::validated_context();
+    let rep = report::run(&ctx, &opts).expect("report runs");
+    common::assert_validation_clean(&ctx);
+    let files = report::write_all(&rep, &dir).expect("report writes");
+    assert!(files.iter().all(|f| f.is_file()), "{files:?}");
+
+    // The metric on a rendered image.
+    let reference = &rep.reference().image;
+    assert_eq!((reference.width, reference.height), (32, 18));
+    let ldr = reference.tone_mapped(rep.reference_exposure);
+    let same = metrics::flip(&ldr, &ldr).unwrap();
+    assert_eq!(same.mean(), 0.0, "ꟻLIP of an image against itself");
+    let mut shifted = ldr.clone();
+    let row = 32 * 3;
+    for y in 0..18 {
+        shifted.rgb[y * row..(y + 1) * row].rotate_right(3 * 3);
+    }
+    let moved = metrics::flip(&ldr, &shifted).unwrap();
+    assert!(moved.mean() > 0.0, "ꟻLIP against a copy shifted by 3 pixels: {}", moved.mean());
+
+    // report.csv: the fixed header, one row per knob value, numbers.
+    let csv = std::fs::read_to_string(dir.join("report.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    assert_eq!(header[..7].join(","), "knob,value,backend,ms_median,ms_p95,flip_mean,psnr");
+    assert_eq!(header[..7].join(","), CSV_HEADER);
+    let rows: Vec<Vec<String>> = lines.map(split_csv).collect();
+    assert_eq!(rows.len(), 2, "{csv}");
+    for (r, value) in rows.iter().zip(["0", "1"]) {
+        assert_eq!(r.len(), header.len(), "{r:?}");
+        assert_eq!((r[0].as_str(), r[1].as_str()), ("max-depth", value));
+        assert!(["query", "pipeline", "compute"].contains(&r[2].as_str()), "backend {}", r[2]);
+        let num = |i: usize| r[i].parse::<f64>().unwrap_or_else(|e| panic!("{}: {e} in {r:?}", header[i]));
+        assert!(num(3) > 0.0 && num(4) >= num(3), "ms median/p95 {r:?}");
+        assert!((0.0..=1.0).contains(&num(5)), "ꟻLIP {r:?}");
+        assert!(num(6) > 0.0, "PSNR {r:?}");
+        let camera_rays = header.iter().position(|h| *h == "rays_camera").unwrap();
+        assert_eq!(num(camera_rays), 0.0, "hybrid traces no camera ray");
+    }
+    // Deeper recursion is closer to the reference (the scene has mirrors and glass).
+    let flip = |i: usize| rows[i][5].parse::<f64>().unwrap();
+    assert!(flip(1) < flip(0), "max-depth 1 should beat 0: {csv}");
+
+    // report.md names the reference and prints the self-check.
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(md.contains("## Reference") && md.contains("pure-RT mode"), "{md}");
+    assert!(md.contains("max depth 16, min weight 0.001"), "{md}");
+    assert!(md.contains("Self-check: hybrid vs rt at equal settings"), "{md}");
+    assert!(md.contains("tone-mapped: largest 8-bit channel difference"), "{md}");
+    assert!(md.contains("| max-depth | 0 |") && md.contains("| max-depth | 1 |"), "{md}");
+
+    // The worst setting's error map (reference size) and the plot decode.
+    let worst = rep.worst_rows();
+    assert_eq!(worst.len(), 1);
+    let map = dir.join(report::write::error_map_name(worst[0]));
+    assert_eq!(decoded_size(&map), (32, 18));
+    let (w, h) = decoded_size(&dir.join("error_vs_time.png"));
+    assert!(w > 0 && h > 0);
+}
+
+fn write_png(path: &Path, w: u32, h: u32, shift: u32) {
+    let img = image::RgbImage::from_fn(w, h, |x, y| {
+        let v = (((x + shift) * 37 + y * 11) % 256) as u8;
+        image::Rgb([v, v / 2, 255 - v])
+    });
+    img.save(path).unwrap();
+}
+
+/// `compare`: identical PNGs give ꟻLIP 0; different ones a positive ꟻLIP
+/// and an error map; mismatched sizes and unreadable files fail with the
+/// file named, a non-zero exit and no panic.
+#[test]
+fn compare_cli() {
+    let d = tmp("compare");
+    let (a, b, small) = (d.join("a.png"), d.join("b.png"), d.join("small.png"));
+    write_png(&a, 40, 20, 0);
+    write_png(&b, 40, 20, 2);
+    write_png(&small, 20, 10, 0);
+    let run =
+        |x: &Path, y: &Path, extra: &[&str]| bin().arg("compare").arg(x).arg(y).args(extra).output().unwrap();
+
+    let out = run(&a, &a, &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("ꟻLIP mean 0.000000") && stdout.contains("PSNR inf dB"), "{stdout}");
+    assert!(stdout.contains("largest 8-bit channel difference 0, 0.0% of pixels differ"), "{stdout}");
+
+    let map = d.join("map.png");
+    let out = run(&a, &b, &["--out", map.to_str().unwrap(), "--threshold", "0.05"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mean: f64 = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("ꟻLIP mean "))
+        .unwrap_or_else(|| panic!("no ꟻLIP line: {stdout}"))
+        .parse()
+        .unwrap();
+    assert!(mean > 0.0, "{stdout}");
+    assert!(stdout.contains("pixels with ꟻLIP > 0.05:"), "{stdout}");
+    assert_eq!(decoded_size(&map), (40, 20));
+
+    let missing = d.join("missing.png");
+    for (x, y, named) in [(&a, &small, &small), (&a, &missing, &missing)] {
+        let out = run(x, y, &[]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "expected failure: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        let line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("{stderr}"));
+        assert!(line.contains(&named.display().to_string()), "does not name {}: {line}", named.display());
+    }
+}
+
+/// `bench --csv` writes one row per variant and pass, and the side-by-side
+/// ratios say slower or faster.
+#[test]
+fn bench_csv_and_ratio_words() {
+    let d = tmp("bench");
+    let csv = d.join("bench.csv");
+    let out = bin()
+        .args(["--no-rt", "bench", "--width", "16", "--height", "16", "--frames", "2", "--warmup", "1"])
+        .args(["--compare-modes", "--csv"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("bench: warming up 2/2") && stderr.contains("bench: measuring 2/2"), "{stderr}");
+    let side: Vec<&str> = stdout.lines().skip_while(|l| !l.starts_with("side by side")).skip(1).collect();
+    assert!(side[0].contains("1.00x baseline"), "{stdout}");
+    assert!(
+        side[1].contains(" slower ") || side[1].contains(" faster ") || side[1].contains(" as fast "),
+        "{stdout}"
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(&header[..4], &["variant", "mode", "backend", "accel_update"]);
+    let rows: Vec<&str> = lines.collect();
+    let frames: Vec<&&str> = rows.iter().filter(|r| r.contains(",frame,")).collect();
+    assert_eq!(frames.len(), 2, "{text}");
+    assert!(frames[0].starts_with("1,hybrid,") && frames[1].starts_with("2,rt,"), "{text}");
+    let median = header.iter().position(|h| *h == "ms_median").unwrap();
+    for r in &rows {
+        let fields = split_csv(r);
+        assert_eq!(fields.len(), header.len(), "{r}");
+        let ms: f64 = fields[median].parse().unwrap_or_else(|e| panic!("{e}: {r}"));
+        assert!(ms >= 0.0, "{r}");
+    }
+}
+
+/// `report` through the binary: bad --knobs and too few --frames are
+/// refused with the problem named; a tiny run shows its progress on stderr,
+/// prints the self-check and writes its files.
+#[test]
+fn report_cli() {
+    let d = tmp("cli");
+    let run = |args: &[&str]| {
+        bin().args(["report", "--width", "16", "--height", "9", "--out"]).arg(&d).args(args).output().unwrap()
+    };
+    for (args, needle) in [
+        (&["--knobs", "depth"][..], "max-depth"),
+        (&["--knobs", "max-depth=99"], "0..=64"),
+        (&["--frames", "3"], "at least 5"),
+    ] {
+        let out = run(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && !stderr.contains("panicked"), "{args:?}: {stderr}");
+        let line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("{stderr}"));
+        assert!(line.contains(needle), "{args:?}: '{needle}' not in {line}");
+    }
+    let out = run(&["--knobs", "mode=hybrid", "--frames", "5", "--warmup", "1", "--no-ray-counts"]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{stderr}");
+    // A line when each setting starts, and one with its times when it is done.
+    assert!(stderr.contains("report [1/4] reference (16x9"), "{stderr}");
+    assert!(stderr.lines().any(|l| l.starts_with("report [4/4]") && l.contains("ms median")), "{stderr}");
+    assert!(stdout.contains("self-check, hybrid vs rt at equal settings: ꟻLIP"), "{stdout}");
+    let csv = std::fs::read_to_string(d.join("report.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 2, "{csv}");
+    assert!(csv.lines().nth(1).unwrap().starts_with("mode,hybrid,"), "{csv}");
+}
