@@ -4,6 +4,7 @@
 #include "common/scene.glsl"
 #define MAT_SAMPLE(index, uv, fallback) sample_tex(index, uv, fallback)
 #include "common/material.glsl"
+#include "common/srgb.glsl"
 
 layout(constant_id = SPEC_ALPHA_TEST) const bool ALPHA_TEST = false;
 
@@ -12,7 +13,7 @@ layout(location = 1) in vec4 v_tangent;
 layout(location = 2) in vec2 v_uv;
 layout(location = 3) flat in uint v_instance;
 
-layout(location = 0) out vec4 o_albedo;    // rgb base colour, a occlusion
+layout(location = 0) out vec4 o_albedo;    // rgb base colour (sRGB-encoded), a occlusion
 layout(location = 1) out vec4 o_normal;    // xyz world shading normal, w roughness
 layout(location = 2) out vec4 o_material;  // r metallic, g transmission, b (ior-1)/2
 layout(location = 3) out vec4 o_emissive;  // rgb emitted radiance
@@ -32,7 +33,7 @@ void main() {
     if (!gl_FrontFacing) n = -n;
     n = apply_normal_map(m, v_uv, n, v_tangent);
 
-    o_albedo = vec4(s.base_color, s.occlusion);
+    o_albedo = vec4(srgb_encode(s.base_color), s.occlusion);
     o_normal = vec4(n, s.roughness);
     o_material = vec4(s.metallic, s.transmission, clamp((s.ior - 1.0) * 0.5, 0.0, 1.0), 0.0);
     o_emissive = vec4(s.emissive, 0.0);

@@ -2,15 +2,12 @@
 // Pass `tonemap`: exposure + Reinhard on luminance, then sRGB encoding into
 // the 8-bit output.
 #include "common/scene.glsl"
+#include "common/srgb.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = SET_PASS, binding = TONEMAP_IN, rgba32f) uniform readonly image2D hdr_in;
 layout(set = SET_PASS, binding = TONEMAP_OUT, rgba8) uniform writeonly image2D ldr_out;
 
-vec3 linear_to_srgb(vec3 c) {
-    c = clamp(c, 0.0, 1.0);
-    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
-}
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -21,5 +18,5 @@ void main() {
         float l = dot(c, vec3(0.2126, 0.7152, 0.0722));
         c *= l > 0.0 ? (1.0 / (1.0 + l)) : 1.0;
     }
-    imageStore(ldr_out, px, vec4(linear_to_srgb(c), 1.0));
+    imageStore(ldr_out, px, vec4(srgb_encode(c), 1.0));
 }

@@ -9,6 +9,7 @@
 #include "brdf.glsl"
 #include "primary_hit.glsl"
 #include "offset.glsl"
+#include "srgb.glsl"
 
 layout(set = SET_PASS, binding = GB_ALBEDO) uniform sampler2D gb_albedo;
 layout(set = SET_PASS, binding = GB_NORMAL) uniform sampler2D gb_normal;
@@ -41,7 +42,7 @@ bool read_primary(ivec2 px, out PrimaryHit p) {
     p.back_face = dot(tn, p.dir) > 0.0;
     p.gn = p.back_face ? -tn : tn;
     p.s.normal = normalize(nr.xyz);
-    p.s.base_color = albedo.rgb;
+    p.s.base_color = srgb_decode(albedo.rgb);
     p.s.occlusion = albedo.a;
     p.s.roughness = nr.w;
     p.s.metallic = mat.r;

@@ -1,11 +1,12 @@
 // Pass `primary` (pure ray-traced mode): camera rays find the primary hit
 // and write it into the same G-buffer targets the `gbuffer` raster pass
-// fills, so every later pass is shared between the two modes. Albedo goes
-// through a UNORM view of the sRGB target, hence the explicit encoding.
+// fills, so every later pass is shared between the two modes. Albedo is
+// sRGB-encoded by the same function as in gbuffer.frag (common/srgb.glsl).
 #include "../common/scene.glsl"
 #include "../common/hit.glsl"
 #include "../common/primary_hit.glsl"
 #include "../common/integrator.glsl"
+#include "../common/srgb.glsl"
 
 layout(set = SET_PASS, binding = GB_ALBEDO, rgba8) uniform writeonly image2D gb_albedo;
 layout(set = SET_PASS, binding = GB_NORMAL, rgba16f) uniform writeonly image2D gb_normal;
@@ -13,10 +14,6 @@ layout(set = SET_PASS, binding = GB_MATERIAL, rgba8) uniform writeonly image2D g
 layout(set = SET_PASS, binding = GB_EMISSIVE, rgba16f) uniform writeonly image2D gb_emissive;
 layout(set = SET_PASS, binding = GB_HIT, rg32ui) uniform writeonly uimage2D gb_hit;
 
-vec3 srgb_encode(vec3 c) {
-    c = clamp(c, 0.0, 1.0);
-    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
-}
 
 void primary_pixel(ivec2 px) {
     if (any(greaterThanEqual(uvec2(px), frame.resolution))) return;

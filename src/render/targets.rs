@@ -9,18 +9,16 @@ use ash::vk;
 use super::frame::{Access, Resource, Use};
 use crate::vk::{Context, Image};
 
-/// A render target: name (debug name, identity), format, and for an sRGB
-/// target that a compute pass writes, the UNORM format of its storage view.
+/// A render target: name (debug name, identity) and format.
 #[derive(Debug, PartialEq, Eq)]
 pub struct TargetDesc {
     pub name: &'static str,
     pub format: vk::Format,
-    pub storage_format: Option<vk::Format>,
 }
 
 impl TargetDesc {
     pub const fn new(name: &'static str, format: vk::Format) -> TargetDesc {
-        TargetDesc { name, format, storage_format: None }
+        TargetDesc { name, format }
     }
 }
 
@@ -28,8 +26,6 @@ impl TargetDesc {
 pub struct Target {
     pub desc: &'static TargetDesc,
     pub image: Image,
-    /// View for storage access (a UNORM view of an sRGB image), else `image.view`.
-    pub storage_view: vk::ImageView,
 }
 
 impl std::ops::Deref for Target {
@@ -46,18 +42,7 @@ impl Target {
         usage: vk::ImageUsageFlags,
         extent: vk::Extent2D,
     ) -> Result<Target> {
-        let storage = usage.contains(vk::ImageUsageFlags::STORAGE);
-        Ok(match desc.storage_format.filter(|_| storage) {
-            Some(view_format) => {
-                let image = Image::new_2d_mutable(ctx, desc.name, desc.format, view_format, extent, usage)?;
-                let view = image.extra_view.expect("mutable image has a storage view");
-                Target { desc, image, storage_view: view }
-            }
-            None => {
-                let image = Image::new_2d(ctx, desc.name, desc.format, extent, 1, usage)?;
-                Target { desc, storage_view: image.view, image }
-            }
-        })
+        Ok(Target { desc, image: Image::new_2d(ctx, desc.name, desc.format, extent, 1, usage)? })
     }
 }
 

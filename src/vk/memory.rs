@@ -155,8 +155,6 @@ pub struct Image {
     pub extent: vk::Extent2D,
     pub mip_levels: u32,
     pub aspect: vk::ImageAspectFlags,
-    /// A second view in another (compatible) format, see `new_2d_mutable`.
-    pub extra_view: Option<vk::ImageView>,
 }
 
 impl Image {
@@ -170,7 +168,6 @@ impl Image {
             extent: vk::Extent2D::default(),
             mip_levels: 0,
             aspect: vk::ImageAspectFlags::empty(),
-            extra_view: None,
         }
     }
 
@@ -178,32 +175,6 @@ impl Image {
         ctx: &Context,
         name: &str,
         format: vk::Format,
-        extent: vk::Extent2D,
-        mip_levels: u32,
-        usage: vk::ImageUsageFlags,
-    ) -> Result<Image> {
-        Self::create_2d(ctx, name, format, None, extent, mip_levels, usage)
-    }
-
-    /// A single-level image whose main view has `format` (without STORAGE
-    /// usage) and whose `extra_view` has `storage_format` (with all of
-    /// `usage`): an sRGB target that a compute pass writes through UNORM.
-    pub fn new_2d_mutable(
-        ctx: &Context,
-        name: &str,
-        format: vk::Format,
-        storage_format: vk::Format,
-        extent: vk::Extent2D,
-        usage: vk::ImageUsageFlags,
-    ) -> Result<Image> {
-        Self::create_2d(ctx, name, format, Some(storage_format), extent, 1, usage)
-    }
-
-    fn create_2d(
-        ctx: &Context,
-        name: &str,
-        format: vk::Format,
-        storage_format: Option<vk::Format>,
         extent: vk::Extent2D,
         mip_levels: u32,
         usage: vk::ImageUsageFlags,
@@ -222,11 +193,6 @@ impl Image {
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
-        let info = if storage_format.is_some() {
-            info.flags(vk::ImageCreateFlags::MUTABLE_FORMAT | vk::ImageCreateFlags::EXTENDED_USAGE)
-        } else {
-            info
-        };
         let raw = unsafe { ctx.device.create_image(&info, None) }.with_context(|| {
             format!("create image '{name}' ({format:?} {}x{})", extent.width, extent.height)
         })?;
@@ -243,9 +209,18 @@ impl Image {
         )
         .inspect_err(|_| unsafe { ctx.device.destroy_image(raw, None) })
         .with_context(|| format!("allocate image '{name}'"))?;
-        unsafe { ctx.device.bind_image_memory(raw, allocation.memory(), allocation.offset())? };
-        let make_view = |format: vk::Format, usage: vk::ImageUsageFlags| {
-            let mut view_usage = vk::ImageViewUsageCreateInfo::default().usage(usage);
+        // From here the image owns its memory: a failure destroys both.
+        let mut image = Image {
+            raw,
+            view: vk::ImageView::null(),
+            allocation: Some(allocation),
+            format,
+            extent,
+            mip_levels,
+            aspect,
+        };
+        let a = image.allocation.as_ref().unwrap();
+        let view = unsafe { ctx.device.bind_image_memory(raw, a.memory(), a.offset()) }.and_then(|()| {
             let info = vk::ImageViewCreateInfo::default()
                 .image(raw)
                 .view_type(vk::ImageViewType::TYPE_2D)
@@ -255,21 +230,19 @@ impl Image {
                         .aspect_mask(aspect)
                         .level_count(mip_levels)
                         .layer_count(1),
-                )
-                .push_next(&mut view_usage);
+                );
             unsafe { ctx.device.create_image_view(&info, None) }
-        };
-        // The main view of a mutable image cannot carry the storage usage its
-        // format does not support; the extra view carries it.
-        let main_usage = if storage_format.is_some() { usage & !vk::ImageUsageFlags::STORAGE } else { usage };
-        let view = make_view(format, main_usage)?;
-        let extra_view = storage_format.map(|f| make_view(f, usage)).transpose()?;
-        ctx.name(raw, name);
-        ctx.name(view, &format!("{name} view"));
-        if let Some(v) = extra_view {
-            ctx.name(v, &format!("{name} storage view"));
+        });
+        match view {
+            Ok(v) => image.view = v,
+            Err(e) => {
+                image.destroy(ctx);
+                return Err(e).with_context(|| format!("bind memory / create view of image '{name}'"));
+            }
         }
-        Ok(Image { raw, view, allocation: Some(allocation), format, extent, mip_levels, aspect, extra_view })
+        ctx.name(raw, name);
+        ctx.name(image.view, &format!("{name} view"));
+        Ok(image)
     }
 
     /// A sampled texture from tightly packed texels, with a full mip chain
@@ -469,9 +442,6 @@ impl Image {
         if let Some(a) = self.allocation.take() {
             unsafe {
                 ctx.device.destroy_image_view(self.view, None);
-                if let Some(v) = self.extra_view.take() {
-                    ctx.device.destroy_image_view(v, None);
-                }
                 ctx.device.destroy_image(self.raw, None);
             }
             let _ = ctx.allocator.lock().unwrap().free(a);

@@ -157,7 +157,7 @@ impl Pass for FullScreen {
                     ctx,
                     i.binding,
                     0,
-                    t.storage_view,
+                    t.view,
                     vk::Sampler::null(),
                     vk::ImageLayout::GENERAL,
                 ),

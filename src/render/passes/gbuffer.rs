@@ -18,13 +18,10 @@ use crate::vk::pipeline::{pipeline_layout, shader_module, Specialization};
 use crate::vk::Context;
 
 /// The G-buffer targets (gbuffer.frag's outputs, in attachment order; the
-/// `primary` pass writes the same ones). Albedo is sRGB-encoded; `primary`
-/// writes it through a UNORM view.
-pub static ALBEDO: TargetDesc = TargetDesc {
-    name: "gbuffer albedo+occlusion",
-    format: vk::Format::R8G8B8A8_SRGB,
-    storage_format: Some(vk::Format::R8G8B8A8_UNORM),
-};
+/// `primary` pass writes the same ones). Albedo holds sRGB-encoded values in
+/// a UNORM image, encoded and decoded by the shaders (glsl/common/srgb.glsl)
+/// so both modes store the same bytes.
+pub static ALBEDO: TargetDesc = TargetDesc::new("gbuffer albedo+occlusion", vk::Format::R8G8B8A8_UNORM);
 pub static NORMAL: TargetDesc = TargetDesc::new("gbuffer normal+roughness", vk::Format::R16G16B16A16_SFLOAT);
 pub static MATERIAL: TargetDesc =
     TargetDesc::new("gbuffer metallic+transmission+ior", vk::Format::R8G8B8A8_UNORM);
