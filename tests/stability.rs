@@ -198,6 +198,7 @@ fn stability_cli() {
             .output()
             .unwrap()
     };
+    let mut p = Problems::default();
     for (args, needle) in [
         (&["--stability", "--cases", "nope"][..], "translate-1e3"),
         (&["--cases", "origin"], "--stability"),
@@ -206,18 +207,19 @@ fn stability_cli() {
     ] {
         let out = run(args);
         let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success() && !stderr.contains("panicked"), "{args:?}: {stderr}");
-        assert!(stderr.contains(needle), "{args:?}: '{needle}' not in {stderr}");
+        p.check(!out.status.success() && !stderr.contains("panicked"), || format!("{args:?} ran: {stderr}"));
+        p.check(stderr.contains(needle), || format!("{args:?}: '{needle}' not in {stderr}"));
     }
     let out = run(&["--stability", "--cases", "scale-1e3", "--frames", "3", "--warmup", "1"]);
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success(), "{stderr}");
-    assert!(
+    p.check(out.status.success(), || format!("the run failed: {stderr}"));
+    p.check(
         stderr.contains("stability [1/2] origin") && stderr.contains("stability [2/2] scale-1e3"),
-        "{stderr}"
+        || format!("no progress lines: {stderr}"),
     );
-    assert!(stdout.contains("of 6 case/backend rows pass"), "{stdout}");
-    let csv = std::fs::read_to_string(d.join("report.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 7, "{csv}");
-    assert!(csv.starts_with(CSV_HEADER), "{csv}");
+    p.check(stdout.contains("of 6 case/backend rows pass"), || format!("no summary: {stdout}"));
+    let csv = std::fs::read_to_string(d.join("report.csv")).unwrap_or_default();
+    p.check(csv.lines().count() == 7, || format!("not 6 rows: {csv}"));
+    p.check(csv.starts_with(CSV_HEADER), || format!("header: {csv}"));
+    assert!(p.0.is_empty(), "{} problem(s):\n{}", p.0.len(), p.0.join("\n"));
 }
