@@ -53,6 +53,9 @@ pub struct Row {
     pub flip_mean: f64,
     pub psnr: f64,
     pub max_ldr_diff: u8,
+    /// Share (percent) of pixels with an 8-bit channel off by more than
+    /// [`write::MARGINAL_DIFF`].
+    pub pct_far_off: f64,
     pub ms_median: f64,
     pub non_finite: usize,
     /// The checks that failed, in words; empty = pass.
@@ -240,6 +243,7 @@ fn compare(case: &Case, r: &Rendered, cases: &[Case], all: &[Rendered], exposure
         flip_mean: f64::NAN,
         psnr: f64::NAN,
         max_ldr_diff: 0,
+        pct_far_off: f64::NAN,
         ms_median: f64::NAN,
         non_finite: 0,
         failed: Vec::new(),
@@ -272,10 +276,16 @@ fn compare(case: &Case, r: &Rendered, cases: &[Case], all: &[Rendered], exposure
             None => Err(anyhow::anyhow!("rt mode not rendered")),
         },
     };
-    let errors = reference.and_then(|reference| metrics::compare_hdr(reference, &m.image, exposure));
+    let errors = reference.and_then(|reference| {
+        let e = metrics::compare_hdr(reference, &m.image, exposure)?;
+        let (a, b) = (reference.tone_mapped(exposure), m.image.tone_mapped(exposure));
+        let (_, far) = crate::metrics::diff_stats(&a.rgb, &b.rgb, 3, write::MARGINAL_DIFF);
+        Ok((e, far))
+    });
     match errors {
-        Ok(e) => {
+        Ok((e, far)) => {
             (row.flip_mean, row.psnr, row.max_ldr_diff) = (e.flip_mean, e.psnr, e.ldr.max);
+            row.pct_far_off = 100.0 * far;
         }
         Err(e) => {
             row.error = Some(format!("comparing with {}: {e:#}", row.against));
