@@ -178,12 +178,13 @@ pub fn markdown(report: &Stability) -> String {
     for r in marginal {
         let _ = writeln!(
             s,
-            "- {} on {}: PSNR {} dB, ꟻLIP {:.5}, but {:.2} % of the pixels differ by more than \
+            "- {} on {}: PSNR {} dB, ꟻLIP {:.5}, but {} pixel(s) ({:.2} %) differ by more than \
              {MARGINAL_DIFF}/255 (up to {}/255) from {}.",
             r.case,
             r.backend,
             db(r.psnr),
             r.flip_mean,
+            (r.pct_far_off / 100.0 * report.width as f64 * report.height as f64).round(),
             r.pct_far_off,
             r.max_ldr_diff,
             r.against
