@@ -371,7 +371,12 @@ fn make(name: &'static str, base: &Scene, cam: &Camera, dir: &Path) -> Result<Ca
             s.environment.map = Some(crate::scene::scene_file::load_hdr(&path)?);
             s.environment.map_path = Some(path.clone());
             let about = if hot {
-                format!("{}: the scene's environment with one texel of 1e5 (top row)", path.display())
+                format!(
+                    "{}: the scene's environment with one texel of 1e5 in its top row (a pole: its solid \
+                     angle is the map's smallest, so it adds ~1e5 x 7.4e-8 to the mean the ambient term \
+                     uses; it is uploaded as 32-bit float, above half's range)",
+                    path.display()
+                )
             } else {
                 format!("{}: the scene's environment as a 512x256 map (canonical)", path.display())
             };
