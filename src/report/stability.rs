@@ -79,6 +79,8 @@ pub struct Stability {
     pub frames: usize,
     pub warmup: usize,
     pub exposure: f32,
+    /// Whether the scene has textures (what explains some differences).
+    pub textured: bool,
     /// (name, about, against, checks) of every case, in report order.
     pub cases: Vec<(&'static str, String, Against, Vec<Check>)>,
     pub rows: Vec<Row>,
@@ -220,6 +222,7 @@ pub fn run(ctx: &Context, opts: &StabilityOptions) -> Result<Stability> {
         frames: opts.frames,
         warmup: opts.warmup,
         exposure,
+        textured: !scene.textures.is_empty(),
         cases: cases.iter().map(|c| (c.name, c.about.clone(), c.against.clone(), c.checks.clone())).collect(),
         rows,
         skipped,

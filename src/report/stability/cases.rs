@@ -283,11 +283,12 @@ fn make(name: &'static str, base: &Scene, cam: &Camera, dir: &Path) -> Result<Ca
             psnr(case(name, about, s, transform_camera(cam, 1.0, offset), origin), INVARIANT_PSNR)
         }
         n if n.starts_with("scale-") => {
-            let k: f32 = n["scale-".len()..].parse().context("scale")?;
+            let k64: f64 = n["scale-".len()..].parse().context("scale")?;
+            let k = k64 as f32;
             transform_scene(&mut s, k, Vec3::ZERO);
             let about = format!(
-                "scaled x{k:e} about the origin: camera, lights, near plane with it, point/spot intensity x{:e}",
-                k * k
+                "scaled x{k64:e} about the origin: camera, lights, near plane with it, point/spot intensity x{:.0e}",
+                k64 * k64
             );
             psnr(case(name, about, s, transform_camera(cam, k, Vec3::ZERO), origin), INVARIANT_PSNR)
         }
