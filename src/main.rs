@@ -128,7 +128,7 @@ enum Command {
         /// of the scene (moved far from the origin, scaled, grazing and
         /// facing mirrors, IOR near 1, a 1e5 environment texel, ...) on
         /// every available backend, with pass/fail thresholds.
-        #[arg(long, conflicts_with_all = ["knobs", "ref_backend", "no_ray_counts"])]
+        #[arg(long, conflicts_with_all = ["knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts"])]
         stability: bool,
         /// With --stability: only these cases (comma-separated; the
         /// canonicals they are compared with are added), e.g.
