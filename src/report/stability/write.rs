@@ -248,3 +248,68 @@ pub fn write_all(report: &Stability, dir: &Path) -> Result<Vec<PathBuf>> {
     files.push(md);
     Ok(files)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::cases::Check;
+    use super::*;
+
+    fn row(case: &'static str, psnr: f64, max: u8, failed: &[&str]) -> Row {
+        Row {
+            case,
+            backend: "compute".into(),
+            against: "origin".into(),
+            finite_pct: 100.0,
+            black_pct: 0.0,
+            white_pct: 0.0,
+            flip_mean: 0.01,
+            psnr,
+            max_ldr_diff: max,
+            pct_far_off: 1.5,
+            ms_median: 2.0,
+            non_finite: 0,
+            failed: failed.iter().map(|s| s.to_string()).collect(),
+            error: None,
+        }
+    }
+
+    #[test]
+    fn tables_name_failures_marginal_rows_and_reasons() {
+        let report = Stability {
+            scene: "s.toml".into(),
+            device: "d".into(),
+            width: 10,
+            height: 10,
+            frames: 3,
+            warmup: 1,
+            exposure: 1.0,
+            textured: false,
+            cases: vec![
+                ("translate-1e6", "far".into(), Against::Case("origin"), vec![Check::PsnrAtLeast(35.0)]),
+                ("translate-1e5", "far".into(), Against::Case("origin"), vec![Check::PsnrAtLeast(35.0)]),
+                ("ior-1.5", "glass".into(), Against::Case("origin"), Vec::new()),
+            ],
+            rows: vec![
+                row("translate-1e6", 30.0, 120, &["PSNR >= 35 dB (got 30.00 dB)"]),
+                row("translate-1e5", 40.0, 100, &[]),
+                row("ior-1.5", 30.0, 150, &[]),
+            ],
+            skipped: vec!["query: not here".into()],
+            images: Vec::new(),
+        };
+        let csv = csv(&report);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert!(lines[0].starts_with("case,backend,finite_pct,flip_mean,psnr,ms_median,pass,"));
+        assert!(lines[1].starts_with("translate-1e6,compute,100.000,0.010000,30.000,2.0000,false,"), "{csv}");
+        assert!(lines[2].starts_with("translate-1e5,compute,100.000,0.010000,40.000,2.0000,true,"), "{csv}");
+        let md = markdown(&report);
+        assert!(md.contains("- translate-1e6 on compute: PSNR >= 35 dB (got 30.00 dB)."), "{md}");
+        // A pass with pixels far off is listed; a case without thresholds is not.
+        assert!(md.contains("- translate-1e5 on compute: PSNR 40.00 dB"), "{md}");
+        assert!(md.contains("2 pixel(s) (1.50 %)"), "{md}");
+        assert!(!md.contains("- ior-1.5 on compute"), "{md}");
+        assert!(md.contains("- translate-1e6, translate-1e5: the world is f32"), "{md}");
+        assert!(md.contains("| ior-1.5 | origin | finite only"), "{md}");
+        assert!(md.contains("- query: not here"), "{md}");
+    }
+}
