@@ -67,7 +67,7 @@ fn why(case: &str, textured: bool) -> &'static str {
              digits, so far from the origin the geometry itself moves (the float spacing is 6e-5 at 1e3, \
              0.0078 at 1e5, 0.0625 at 1e6) and the raster's view-projection subtracts large numbers; the \
              ray-origin offset (16 ULPs of the hit's largest coordinate) grows with the distance, to 1.0 at \
-             1e6, so shadow rays start above small occluders and contact shadows vanish. Camera-relative \
+             1e6, so shadow rays most likely start above small occluders and contact shadows vanish. Camera-relative \
              rendering (instance transforms relative to the camera, computed in f64 on the host) is the \
              fix; it is a separate change"
         }
