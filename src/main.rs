@@ -124,6 +124,17 @@ enum Command {
         /// Do not count rays per frame (saves a pipeline compile per setting).
         #[arg(long)]
         no_ray_counts: bool,
+        /// Numerical-stability report instead: stiff and extreme variants
+        /// of the scene (moved far from the origin, scaled, grazing and
+        /// facing mirrors, IOR near 1, a 1e5 environment texel, ...) on
+        /// every available backend, with pass/fail thresholds.
+        #[arg(long, conflicts_with_all = ["knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts"])]
+        stability: bool,
+        /// With --stability: only these cases (comma-separated; the
+        /// canonicals they are compared with are added), e.g.
+        /// "translate-1e3,ior-1.0".
+        #[arg(long, requires = "stability", value_delimiter = ',')]
+        cases: Vec<String>,
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
@@ -422,8 +433,19 @@ fn run(cli: Cli) -> Result<()> {
             ref_backend,
             ref_mode,
             no_ray_counts,
+            stability,
+            cases,
             out,
         }) => {
+            if stability {
+                let opts = report::stability::StabilityOptions {
+                    frames,
+                    warmup,
+                    cases,
+                    ..report::stability::StabilityOptions::new(view.job()?, out)
+                };
+                return report::stability::stability_command(&gpu, &opts);
+            }
             let opts = ReportOptions {
                 frames,
                 warmup,

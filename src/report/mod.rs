@@ -7,13 +7,15 @@
 //!
 //! One technique per file: `metrics` (ꟻLIP, PSNR, relMSE), `knobs` (the
 //! knob table), `measure` (warm-up and GPU timing), `write` (tables),
-//! `plot` (the chart and the Pareto front), `compare` (two image files).
+//! `plot` (the chart and the Pareto front), `compare` (two image files),
+//! `stability` (`report --stability`: stiff and extreme variants of a scene).
 
 pub mod compare;
 pub mod knobs;
 pub mod measure;
 pub mod metrics;
 pub mod plot;
+pub mod stability;
 pub mod write;
 
 use std::path::{Path, PathBuf};

@@ -160,7 +160,7 @@ pub(super) fn procedural(o: &ObjectDef, kind: PrimitiveKind) -> Result<Primitive
 
 /// Equirectangular Radiance HDR; non-finite and negative texels (which would
 /// poison importance sampling) become 0.
-pub(super) fn load_hdr(path: &Path) -> Result<HdrImage> {
+pub fn load_hdr(path: &Path) -> Result<HdrImage> {
     let image = image::open(path)
         .with_context(|| format!("cannot load environment map '{}'", path.display()))?
         .into_rgb32f();
