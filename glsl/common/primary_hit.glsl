@@ -34,10 +34,9 @@ float pixel_spread_angle() {
     return atan(2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y)));
 }
 
-// Barycentrics (b1, b2) of the ray/triangle-plane intersection, clamped into
-// the triangle so the point is on the surface even for edge pixels whose
-// centre the rasterizer covered by the tie-breaking rule.
-vec2 plane_barycentrics(TriangleWorld t, vec3 o, vec3 d) {
+// Barycentrics (b1, b2) of the ray/triangle-plane intersection, anywhere in
+// the plane (for screen-space derivatives).
+vec2 plane_barycentrics_unclamped(TriangleWorld t, vec3 o, vec3 d) {
     vec3 e1 = t.p1 - t.p0;
     vec3 e2 = t.p2 - t.p0;
     vec3 pv = cross(d, e2);
@@ -45,11 +44,17 @@ vec2 plane_barycentrics(TriangleWorld t, vec3 o, vec3 d) {
     if (abs(det) < 1e-30) return vec2(1.0 / 3.0);
     float inv = 1.0 / det;
     vec3 tv = o - t.p0;
-    float u = dot(tv, pv) * inv;
     vec3 qv = cross(tv, e1);
-    float v = dot(d, qv) * inv;
-    u = clamp(u, 0.0, 1.0);
-    v = clamp(v, 0.0, 1.0);
+    return vec2(dot(tv, pv), dot(d, qv)) * inv;
+}
+
+// Barycentrics (b1, b2) of the ray/triangle-plane intersection, clamped into
+// the triangle so the point is on the surface even for edge pixels whose
+// centre the rasterizer covered by the tie-breaking rule.
+vec2 plane_barycentrics(TriangleWorld t, vec3 o, vec3 d) {
+    vec2 b = plane_barycentrics_unclamped(t, o, d);
+    float u = clamp(b.x, 0.0, 1.0);
+    float v = clamp(b.y, 0.0, 1.0);
     float s = u + v;
     if (s > 1.0) { u /= s; v /= s; }
     return vec2(u, v);

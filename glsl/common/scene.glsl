@@ -27,9 +27,15 @@ vec4 sample_tex(int index, vec2 uv, vec4 fallback) {
 // secondary hit samples mip 0 and textures seen in mirrors, through glass
 // or by pure-RT camera rays sparkle.
 float g_hit_lod = 0.0;
+// Pure-RT camera rays sample with the same screen-space uv gradients the
+// rasterizer derives (see primary.glsl), so both modes pick the same texels.
+bool g_hit_grad = false;
+vec2 g_uv_dx = vec2(0.0);
+vec2 g_uv_dy = vec2(0.0);
 
 vec4 sample_tex_cone(int index, vec2 uv, vec4 fallback) {
     if (index < 0) return fallback;
+    if (g_hit_grad) return textureGrad(textures[nonuniformEXT(index)], uv, g_uv_dx, g_uv_dy);
     vec2 size = vec2(textureSize(textures[nonuniformEXT(index)], 0));
     return textureLod(textures[nonuniformEXT(index)], uv, g_hit_lod + 0.5 * log2(size.x * size.y));
 }
