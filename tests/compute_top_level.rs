@@ -111,7 +111,7 @@ fn gpu_top_level_contains_the_host_fit_over_the_refit_roots() {
         let policy = if i == 2 { RebuildPolicy::ALWAYS } else { RebuildPolicy::NEVER };
         // What the renderer's plan / record / finish do, in one submission.
         gpu.update_dynamic(&scene).unwrap();
-        skinning.write(&scene).unwrap();
+        skinning.write(&scene, gpu.origin).unwrap();
         let updates = bvh.prepare_update(&scene, &policy).unwrap();
         let estimate: Bvh = bvh.host_topology().clone();
         ctx.begin_commands(cmd).unwrap();

@@ -25,6 +25,7 @@ use super::compute_refit::ComputeRefit;
 use super::compute_top_level::TopLevelRefit;
 use super::dynamic::{RebuildPolicy, RefitState, Update};
 use super::{instance_mask, instance_opaque};
+use crate::gpu::origin::RenderOrigin;
 use crate::gpu::scene::GpuScene;
 use crate::scene::{Aabb, Instance, Scene};
 use crate::vk::pipeline::{Binding, DescriptorSet};
@@ -94,6 +95,8 @@ pub struct ComputeBvh {
     /// Host ms of the last `prepare_update`: CPU tree rebuilds, top level.
     pub rebuild_ms: f64,
     pub top_level_ms: f64,
+    /// The GPU scene's render origin (instance transforms are relative to it).
+    origin: RenderOrigin,
 }
 
 fn append(nodes: &mut Vec<BvhNode>, prims: &mut Vec<u32>, bvh: Bvh, capacity: usize) -> BlasRef {
@@ -179,6 +182,7 @@ impl ComputeBvh {
             triangles,
             rebuild_ms: 0.0,
             top_level_ms: 0.0,
+            origin: gpu.origin,
         };
         if let Err(e) = bvh.create_buffers(ctx, scene, gpu, &nodes, &prims, staging_size) {
             bvh.destroy(ctx);
@@ -219,7 +223,7 @@ impl ComputeBvh {
     /// without, the host's bounds are exact. The GPU must not be reading the
     /// top level (the previous frame is done).
     fn write_top_level(&mut self, scene: &Scene) -> Result<()> {
-        let (tlas, instances) = top_level(scene, |inst| self.blas_of(inst));
+        let (tlas, instances) = top_level(scene, self.origin, |inst| self.blas_of(inst));
         self.tlas_nodes.write(0, bytemuck::cast_slice(&tlas.nodes))?;
         self.tlas_prims.write(0, bytemuck::cast_slice(&tlas.prim_indices))?;
         self.instances.write(0, bytemuck::cast_slice(&instances))?;
@@ -376,11 +380,14 @@ impl ComputeBvh {
         let bounds: Vec<Aabb> = scene
             .instances
             .iter()
-            .map(|inst| world_bounds(scene, inst, blas_of(inst)).unwrap_or(Aabb::EMPTY))
+            .map(|inst| {
+                world_bounds(scene, inst, &self.origin.matrix(&inst.world), blas_of(inst))
+                    .unwrap_or(Aabb::EMPTY)
+            })
             .collect();
         let mut refit = self.tlas.clone();
         refit.refit(&bounds);
-        (refit, top_level(scene, blas_of).0)
+        (refit, top_level(scene, self.origin, blas_of).0)
     }
 
     fn blas_of(&self, inst: &Instance) -> Option<&BlasRef> {
@@ -474,12 +481,12 @@ impl ComputeBvh {
 }
 
 /// World bounds of `inst`'s tree, if some ray can hit it.
-fn world_bounds(scene: &Scene, inst: &Instance, b: Option<&BlasRef>) -> Option<Aabb> {
+fn world_bounds(scene: &Scene, inst: &Instance, world: &Mat4, b: Option<&BlasRef>) -> Option<Aabb> {
     let n = b?.bvh.nodes.first()?;
     if instance_mask(scene, inst) == 0 {
         return None;
     }
-    let world = Aabb { min: n.min.into(), max: n.max.into() }.transformed(&inst.world);
+    let world = Aabb { min: n.min.into(), max: n.max.into() }.transformed(world);
     (world.min.is_finite() && world.max.is_finite()).then_some(world)
 }
 
@@ -487,6 +494,7 @@ fn world_bounds(scene: &Scene, inst: &Instance, b: Option<&BlasRef>) -> Option<A
 /// the per-instance records the shader needs.
 fn top_level<'a>(
     scene: &Scene,
+    origin: RenderOrigin,
     blas_of: impl Fn(&Instance) -> Option<&'a BlasRef>,
 ) -> (Bvh, Vec<GpuBvhInstance>) {
     let mut records = Vec::with_capacity(scene.instances.len());
@@ -496,8 +504,10 @@ fn top_level<'a>(
     let mut traceable = Vec::with_capacity(scene.instances.len());
     for (i, inst) in scene.instances.iter().enumerate() {
         let b = blas_of(inst);
-        let world_to_object = if inst.world.determinant().abs() > f32::MIN_POSITIVE {
-            inst.world.inverse()
+        // Relative to the render origin, like every GPU transform.
+        let world = origin.matrix(&inst.world);
+        let world_to_object = if world.determinant().abs() > f32::MIN_POSITIVE {
+            world.inverse()
         } else {
             Mat4::ZERO // a zero-scale instance can never be hit
         };
@@ -508,9 +518,9 @@ fn top_level<'a>(
             prim_offset: b.map(|b| b.prim_offset).unwrap_or(0),
             mask,
             opaque: instance_opaque(scene, inst) as u32,
-            object_to_world: inst.world.to_cols_array(),
+            object_to_world: world.to_cols_array(),
         });
-        if let Some(world) = world_bounds(scene, inst, b) {
+        if let Some(world) = world_bounds(scene, inst, &world, b) {
             bounds.push(world);
             traceable.push(i as u32);
         }

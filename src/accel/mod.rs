@@ -2,6 +2,7 @@
 //! the single shared vertex/index copy (PREFER_FAST_TRACE, compacted), and
 //! one TLAS over all instances. Sizes come from the driver's queries.
 
+use crate::gpu::origin::RenderOrigin;
 use anyhow::{Context as _, Result};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -181,6 +182,8 @@ pub struct SceneAccel {
     instances: Buffer,
     scratch: Scratch,
     pub build_ms: f64,
+    /// The GPU scene's render origin (instance transforms are relative to it).
+    origin: RenderOrigin,
 }
 
 impl SceneAccel {
@@ -198,6 +201,7 @@ impl SceneAccel {
             instances: Buffer::null(),
             scratch: Scratch { buffer: None, align: scratch_alignment(ctx) },
             build_ms: 0.0,
+            origin: gpu.origin,
         };
         match accel.fill(ctx, scene, gpu) {
             Ok(()) => Ok(accel),
@@ -424,7 +428,7 @@ impl SceneAccel {
                     vk::GeometryInstanceFlagsKHR::FORCE_NO_OPAQUE
                 };
                 let mask = if blas.is_some() { instance_mask(scene, inst) } else { 0 };
-                let t = inst.world.transpose().to_cols_array();
+                let t = self.origin.matrix(&inst.world).transpose().to_cols_array();
                 vk::AccelerationStructureInstanceKHR {
                     transform: vk::TransformMatrixKHR { matrix: t[..12].try_into().unwrap() },
                     instance_custom_index_and_mask: vk::Packed24_8::new(i as u32, mask),

@@ -3,6 +3,7 @@
 //! types. Sits between `vk` and the layers that use the GPU scene (`accel`,
 //! `render`): it imports only `vk` and `scene`.
 
+pub mod origin;
 pub mod scene;
 pub mod shared;
 pub mod types;

@@ -8,6 +8,7 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
+use super::origin::RenderOrigin;
 use super::shared::{
     SCENE_ENV_MAP, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS, SCENE_MATERIALS,
     SCENE_RAY_COUNTERS, SCENE_TEXTURES, SCENE_VERTICES,
@@ -62,6 +63,8 @@ pub struct GpuScene {
     pub light_count: u32,
     /// Mean environment radiance (solid-angle weighted), for the ambient term.
     pub env_mean: Vec3,
+    /// What the GPU's world coordinates are relative to (see origin.rs).
+    pub origin: RenderOrigin,
 }
 
 impl GpuScene {
@@ -108,10 +111,15 @@ impl GpuScene {
             draws: Vec::new(),
             light_count: 0,
             env_mean: Vec3::ZERO,
+            origin: RenderOrigin::default(),
         }
     }
 
     fn fill(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        self.origin = RenderOrigin::for_scene(scene);
+        if !self.origin.is_zero() {
+            log::info!("scene far from the world origin: GPU coordinates are relative to {}", self.origin.0);
+        }
         let (vertices, indices, ranges, skinned, skinned_bounds) = upload_geometry(ctx, scene)?;
         (self.vertices, self.indices) = (vertices, indices);
         (self.ranges, self.skinned, self.skinned_bounds) = (ranges, skinned, skinned_bounds);
@@ -226,14 +234,14 @@ impl GpuScene {
 
         self.draws = build_draws(scene, &self.ranges, &self.skinned);
         self.light_count = scene.lights.len() as u32;
-        write_instances(scene, &self.ranges, &self.skinned, &mut self.instances)?;
-        write_lights(scene, &mut self.lights)
+        write_instances(scene, self.origin, &self.ranges, &self.skinned, &mut self.instances)?;
+        write_lights(scene, self.origin, &mut self.lights)
     }
 
     /// Re-writes instance transforms and lights (animation, later issues).
     pub fn update_dynamic(&mut self, scene: &Scene) -> Result<()> {
-        write_instances(scene, &self.ranges, &self.skinned, &mut self.instances)?;
-        write_lights(scene, &mut self.lights)
+        write_instances(scene, self.origin, &self.ranges, &self.skinned, &mut self.instances)?;
+        write_lights(scene, self.origin, &mut self.lights)
     }
 
     /// Where `inst`'s vertices live: its own deformed range when skinned.
@@ -421,6 +429,7 @@ fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
 
 fn write_instances(
     scene: &Scene,
+    origin: RenderOrigin,
     ranges: &[Vec<PrimitiveRange>],
     skinned: &[PrimitiveRange],
     buf: &mut Buffer,
@@ -433,7 +442,7 @@ fn write_instances(
             let props = &scene.objects.get(inst.object).map(|o| o.props.clone()).unwrap_or_default();
             let normal = normal_matrix(&inst.world);
             GpuInstance {
-                world: inst.world.to_cols_array(),
+                world: origin.matrix(&inst.world).to_cols_array(),
                 normal_matrix: normal.to_cols_array(),
                 material: scene.instance_material(inst) as u32,
                 first_index: r.first_index,
@@ -457,12 +466,12 @@ fn normal_matrix(world: &Mat4) -> Mat4 {
     Mat4::from_mat3(n)
 }
 
-fn write_lights(scene: &Scene, buf: &mut Buffer) -> Result<()> {
-    let data: Vec<GpuLight> = scene.lights.iter().map(gpu_light).collect();
+fn write_lights(scene: &Scene, origin: RenderOrigin, buf: &mut Buffer) -> Result<()> {
+    let data: Vec<GpuLight> = scene.lights.iter().map(|l| gpu_light(l, origin)).collect();
     buf.write(0, bytemuck::cast_slice(&data))
 }
 
-fn gpu_light(l: &crate::scene::Light) -> GpuLight {
+fn gpu_light(l: &crate::scene::Light, origin: RenderOrigin) -> GpuLight {
     let (kind, spot_scale, spot_offset) = match l.kind {
         LightKind::Directional => (LIGHT_DIRECTIONAL, 0.0, 0.0),
         LightKind::Point => (LIGHT_POINT, 0.0, 0.0),
@@ -475,7 +484,7 @@ fn gpu_light(l: &crate::scene::Light) -> GpuLight {
         }
     };
     GpuLight {
-        position: l.position.to_array(),
+        position: origin.point(l.position).to_array(),
         kind,
         direction: l.direction.normalize_or(Vec3::NEG_Y).to_array(),
         range: l.range.unwrap_or(0.0),

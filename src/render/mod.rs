@@ -279,7 +279,7 @@ impl Renderer {
     fn plan_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         self.gpu.update_dynamic(scene)?;
         if let Some(s) = &mut self.skinning {
-            s.write(scene)?;
+            s.write(scene, self.gpu.origin)?;
         }
         if let Some(t) = &mut self.tracer {
             t.prepare_update(ctx, scene, &self.gpu, &self.rebuild_policy)?;
@@ -418,6 +418,8 @@ impl Renderer {
         self.ensure_frame(ctx, scene, settings)?;
         let e = self.extent;
         let aspect = e.width as f32 / e.height.max(1) as f32;
+        // The camera relative to the render origin, like every GPU transform.
+        let camera = &Camera { world: self.gpu.origin.matrix(&camera.world), ..camera.clone() };
         let view = camera.view();
         let proj = camera.projection(aspect);
         let view_proj = proj * view;

@@ -9,6 +9,7 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
+use crate::gpu::origin::RenderOrigin;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::shared::{SKIN_BOUNDS, SKIN_DEST, SKIN_JOINTS, SKIN_SOURCE};
 use crate::scene::{Aabb, Scene, Vertex};
@@ -164,8 +165,11 @@ impl Skinning {
 
     /// Writes this frame's joint matrices and resets the bounds accumulators.
     /// The GPU must not be using them (the caller waited).
-    pub fn write(&mut self, scene: &Scene) -> Result<()> {
-        let world = scene.world_matrices();
+    pub fn write(&mut self, scene: &Scene, origin: RenderOrigin) -> Result<()> {
+        // Node matrices relative to the render origin before they are
+        // combined: inverse(mesh node) x joint far from the world origin
+        // would cancel in f32.
+        let world: Vec<Mat4> = scene.world_matrices().iter().map(|m| origin.matrix(m)).collect();
         let mut m: Vec<Mat4> = Vec::new();
         for &(node, skin) in &self.sources {
             m.extend(scene.joint_matrices(skin, node, &world));
