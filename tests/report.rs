@@ -2,6 +2,7 @@
 //! scene) checks its own numbers and files; `compare` and `bench --csv` end
 //! to end through the binary.
 mod common;
+use common::split_csv;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -20,25 +21,6 @@ fn bin() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_hybrid-rt"));
     c.env("HYBRID_RT_VALIDATION", "1");
     c
-}
-
-/// Splits a CSV line, honouring RFC 4180 quotes.
-fn split_csv(line: &str) -> Vec<String> {
-    let (mut fields, mut cur, mut quoted, mut chars) =
-        (Vec::new(), String::new(), false, line.chars().peekable());
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => fields.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
-    }
-    fields.push(cur);
-    fields
 }
 
 fn decoded_size(path: &Path) -> (u32, u32) {

@@ -3,6 +3,7 @@
 //! of those cases hold, report.csv parses with the exact header, report.md
 //! states the thresholds; and the command line refuses bad input.
 mod common;
+use common::split_csv;
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -15,25 +16,6 @@ fn tmp(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-/// Splits a CSV line, honouring RFC 4180 quotes (as tests/report.rs).
-fn split_csv(line: &str) -> Vec<String> {
-    let (mut fields, mut cur, mut quoted, mut chars) =
-        (Vec::new(), String::new(), false, line.chars().peekable());
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => fields.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
-    }
-    fields.push(cur);
-    fields
 }
 
 /// The cases asserted here (their canonicals come along).
