@@ -186,6 +186,9 @@ pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let out = renderer.render(ctx, &scene, &camera, &job.settings);
     renderer.destroy(ctx);
+    if let Some(w) = out.as_ref().ok().and_then(FrameOutput::truncation_warning) {
+        log::warn!("{w}");
+    }
     out
 }
 
@@ -473,6 +476,9 @@ fn bench_frame(
         counts = renderer.update_counts;
     }
     let out = renderer.render(ctx, scene, &camera, &settings)?;
+    if let Some(w) = out.truncation_warning().filter(|_| i == warmup) {
+        log::warn!("{w}");
+    }
     Ok(BenchFrame { update, timings: out.timings, counts })
 }
 

@@ -80,16 +80,21 @@ struct Branch {
     Cone cone;
 };
 
-#define STACK_SIZE 16
-Branch g_stack[STACK_SIZE];
+Branch g_stack[BRANCH_STACK_SIZE];
 int g_sp = 0;
+// The pixel's tree lost a branch (full stack, or the ray budget ran out).
+bool g_truncated = false;
 
 void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone) {
     // Importance cutoff: branches that can change the pixel by less than
     // MIN_WEIGHT of their radiance are not traced.
-    if (g_sp < STACK_SIZE && max3(w) >= MIN_WEIGHT && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
-        g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone);
-        g_sp++;
+    if (max3(w) >= MIN_WEIGHT && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
+        if (g_sp < int(BRANCH_STACK_SIZE)) {
+            g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone);
+            g_sp++;
+        } else {
+            g_truncated = true;
+        }
     }
 }
 
@@ -154,10 +159,17 @@ vec3 shade(Surface s, vec3 v, vec3 gn, bool back_face, vec3 w, uint depth, Cone 
     return w * c;
 }
 
-// Traces every pending branch to completion.
+// Traces every pending branch to completion, at most RAY_BUDGET_PER_PIXEL
+// rays; a cut tree is counted (RAY_COUNTER_TRUNCATED) so the host can warn.
 vec3 trace_branches() {
     vec3 radiance = vec3(0.0);
+    uint traced = 0u;
     while (g_sp > 0) {
+        if (traced == RAY_BUDGET_PER_PIXEL) {
+            g_truncated = true;
+            break;
+        }
+        traced++;
         g_sp--;
         Branch b = g_stack[g_sp];
         RayHit h;
@@ -172,6 +184,7 @@ vec3 trace_branches() {
             radiance += b.weight * environment(b.dir);
         }
     }
+    if (g_truncated) atomicAdd(ray_counts[RAY_COUNTER_TRUNCATED], 1u);
     return radiance;
 }
 

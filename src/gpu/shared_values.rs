@@ -101,6 +101,14 @@ shared! {
     uint RAY_KIND_CAMERA = 0;
     uint RAY_KIND_SHADOW = 1;
     uint RAY_KIND_SECONDARY = 2;
+    // Counter slot of the pixels whose reflection/refraction tree was cut
+    // (always counted): by the per-pixel ray budget or a full branch stack.
+    uint RAY_COUNTER_TRUNCATED = 3;
+    // Most secondary rays one pixel traces; bounds `--min-weight 0` with a
+    // deep `--max-depth` (2^depth branches through glass).
+    uint RAY_BUDGET_PER_PIXEL = 1024;
+    // Pending branches one pixel holds (the integrator's explicit stack).
+    uint BRANCH_STACK_SIZE = 16;
 
     // Materials (Material.alpha_mode, Material.flags).
     uint ALPHA_OPAQUE = 0;

@@ -18,6 +18,7 @@ use glam::Mat4;
 use gpu_allocator::MemoryLocation;
 
 use crate::accel::dynamic::RebuildPolicy;
+use crate::gpu::shared::RAY_COUNTER_TRUNCATED;
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
@@ -90,6 +91,10 @@ pub struct FrameOutput {
     /// Rays traced by kind (camera, shadow, secondary) when
     /// `Effects::count_rays` is on, else zeros.
     pub ray_counts: [u32; 3],
+    /// Pixels whose reflection/refraction tree was cut by the per-pixel ray
+    /// budget or a full branch stack (`RAY_BUDGET_PER_PIXEL`,
+    /// `BRANCH_STACK_SIZE`); always counted.
+    pub truncated_pixels: u32,
 }
 
 /// A pass of the current frame with what it declared.
@@ -527,8 +532,9 @@ impl Renderer {
         let hdr = bytemuck::pod_collect_to_vec::<u8, f32>(self.readback_hdr.read()?);
         let counts: Vec<u32> = bytemuck::pod_collect_to_vec(self.gpu.ray_counters.read()?);
         let ray_counts = [counts[0], counts[1], counts[2]];
+        let truncated_pixels = counts[RAY_COUNTER_TRUNCATED as usize];
         let e = self.extent;
-        Ok(FrameOutput { width: e.width, height: e.height, ldr, hdr, timings, ray_counts })
+        Ok(FrameOutput { width: e.width, height: e.height, ldr, hdr, timings, ray_counts, truncated_pixels })
     }
 
     pub fn destroy(&mut self, ctx: &Context) {

@@ -7,6 +7,19 @@ use anyhow::{Context as _, Result};
 use super::FrameOutput;
 
 impl FrameOutput {
+    /// What to tell the user when reflection/refraction trees were cut.
+    pub fn truncation_warning(&self) -> Option<String> {
+        use crate::gpu::shared::{BRANCH_STACK_SIZE, RAY_BUDGET_PER_PIXEL};
+        (self.truncated_pixels > 0).then(|| {
+            format!(
+                "{} pixel(s) reached the limit of {RAY_BUDGET_PER_PIXEL} secondary rays or {BRANCH_STACK_SIZE} \
+                 pending branches per pixel: their reflection/refraction trees were cut (lower --max-depth or \
+                 raise --min-weight)",
+                self.truncated_pixels
+            )
+        })
+    }
+
     /// The tone-mapped image without alpha.
     pub fn rgb8(&self) -> image::RgbImage {
         let rgb: Vec<u8> = self.ldr.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();

@@ -104,6 +104,9 @@ pub fn measure(
         last = Some(out);
     }
     let out = last.expect("at least one timed frame");
+    if let Some(w) = out.truncation_warning() {
+        log::warn!("{w}");
+    }
     let (median, p95) = median_p95(&totals);
     let config = renderer.shading_config();
     let (image, non_finite) = HdrImage::from_rgba(out.width, out.height, &out.hdr);

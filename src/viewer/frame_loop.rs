@@ -77,6 +77,7 @@ impl Viewer {
                 hdr: Vec::new(),
                 timings: Vec::new(),
                 ray_counts: [0; 3],
+                truncated_pixels: 0,
             };
             frame.save_png(&shot.path)
         })();
