@@ -9,6 +9,7 @@
 #endif
 #include "material.glsl"
 #include "offset.glsl"
+#include "primary_hit.glsl"
 
 struct RayHit {
     uint instance;
@@ -39,11 +40,38 @@ vec2 hit_uv(HitVertices hv, vec2 b) {
     return hv.v0.uv * w.x + hv.v1.uv * w.y + hv.v2.uv * w.z;
 }
 
+// The uv gradients the rasterizer would use on (instance, primitive) at
+// pixel `px` (differences to the neighbouring pixels, whose camera rays
+// meet the triangle's plane), so pure-RT camera rays filter textures, alpha
+// cut-outs included, exactly like the G-buffer pass.
+void camera_uv_gradients(uint instance, uint primitive, ivec2 px, out vec2 dx, out vec2 dy) {
+    TriangleWorld t = triangle_world(instance, primitive);
+    HitVertices hv = hit_vertices(instances[instance], primitive);
+    vec2 c = vec2(px) + 0.5;
+    vec2 b0 = plane_barycentrics_unclamped(t, frame.camera_pos, camera_ray_dir(c));
+    vec2 bx = plane_barycentrics_unclamped(t, frame.camera_pos, camera_ray_dir(c + vec2(1.0, 0.0)));
+    vec2 by = plane_barycentrics_unclamped(t, frame.camera_pos, camera_ray_dir(c + vec2(0.0, 1.0)));
+    vec2 uv0 = hit_uv(hv, b0);
+    dx = hit_uv(hv, bx) - uv0;
+    dy = hit_uv(hv, by) - uv0;
+}
+
+// Set while a pure-RT camera ray of pixel g_camera_pixel is traced: its
+// alpha tests read filtered alpha like the raster's; every other ray tests
+// the finest level.
+bool g_camera_ray = false;
+ivec2 g_camera_pixel = ivec2(0);
+
 // Base-colour alpha at a hit (for alpha-masked any-hit decisions).
 float hit_alpha(uint instance, uint primitive, vec2 b) {
     Instance inst = instances[instance];
     Material m = materials[inst.material];
     vec2 uv = hit_uv(hit_vertices(inst, primitive), b);
+    if (g_camera_ray && m.tex_base_color >= 0) {
+        vec2 dx, dy;
+        camera_uv_gradients(instance, primitive, g_camera_pixel, dx, dy);
+        return m.base_color.a * textureGrad(textures[nonuniformEXT(m.tex_base_color)], uv, dx, dy).a;
+    }
     return m.base_color.a * sample_tex_lod(m.tex_base_color, uv, 0.0, vec4(1.0)).a;
 }
 

@@ -10,6 +10,10 @@ struct TracePayload {
     float t;
     uint hit;            // 1 = something was hit (for shadow rays: blocked)
     vec3 transmittance;  // shadow rays: product over transmissive crossings
+    // A pure-RT camera ray's pixel (x | y << 16), for its alpha tests' LOD;
+    // NOT_A_CAMERA_RAY otherwise.
+    uint camera_pixel;
 };
+const uint NOT_A_CAMERA_RAY = 0xffffffffu;
 // Hit groups: HIT_GROUP_* in generated/shared.glsl.
 #endif
