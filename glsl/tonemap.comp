@@ -1,22 +1,36 @@
 #version 460
-// Pass `tonemap`: exposure + Reinhard on luminance, then sRGB encoding into
-// the 8-bit output.
+// Pass `tonemap`: exposure (fixed, or the luminance pass's adapted one),
+// the tone curve, sRGB encoding into the 8-bit output. A NaN or Inf pixel
+// is counted (ray counter RAY_COUNTER_BAD_PIXELS) and shown magenta, the
+// convention the render command's PNGs use: never hidden, and never
+// allowed to spread (no reduction reads it).
+#extension GL_EXT_scalar_block_layout : require
 #include "common/scene.glsl"
 #include "common/srgb.glsl"
+#include "common/tonemap.glsl"
+#include "common/exposure_state.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = SET_PASS, binding = TONEMAP_IN, rgba32f) uniform readonly image2D hdr_in;
 layout(set = SET_PASS, binding = TONEMAP_OUT, rgba8) uniform writeonly image2D ldr_out;
 
-
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(uvec2(px), frame.resolution))) return;
     vec3 c = imageLoad(hdr_in, px).rgb;
+    if (any(isnan(c)) || any(isinf(c))) {
+        atomicAdd(ray_counts[RAY_COUNTER_BAD_PIXELS], 1u);
+        imageStore(ldr_out, px, vec4(1.0, 0.0, 1.0, 1.0));
+        return;
+    }
     if (frame.debug_view == DEBUG_NONE) {
-        c *= frame.exposure;
-        float l = dot(c, vec3(0.2126, 0.7152, 0.0722));
-        c *= l > 0.0 ? (1.0 / (1.0 + l)) : 1.0;
+        bool automatic = frame.auto_exposure != AUTO_EXPOSURE_OFF;
+        float exposure = automatic ? exposure_state.exposure : frame.exposure;
+        // Bounded, so that no curve overflows (1e18 squared is finite).
+        c = min(max(c, vec3(0.0)) * exposure, vec3(1e18));
+        // No explicit white point: the frame's brightest pixel, exposed.
+        float white = frame.white > 0.0 ? frame.white : exposure_state.max_luminance * exposure;
+        c = tonemap_apply(frame.tonemap, c, white);
     }
     imageStore(ldr_out, px, vec4(srgb_encode(c), 1.0));
 }

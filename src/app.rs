@@ -186,10 +186,37 @@ pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let out = renderer.render(ctx, &scene, &camera, &job.settings);
     renderer.destroy(ctx);
-    if let Some(w) = out.as_ref().ok().and_then(FrameOutput::truncation_warning) {
-        log::warn!("{w}");
+    if let Ok(frame) = &out {
+        log_frame_health(frame);
     }
     out
+}
+
+/// Logs what the frame's counters and exposure state say: cut
+/// reflection/refraction trees, NaN/Inf pixels, the measured exposure.
+pub fn log_frame_health(frame: &FrameOutput) {
+    if let Some(w) = frame.truncation_warning() {
+        log::warn!("{w}");
+    }
+    if frame.bad_pixels > 0 {
+        log::warn!(
+            "{} pixel(s) reached tone mapping with NaN or Inf radiance: shown magenta, left out of the \
+             exposure measurement",
+            frame.bad_pixels
+        );
+    }
+    if let Some(e) = frame.exposure {
+        log::info!(
+            "auto exposure: log-average luminance {:.4e}, target {:.4e}, adapted {:.4e}, exposure {:.4e}, \
+             max luminance {:.4e} ({} finite pixels)",
+            e.log_average,
+            e.target,
+            e.adapted,
+            e.exposure,
+            e.max_luminance,
+            e.finite_pixels
+        );
+    }
 }
 
 /// `render`: one frame to PNG (and optionally linear HDR). With `strict`,
@@ -355,6 +382,10 @@ pub struct BenchReport {
     pub frame_total: PassStats,
     /// Camera, shadow and secondary rays of the first camera's frame.
     pub rays_first_frame: [u32; 3],
+    /// NaN/Inf pixels tone mapping met, over the measured frames.
+    pub bad_pixels: u64,
+    /// The auto exposure of the last measured frame (None: fixed).
+    pub exposure: Option<crate::render::tone::ExposureState>,
 }
 
 impl BenchReport {
@@ -390,6 +421,13 @@ impl BenchReport {
             }
             s.push('\n');
         }
+        if let Some(e) = self.exposure {
+            s.push_str(&format!(
+                "auto exposure (last frame): log-average luminance {:.4e}, adapted {:.4e}, exposure {:.4e}\n",
+                e.log_average, e.adapted, e.exposure
+            ));
+        }
+        s.push_str(&format!("bad pixels (NaN/Inf radiance, shown magenta): {}\n", self.bad_pixels));
         s
     }
 }
@@ -438,6 +476,8 @@ struct BenchFrame {
     update: Vec<(&'static str, f64)>,
     timings: Vec<(&'static str, f64)>,
     counts: [usize; 2],
+    bad_pixels: u32,
+    exposure: Option<crate::render::tone::ExposureState>,
 }
 
 /// Renders frame `i` of a benchmark of `variant` (warm-up frames first:
@@ -476,10 +516,16 @@ fn bench_frame(
         counts = renderer.update_counts;
     }
     let out = renderer.render(ctx, scene, &camera, &settings)?;
-    if let Some(w) = out.truncation_warning().filter(|_| i == warmup) {
-        log::warn!("{w}");
+    if i == warmup {
+        log_frame_health(&out);
     }
-    Ok(BenchFrame { update, timings: out.timings, counts })
+    Ok(BenchFrame {
+        update,
+        timings: out.timings,
+        counts,
+        bad_pixels: out.bad_pixels,
+        exposure: out.exposure,
+    })
 }
 
 /// `bench`: every variant is warmed up first (one ray-counting frame, then
@@ -510,6 +556,9 @@ pub fn bench(
         bail!("bench: not every variant asked for can run on {}: {}", ctx.caps.name, unavailable.join("; "));
     }
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
+    // The camera path adapts like a played-back animation: 1 / fps per frame
+    // (the first frame converges at once).
+    renderer.adapt_dt = Some(1.0 / job.fps.max(1e-3));
     let mut reports = Vec::new();
     let n = variants.len();
     let result: Result<()> = (|| {
@@ -550,6 +599,7 @@ pub fn bench(
             let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
             let mut totals = Vec::new();
             let mut counts = [0usize; 2];
+            let (mut bad_pixels, mut exposure) = (0u64, None);
             for i in warmup..warmup + frames {
                 let f = bench_frame(
                     ctx,
@@ -563,6 +613,8 @@ pub fn bench(
                     (warmup, frames),
                 )?;
                 counts = [counts[0] + f.counts[0], counts[1] + f.counts[1]];
+                bad_pixels += f.bad_pixels as u64;
+                exposure = f.exposure;
                 let mut total = 0.0;
                 for &(name, ms) in f.update.iter().chain(&f.timings).filter(|(n, _)| *n != "readback") {
                     total += ms;
@@ -595,6 +647,8 @@ pub fn bench(
                 passes: per_pass.into_iter().map(|(n, v)| stats(n, v)).collect(),
                 frame_total: stats("frame", totals),
                 rays_first_frame: rays[k],
+                bad_pixels,
+                exposure,
             });
         }
         Ok(())

@@ -11,6 +11,7 @@ use glam::Vec3;
 
 use hybrid_rt::app::{self, AccelUpdate, CameraChoice, GpuOptions, RenderJob};
 use hybrid_rt::render::shading::{Backend, Effects, Mode};
+use hybrid_rt::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use hybrid_rt::render::{DebugView, RenderSettings};
 use hybrid_rt::report::{self, ReferenceSettings, ReportOptions};
 use hybrid_rt::viewer::{self, PresentMode, ViewerOptions};
@@ -135,6 +136,12 @@ enum Command {
         /// "translate-1e3,ior-1.0".
         #[arg(long, requires = "stability", value_delimiter = ',')]
         cases: Vec<String>,
+        /// Tone operators side by side instead: a contact sheet per Radiance
+        /// .hdr map (comma-separated), the scene lit by each; rows operators,
+        /// columns key values (log-average auto exposure) and the fixed
+        /// --exposure; tone_sheet.md with the measured exposures and pass ms.
+        #[arg(long, value_delimiter = ',', conflicts_with_all = ["stability", "knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts"])]
+        tone_sheet: Vec<PathBuf>,
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
@@ -200,9 +207,12 @@ struct ViewArgs {
     /// Vertical field of view in degrees, in (0, 180), for --look-from/--look-at [default: 60].
     #[arg(long, value_parser = parse_fov, allow_hyphen_values = true)]
     fov: Option<f32>,
-    /// Exposure multiplier before tone mapping (finite, > 0).
+    /// Exposure multiplier before tone mapping (finite, > 0); with
+    /// --auto-exposure, a compensation on the measured exposure.
     #[arg(long, default_value_t = 1.0, value_parser = parse_exposure, allow_hyphen_values = true)]
     exposure: f32,
+    #[command(flatten)]
+    tone: ToneArgs,
     /// Show a G-buffer target instead of the lit image.
     #[arg(long, value_enum, default_value_t = DebugView::None)]
     debug_view: DebugView,
@@ -236,6 +246,104 @@ struct ViewArgs {
     /// when not given).
     #[arg(long, value_parser = parse_fps, allow_hyphen_values = true)]
     fps: Option<f32>,
+}
+
+/// Tone mapping and auto exposure (render/tone.rs).
+#[derive(Args, Clone)]
+struct ToneArgs {
+    /// Tone curve.
+    #[arg(long, value_enum, default_value_t = ToneOperator::Reinhard)]
+    tonemap: ToneOperator,
+    /// Exposure from the frame's luminance: off (fixed --exposure),
+    /// log-average (Reinhard's key / log-average), histogram (percentile-clipped
+    /// log-luminance histogram). Still frames converge at once; bench and
+    /// view adapt over time.
+    #[arg(long, value_enum, default_value_t = AutoExposure::Off)]
+    auto_exposure: AutoExposure,
+    /// Key: the exposed luminance the frame's average maps to (finite, > 0),
+    /// with --auto-exposure [default: 0.18].
+    #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true)]
+    key: Option<f32>,
+    /// White point of --tonemap reinhard-white in exposed luminance (finite,
+    /// > 0) [default: the frame's brightest pixel].
+    #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true)]
+    white_point: Option<f32>,
+    /// Histogram auto exposure: the darkest and brightest fractions of
+    /// pixels left out, "LOW,HIGH" with 0 <= LOW < HIGH <= 1 [default: 0.1,0.9].
+    #[arg(long, value_parser = parse_percentiles, allow_hyphen_values = true)]
+    histogram_clip: Option<(f32, f32)>,
+    /// Histogram auto exposure: adaptation speeds in EV per second,
+    /// "BRIGHTEN,DARKEN" (finite, > 0) [default: 3,1].
+    #[arg(long, value_parser = parse_speeds, allow_hyphen_values = true)]
+    adapt_speed: Option<(f32, f32)>,
+}
+
+impl ToneArgs {
+    fn settings(&self) -> ToneSettings {
+        let d = ToneSettings::default();
+        let (histogram_low, histogram_high) =
+            self.histogram_clip.unwrap_or((d.histogram_low, d.histogram_high));
+        let (speed_brighten, speed_darken) = self.adapt_speed.unwrap_or((d.speed_brighten, d.speed_darken));
+        ToneSettings {
+            operator: self.tonemap,
+            auto_exposure: self.auto_exposure,
+            key: self.key.unwrap_or(d.key),
+            white: self.white_point,
+            histogram_low,
+            histogram_high,
+            speed_brighten,
+            speed_darken,
+        }
+    }
+
+    /// A tone option the chosen operator or exposure mode does not read.
+    fn without_effect(&self) -> Option<&'static str> {
+        let histogram = self.auto_exposure == AutoExposure::Histogram;
+        if self.key.is_some() && self.auto_exposure == AutoExposure::Off {
+            return Some("--key has no effect without --auto-exposure (the fixed --exposure applies)");
+        }
+        if self.white_point.is_some() && self.tonemap != ToneOperator::ReinhardWhite {
+            return Some("--white-point has no effect without --tonemap reinhard-white");
+        }
+        if (self.histogram_clip.is_some() || self.adapt_speed.is_some()) && !histogram {
+            return Some(
+                "--histogram-clip and --adapt-speed have no effect without --auto-exposure histogram",
+            );
+        }
+        None
+    }
+}
+
+/// "A,B": two finite floats.
+fn parse_pair(s: &str, what: &str) -> Result<(f32, f32), String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let [a, b] = parts[..] else { return Err(format!("'{s}': expected {what}")) };
+    let num = |t: &str| -> Result<f32, String> {
+        t.trim()
+            .parse::<f32>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or(format!("'{t}' is not a finite number (expected {what})"))
+    };
+    Ok((num(a)?, num(b)?))
+}
+
+fn parse_percentiles(s: &str) -> Result<(f32, f32), String> {
+    let (lo, hi) = parse_pair(s, "LOW,HIGH with 0 <= LOW < HIGH <= 1")?;
+    if (0.0..1.0).contains(&lo) && lo < hi && hi <= 1.0 {
+        Ok((lo, hi))
+    } else {
+        Err(format!("{lo},{hi} is out of range (expected LOW,HIGH with 0 <= LOW < HIGH <= 1)"))
+    }
+}
+
+fn parse_speeds(s: &str) -> Result<(f32, f32), String> {
+    let (b, d) = parse_pair(s, "BRIGHTEN,DARKEN in EV per second, > 0")?;
+    if b > 0.0 && d > 0.0 {
+        Ok((b, d))
+    } else {
+        Err(format!("{b},{d} is out of range (expected BRIGHTEN,DARKEN in EV per second, > 0)"))
+    }
 }
 
 /// A finite float for `flag` that `ok` accepts; `range` says what is.
@@ -295,6 +403,9 @@ impl ViewArgs {
     /// Options that would change nothing here: refused (a usage error), so a
     /// typo'd or misplaced option is not silently ignored.
     fn without_effect(&self, command: &str) -> Option<String> {
+        if let Some(why) = self.tone.without_effect() {
+            return Some(why.into());
+        }
         if self.fov.is_some() && self.look_from.is_none() {
             return Some(
                 "--fov has no effect without --look-from/--look-at (scene cameras keep their own)".into(),
@@ -336,6 +447,7 @@ impl ViewArgs {
             camera,
             settings: RenderSettings {
                 exposure: self.exposure,
+                tone: self.tone.settings(),
                 debug_view: self.debug_view,
                 mode: self.mode,
                 backend: self.backend,
@@ -435,8 +547,19 @@ fn run(cli: Cli) -> Result<()> {
             no_ray_counts,
             stability,
             cases,
+            tone_sheet,
             out,
         }) => {
+            if !tone_sheet.is_empty() {
+                let job = view.job()?;
+                let files = app::with_context(&gpu, |ctx| {
+                    report::tone_sheet::tone_sheets(ctx, &job, &tone_sheet, warmup, &out)
+                })?;
+                for f in files {
+                    println!("wrote {}", f.display());
+                }
+                return Ok(());
+            }
             if stability {
                 let opts = report::stability::StabilityOptions {
                     frames,

@@ -11,9 +11,10 @@ layout(set = SET_SCENE, binding = SCENE_INSTANCES, scalar) readonly buffer Insta
 layout(set = SET_SCENE, binding = SCENE_LIGHTS, scalar) readonly buffer Lights { Light lights[]; };
 layout(set = SET_SCENE, binding = SCENE_ENV_MAP) uniform sampler2D env_map;
 layout(set = SET_SCENE, binding = SCENE_TEXTURES) uniform sampler2D textures[];  // bindless: last binding
-// Ray counters for benchmarks (written only when COUNT_RAYS is on):
+// Ray counters for benchmarks (by kind only when COUNT_RAYS is on; the
+// truncated and bad-pixel slots always):
 // by RAY_KIND_*: camera rays (pure RT), shadow rays, reflection/refraction rays.
-layout(set = SET_SCENE, binding = SCENE_RAY_COUNTERS) buffer RayCounters { uint ray_counts[4]; };
+layout(set = SET_SCENE, binding = SCENE_RAY_COUNTERS) buffer RayCounters { uint ray_counts[RAY_COUNTER_SLOTS]; };
 
 vec4 sample_tex(int index, vec2 uv, vec4 fallback) {
     return index < 0 ? fallback : texture(textures[nonuniformEXT(index)], uv);

@@ -80,6 +80,22 @@ struct Frame {
     uint frame_index;
     uint flags;
     float znear;
+    // Tone mapping (render/tone.rs): TONEMAP_*, AUTO_EXPOSURE_*, the key,
+    // the white point (<= 0: the frame's brightest pixel), the adaptation
+    // step in seconds (<= 0: converge at once), histogram percentiles and
+    // adaptation speeds in EV per second.
+    uint tonemap;
+    uint auto_exposure;
+    float key;
+    float white;
+    float adapt_dt;
+    float hist_low;
+    float hist_high;
+    float speed_brighten;
+    float speed_darken;
+    float pad0;
+    float pad1;
+    float pad2;
 };
 
 #endif

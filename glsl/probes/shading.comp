@@ -1,6 +1,6 @@
 #version 460
 // Evaluates the shading functions the renderer uses (BRDF, Fresnel,
-// refraction, ray offset) on host-given inputs, so tests can check the
+// refraction, ray offset, tone curves, eye adaptation) on host-given inputs, so tests can check the
 // compiled GLSL itself against closed forms (tests/shading_closed_form.rs).
 // Not part of any frame.
 #extension GL_EXT_scalar_block_layout : require
@@ -8,6 +8,8 @@
 #include "../common/brdf.glsl"
 #include "../common/fresnel.glsl"
 #include "../common/offset.glsl"
+#include "../common/tonemap.glsl"
+#include "../common/exposure.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -54,6 +56,17 @@ void main() {
         o.y = v_smith_ggx_correlated(k.p.x, k.p.y, k.b);
     } else if (k.op == PROBE_OFFSET) {
         o.xyz = offset_ray(k.p.xyz, k.q.xyz, k.p.w);
+    } else if (k.op == PROBE_TONEMAP) {
+        // Operator b (TONEMAP_*) on colour p, white point c.
+        o.xyz = tonemap_apply(uint(k.b), k.p.xyz, k.c);
+    } else if (k.op == PROBE_ADAPT) {
+        // p.z adaptation steps of c seconds from a towards b: x log-average,
+        // y histogram at speeds p.xy (brighten, darken).
+        o.xy = vec2(k.a);
+        for (uint s = 0u; s < uint(k.p.z); s++) {
+            o.x = adapt_log_average(o.x, k.b, k.c);
+            o.y = adapt_histogram(o.y, k.b, k.c, k.p.x, k.p.y);
+        }
     } else if (k.op == PROBE_REFRACT) {
         o.xyz = refract_dir(k.p.xyz, k.q.xyz, k.a);
     }

@@ -10,8 +10,8 @@ use gpu_allocator::MemoryLocation;
 
 use super::origin::RenderOrigin;
 use super::shared::{
-    SCENE_ENV_MAP, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS, SCENE_MATERIALS,
-    SCENE_RAY_COUNTERS, SCENE_TEXTURES, SCENE_VERTICES,
+    RAY_COUNTER_SLOTS, SCENE_ENV_MAP, SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES,
+    SCENE_LIGHTS, SCENE_MATERIALS, SCENE_RAY_COUNTERS, SCENE_TEXTURES, SCENE_VERTICES,
 };
 use super::types::*;
 use crate::scene::tangents::bounds_of;
@@ -45,8 +45,12 @@ pub struct GpuScene {
     pub instances: Buffer,
     pub lights: Buffer,
     pub frame: Buffer,
-    /// Ray counters (camera, shadow, secondary, unused), host-visible.
+    /// Frame counters (RAY_COUNTER_*: rays by kind, truncated pixels, bad
+    /// pixels), host-visible.
     pub ray_counters: Buffer,
+    /// Auto-exposure state kept across frames, then the luminance
+    /// reduction's scratch (render/tone.rs), host-visible.
+    pub exposure: Buffer,
     pub textures: Vec<Image>,
     samplers: Vec<(SamplerDesc, vk::Sampler)>,
     pub env_map: Image,
@@ -100,6 +104,7 @@ impl GpuScene {
             lights: Buffer::null(),
             frame: Buffer::null(),
             ray_counters: Buffer::null(),
+            exposure: Buffer::null(),
             textures: Vec::new(),
             samplers: Vec::new(),
             env_map: Image::null(),
@@ -180,10 +185,19 @@ impl GpuScene {
         self.ray_counters = Buffer::new(
             ctx,
             "ray counters",
-            16,
+            RAY_COUNTER_SLOTS as u64 * 4,
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
+        self.exposure = Buffer::new(
+            ctx,
+            "exposure state",
+            exposure_buffer_bytes(),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuToCpu,
+        )?;
+        // No history yet (`valid` 0): the first measured frame converges at once.
+        self.exposure.write(0, &[0u8; EXPOSURE_STATE_BYTES])?;
         (self.env_map, self.env_mean) = upload_environment(ctx, scene)?;
         self.env_sampler = create_sampler(
             ctx,
@@ -208,6 +222,7 @@ impl GpuScene {
             (SCENE_LIGHTS, Binding::one(storage)),
             (SCENE_ENV_MAP, Binding::one(sampled)),
             (SCENE_RAY_COUNTERS, Binding::one(storage)),
+            (SCENE_EXPOSURE, Binding::one(storage)),
             // Bindless textures: variable-count, so the last binding.
             (
                 SCENE_TEXTURES,
@@ -225,6 +240,7 @@ impl GpuScene {
         set.write_buffer(ctx, SCENE_INSTANCES, self.instances.raw);
         set.write_buffer(ctx, SCENE_LIGHTS, self.lights.raw);
         set.write_buffer(ctx, SCENE_RAY_COUNTERS, self.ray_counters.raw);
+        set.write_buffer(ctx, SCENE_EXPOSURE, self.exposure.raw);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         set.write_image(ctx, SCENE_ENV_MAP, 0, self.env_map.view, self.env_sampler, read);
         for (i, (img, tex)) in self.textures.iter().zip(&scene.textures).enumerate() {
@@ -262,6 +278,7 @@ impl GpuScene {
             &mut self.lights,
             &mut self.frame,
             &mut self.ray_counters,
+            &mut self.exposure,
         ] {
             b.destroy(ctx);
         }

@@ -20,8 +20,10 @@ shared! {
     id SCENE_LIGHTS = 5;
     id SCENE_ENV_MAP = 6;
     id SCENE_RAY_COUNTERS = 7;
+    // Auto-exposure state, kept across frames (render/passes/luminance.rs).
+    id SCENE_EXPOSURE = 8;
     // Bindless textures: variable-count, so the last binding.
-    id SCENE_TEXTURES = 8;
+    id SCENE_TEXTURES = 9;
 
     // Set 1 of the passes that read the primary hit (render/passes): the
     // G-buffer targets first, then each pass's own images.
@@ -35,9 +37,36 @@ shared! {
     id DIRECT_IN = 5;
     id SPECULAR_IN = 6;
     id HDR_OUT = 7;
-    // Set 1 of the tone-mapping pass.
+    // Set 1 of the tone-mapping pass and of the luminance reduction.
     id TONEMAP_IN = 0;
     id TONEMAP_OUT = 1;
+    id LUMINANCE_IN = 0;
+
+    // Tone mapping (Frame.tonemap, Frame.auto_exposure).
+    uint TONEMAP_REINHARD = 0;
+    uint TONEMAP_REINHARD_WHITE = 1;
+    uint TONEMAP_ACES = 2;
+    uint TONEMAP_NONE = 3;
+    uint AUTO_EXPOSURE_OFF = 0;
+    uint AUTO_EXPOSURE_LOG_AVERAGE = 1;
+    uint AUTO_EXPOSURE_HISTOGRAM = 2;
+    // Workgroups of the luminance reduction's first kernel (a fixed grid
+    // striding over the image, so the partial sums have a fixed size) and
+    // its threads per group.
+    uint LUMINANCE_GROUPS = 64;
+    uint LUMINANCE_THREADS = 256;
+    // Log-luminance histogram: bins over [HIST_MIN_LOG2, HIST_MAX_LOG2]
+    // (log2 of luminance; darker pixels land in bin 0, brighter in the last).
+    // 48 EV in 0.1875-EV bins: from starlight to a 1e7 sun texel.
+    uint HIST_BINS = 256;
+    float HIST_MIN_LOG2 = -24.0;
+    float HIST_MAX_LOG2 = 24.0;
+    // delta in exp(mean(log(delta + L))): guards log 0 on black pixels.
+    float LOG_AVERAGE_DELTA = 0.0001;
+    // Eye adaptation (the PRT document): adapted += (target - adapted) *
+    // (1 - ADAPT_BASE^(ADAPT_FPS * dt)), frame-rate independent.
+    float ADAPT_BASE = 0.98;
+    float ADAPT_FPS = 60.0;
 
     // Set 2: the ray-query and RT-pipeline tracers bind the TLAS ...
     id TRACE_TLAS = 0;
@@ -80,6 +109,8 @@ shared! {
     uint PROBE_OFFSET = 3;
     uint PROBE_REFRACT = 4;
     uint PROBE_GGX = 5;
+    uint PROBE_TONEMAP = 6;
+    uint PROBE_ADAPT = 7;
 
     // Specialization constants.
     id SPEC_ALPHA_TEST = 0;
@@ -89,6 +120,8 @@ shared! {
     id SPEC_MAX_DEPTH = 4;
     id SPEC_MIN_WEIGHT = 5;
     id SPEC_COUNT_RAYS = 6;
+    // The luminance reduction's two kernels (glsl/luminance.comp).
+    id SPEC_LUMINANCE_STAGE = 7;
 
     // Instance mask bits: which kind of ray may hit an instance.
     uint MASK_VISIBLE = 1;
@@ -104,6 +137,15 @@ shared! {
     // Counter slot of the pixels whose reflection/refraction tree was cut
     // (always counted): by the per-pixel ray budget or a full branch stack.
     uint RAY_COUNTER_TRUNCATED = 3;
+    // Counter slot of the pixels whose radiance reached tone mapping as
+    // NaN, Inf or negative (always counted; they are shown magenta).
+    uint RAY_COUNTER_BAD_PIXELS = 4;
+    uint RAY_COUNTER_SLOTS = 8;
+    // Pixels one fault injection overwrites (glsl/inject.comp; push
+    // constants), and its one set with the HDR image.
+    uint INJECT_MAX = 4;
+    id SET_INJECT = 0;
+    id INJECT_HDR = 0;
     // Most secondary rays one pixel traces; bounds `--min-weight 0` with a
     // deep `--max-depth` (2^depth branches through glass).
     uint RAY_BUDGET_PER_PIXEL = 1024;

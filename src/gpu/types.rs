@@ -88,5 +88,48 @@ pub struct GpuFrame {
     pub frame_index: u32,
     pub flags: u32,
     pub znear: f32,
+    pub tonemap: u32,
+    pub auto_exposure: u32,
+    pub key: f32,
+    pub white: f32,
+    pub adapt_dt: f32,
+    pub hist_low: f32,
+    pub hist_high: f32,
+    pub speed_brighten: f32,
+    pub speed_darken: f32,
+    pub pad: [f32; 3],
 }
-const _: () = assert!(std::mem::size_of::<GpuFrame>() == 336);
+const _: () = assert!(std::mem::size_of::<GpuFrame>() == 384);
+
+/// What the luminance pass measured and the exposure it settled on (the
+/// GPU's `ExposureState`, glsl/common/exposure.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ExposureState {
+    /// The adapted scene luminance the exposure is derived from.
+    pub adapted: f32,
+    /// key / adapted × the --exposure compensation: what tone mapping applies.
+    pub exposure: f32,
+    /// This frame's measured luminance (log-average or histogram mean).
+    pub target: f32,
+    /// exp(mean(log(delta + L))) over the finite pixels.
+    pub log_average: f32,
+    /// The brightest finite luminance.
+    pub max_luminance: f32,
+    /// Finite pixels measured.
+    pub finite_pixels: u32,
+    /// 1 once a frame was measured (adaptation has a history).
+    pub valid: u32,
+    pub pad: u32,
+}
+
+/// Bytes of the state block at the start of the exposure buffer.
+pub const EXPOSURE_STATE_BYTES: usize = std::mem::size_of::<ExposureState>();
+const _: () = assert!(EXPOSURE_STATE_BYTES == 32);
+
+/// The exposure buffer: the state, then the reduction's per-group partial
+/// sums (16 bytes each) and per-group histograms (4 bytes per bin).
+pub fn exposure_buffer_bytes() -> u64 {
+    use crate::gpu::shared::{HIST_BINS, LUMINANCE_GROUPS};
+    (EXPOSURE_STATE_BYTES + LUMINANCE_GROUPS as usize * (16 + 4 * HIST_BINS as usize)) as u64
+}

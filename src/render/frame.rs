@@ -24,6 +24,10 @@ pub enum SharedBuffer {
     Geometry,
     /// The tracer's acceleration data: TLAS/BLASes or the compute BVH.
     Accel,
+    /// The auto-exposure state and the luminance reduction's scratch.
+    Exposure,
+    /// The frame counters (rays by kind, truncated and bad pixels).
+    Counters,
 }
 
 /// How a pass uses a resource. Shader accesses happen in the pass's own

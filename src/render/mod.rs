@@ -4,12 +4,14 @@
 //! derives barriers, labels and timestamps from what each pass declares.
 
 pub mod frame;
+pub mod inject;
 pub mod kernel;
 pub mod output;
 pub mod passes;
 pub mod shading;
 pub mod skinning;
 pub mod targets;
+pub mod tone;
 pub mod tracer;
 
 use anyhow::{Context as _, Result};
@@ -18,7 +20,7 @@ use glam::Mat4;
 use gpu_allocator::MemoryLocation;
 
 use crate::accel::dynamic::RebuildPolicy;
-use crate::gpu::shared::RAY_COUNTER_TRUNCATED;
+use crate::gpu::shared::{RAY_COUNTER_BAD_PIXELS, RAY_COUNTER_SLOTS, RAY_COUNTER_TRUNCATED};
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
@@ -29,6 +31,7 @@ use passes::{composite::HDR, tonemap::LDR, Cx, Init, Pass, FRAME};
 use shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;
+use tone::{ExposureState, ToneOperator, ToneSettings};
 use tracer::Tracer;
 
 /// G-buffer debug views (also selectable in the viewer).
@@ -59,7 +62,10 @@ impl DebugView {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
+    /// The exposure with auto exposure off; with it on, a compensation
+    /// factor on the measured one.
     pub exposure: f32,
+    pub tone: ToneSettings,
     pub debug_view: DebugView,
     pub mode: Mode,
     pub effects: Effects,
@@ -70,11 +76,34 @@ impl Default for RenderSettings {
     fn default() -> Self {
         Self {
             exposure: 1.0,
+            tone: ToneSettings::default(),
             debug_view: DebugView::None,
             mode: Mode::Hybrid,
             effects: Effects::default(),
             backend: Backend::Auto,
         }
+    }
+}
+
+/// The frame uniforms' tone-mapping fields.
+fn tone_uniforms(t: &ToneSettings, adapt_dt: Option<f32>) -> GpuFrame {
+    let white = match (t.operator, t.white) {
+        (_, Some(w)) => w,
+        // <= 0: the frame's brightest pixel (measured by `luminance`).
+        (ToneOperator::ReinhardWhite, None) => 0.0,
+        _ => 1.0,
+    };
+    GpuFrame {
+        tonemap: t.operator.code(),
+        auto_exposure: t.auto_exposure.code(),
+        key: t.key,
+        white,
+        adapt_dt: adapt_dt.unwrap_or(0.0),
+        hist_low: t.histogram_low,
+        hist_high: t.histogram_high,
+        speed_brighten: t.speed_brighten,
+        speed_darken: t.speed_darken,
+        ..bytemuck::Zeroable::zeroed()
     }
 }
 
@@ -95,6 +124,11 @@ pub struct FrameOutput {
     /// budget or a full branch stack (`RAY_BUDGET_PER_PIXEL`,
     /// `BRANCH_STACK_SIZE`); always counted.
     pub truncated_pixels: u32,
+    /// Pixels whose radiance reached tone mapping as NaN or Inf (shown
+    /// magenta); always counted.
+    pub bad_pixels: u32,
+    /// What auto exposure measured and applied (None: fixed exposure).
+    pub exposure: Option<ExposureState>,
 }
 
 /// A pass of the current frame with what it declared.
@@ -136,6 +170,11 @@ pub struct Renderer {
     readback_ldr: Buffer,
     readback_hdr: Buffer,
     frame_index: u32,
+    /// Seconds since the previous frame for eye adaptation; None: converge
+    /// at once (a still frame: no adaptation history).
+    pub adapt_dt: Option<f32>,
+    /// Test fault injection into the HDR frame (`inject_radiance`).
+    injection: Option<inject::Injection>,
 }
 
 fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
@@ -181,6 +220,8 @@ impl Renderer {
             readback_ldr: Buffer::null(),
             readback_hdr: Buffer::null(),
             frame_index: 0,
+            adapt_dt: None,
+            injection: None,
         };
         match r.create_resources(ctx, scene) {
             Ok(()) => Ok(r),
@@ -447,6 +488,7 @@ impl Renderer {
             frame_index: self.frame_index,
             flags: 0,
             znear: camera.znear,
+            ..tone_uniforms(&settings.tone, self.adapt_dt)
         };
         debug_assert!(Mat4::from_cols_array(&frame.view).is_finite());
         self.gpu.write_frame(&frame)
@@ -474,6 +516,9 @@ impl Renderer {
                 p.pass.record(&cx, cmd);
                 Ok(())
             })?;
+            if let (Some(inj), "composite") = (&self.injection, p.name) {
+                inj.record(&mut rec, &self.targets)?;
+            }
         }
         tail(&mut rec, &self.targets)?;
         self.frame_index = self.frame_index.wrapping_add(1);
@@ -489,7 +534,7 @@ impl Renderer {
         settings: &RenderSettings,
     ) -> Result<FrameOutput> {
         self.prepare(ctx, scene, camera, settings)?;
-        self.gpu.ray_counters.write(0, &[0u8; 16])?;
+        self.gpu.ray_counters.write(0, &[0u8; RAY_COUNTER_SLOTS as usize * 4])?;
         let cmd = self.cmd;
         ctx.begin_commands(cmd)?;
         let (ldr_buf, hdr_buf) = (self.readback_ldr.raw, self.readback_hdr.raw);
@@ -516,10 +561,12 @@ impl Renderer {
                         )
                     };
                 }
+                // The copies, and the counters and exposure state the
+                // shaders wrote, become visible to the host.
                 crate::vk::memory_barrier(
                     ctx,
                     cmd,
-                    (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+                    (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_WRITE),
                     (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
                 );
                 Ok(())
@@ -533,8 +580,51 @@ impl Renderer {
         let counts: Vec<u32> = bytemuck::pod_collect_to_vec(self.gpu.ray_counters.read()?);
         let ray_counts = [counts[0], counts[1], counts[2]];
         let truncated_pixels = counts[RAY_COUNTER_TRUNCATED as usize];
+        let bad_pixels = counts[RAY_COUNTER_BAD_PIXELS as usize];
+        let exposure = self.exposure_state()?;
         let e = self.extent;
-        Ok(FrameOutput { width: e.width, height: e.height, ldr, hdr, timings, ray_counts, truncated_pixels })
+        Ok(FrameOutput {
+            width: e.width,
+            height: e.height,
+            ldr,
+            hdr,
+            timings,
+            ray_counts,
+            truncated_pixels,
+            bad_pixels,
+            exposure,
+        })
+    }
+
+    /// What auto exposure measured in the last completed frame (None when
+    /// the frame measures no luminance).
+    pub fn exposure_state(&self) -> Result<Option<ExposureState>> {
+        if !self.config.is_some_and(|c| c.luminance) {
+            return Ok(None);
+        }
+        let bytes = &self.gpu.exposure.read()?[..tone::EXPOSURE_STATE_BYTES];
+        Ok(Some(bytemuck::pod_read_unaligned(bytes)))
+    }
+
+    /// Reads and clears the bad-pixel counter (the viewer, after its frame's fence).
+    pub fn take_bad_pixels(&mut self) -> Result<u32> {
+        let at = RAY_COUNTER_BAD_PIXELS as usize * 4;
+        let n = bytemuck::pod_read_unaligned(&self.gpu.ray_counters.read()?[at..at + 4]);
+        self.gpu.ray_counters.write(at, &[0u8; 4])?;
+        Ok(n)
+    }
+
+    /// Fault injection for tests: from the next frame on, these HDR pixels
+    /// are overwritten after `composite` (empty: disarmed).
+    pub fn inject_radiance(&mut self, ctx: &Context, pixels: &[inject::Injected]) -> Result<()> {
+        unsafe { ctx.device.device_wait_idle()? };
+        if let Some(mut old) = self.injection.take() {
+            old.destroy(ctx);
+        }
+        if !pixels.is_empty() {
+            self.injection = Some(inject::Injection::new(ctx, pixels)?);
+        }
+        Ok(())
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
@@ -558,6 +648,9 @@ impl Renderer {
         }
         if let Some(mut t) = self.tracer.take() {
             t.destroy(ctx);
+        }
+        if let Some(mut i) = self.injection.take() {
+            i.destroy(ctx);
         }
         self.targets.destroy(ctx);
         self.gpu.destroy(ctx);

@@ -183,6 +183,9 @@ pub struct ShadingConfig {
     pub debug_view: bool,
     /// What the scene contains that the effects need.
     pub needs: SceneNeeds,
+    /// The frame's luminance is measured (auto exposure, or the white point
+    /// of `reinhard-white` from the frame's maximum): the `luminance` pass runs.
+    pub luminance: bool,
 }
 
 impl ShadingConfig {
@@ -208,7 +211,8 @@ impl ShadingConfig {
         let traces = mode == Mode::Rt || effects.shadows || effects.reflections || effects.refractions;
         let backend =
             if !traces { None } else { Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs)?) };
-        Ok(ShadingConfig { mode, effects, backend, debug_view, needs })
+        let luminance = settings.tone.measures_luminance() && !debug_view;
+        Ok(ShadingConfig { mode, effects, backend, debug_view, needs, luminance })
     }
 
     /// Why this backend (for the log).

@@ -40,6 +40,17 @@ pub struct Measured {
     pub image: HdrImage,
     /// Pixels whose radiance was NaN or Inf (set to 0 in `image`).
     pub non_finite: usize,
+    /// The last timed frame as displayed (tone-mapped sRGB).
+    pub ldr: image::RgbImage,
+    /// What auto exposure measured in it (None: fixed exposure).
+    pub exposure: Option<crate::render::tone::ExposureState>,
+}
+
+impl Measured {
+    /// Median ms of pass `name` (NaN when it did not run).
+    pub fn pass_ms(&self, name: &str) -> f64 {
+        self.timing.passes.iter().find(|(n, _)| *n == name).map(|(_, ms)| *ms).unwrap_or(f64::NAN)
+    }
 }
 
 /// The median (upper one of an even count, like `bench`) and the p95
@@ -131,6 +142,8 @@ pub fn measure(
         rays,
         image,
         non_finite,
+        ldr: out.rgb8(),
+        exposure: out.exposure,
     })
 }
 

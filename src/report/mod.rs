@@ -8,7 +8,8 @@
 //! One technique per file: `metrics` (ꟻLIP, PSNR, relMSE), `knobs` (the
 //! knob table), `measure` (warm-up and GPU timing), `write` (tables),
 //! `plot` (the chart and the Pareto front), `compare` (two image files),
-//! `stability` (`report --stability`: stiff and extreme variants of a scene).
+//! `stability` (`report --stability`: stiff and extreme variants of a scene),
+//! `tone_sheet` (`report --tone-sheet`: tone operators side by side).
 
 pub mod compare;
 pub mod knobs;
@@ -16,6 +17,7 @@ pub mod measure;
 pub mod metrics;
 pub mod plot;
 pub mod stability;
+pub mod tone_sheet;
 pub mod write;
 
 use std::path::{Path, PathBuf};

@@ -37,7 +37,7 @@ fn font_candidates() -> Vec<PathBuf> {
 }
 
 /// Registers the TTF font for plotters' "sans-serif" family, once.
-fn register_font() -> Result<()> {
+pub(super) fn register_font() -> Result<()> {
     static REGISTERED: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
     REGISTERED
         .get_or_init(|| {

@@ -78,6 +78,8 @@ impl Viewer {
                 timings: Vec::new(),
                 ray_counts: [0; 3],
                 truncated_pixels: 0,
+                bad_pixels: 0,
+                exposure: None,
             };
             frame.save_png(&shot.path)
         })();
@@ -165,8 +167,14 @@ impl Viewer {
         self.renderer.finish_scene_update(&self.ctx)?;
         self.collect_gpu_times()?;
         self.finish_screenshot()?;
+        let bad = self.renderer.take_bad_pixels()?;
+        if bad > 0 {
+            self.stats.bad_pixels(bad);
+        }
 
         self.controller.update(dt);
+        // Eye adaptation follows the wall clock (the first frame converges).
+        self.renderer.adapt_dt = (self.presented > 0).then_some(dt);
         if let Some((i, clock, paused)) = &mut self.animation {
             if !*paused {
                 // Wall-clock playback unless a fixed step was asked for (the

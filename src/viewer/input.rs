@@ -1,5 +1,5 @@
 //! Window events and keys: camera input goes to the controller, viewer keys
-//! change the render settings (debug view, exposure, effects, mode), the
+//! change the render settings (debug view, exposure, tone mapping, effects, mode), the
 //! animation clock or request a screenshot; the window title shows them.
 
 use std::path::PathBuf;
@@ -12,6 +12,7 @@ use super::camera_controller::{self, digit};
 use super::session::Viewer;
 use super::{Flow, DEBUG_VIEWS};
 use crate::render::shading::Mode;
+use crate::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use crate::render::DebugView;
 
 impl Viewer {
@@ -20,6 +21,9 @@ impl Viewer {
         let mut t = format!("hybrid-rt - {} - {}x{}", self.scene_name, e.width, e.height);
         if self.settings.debug_view != DebugView::None {
             t.push_str(&format!(" - {:?} view", self.settings.debug_view).to_lowercase());
+        }
+        if self.settings.tone != ToneSettings::default() {
+            t.push_str(&format!(" - {}", self.settings.tone.describe()));
         }
         if self.controller.mode() == camera_controller::Mode::Orbit {
             t.push_str(" - orbit");
@@ -92,6 +96,22 @@ impl Viewer {
                 self.set_exposure(self.settings.exposure / 2f32.sqrt())
             }
             KeyCode::Equal | KeyCode::NumpadAdd => self.set_exposure(self.settings.exposure * 2f32.sqrt()),
+            KeyCode::KeyM => {
+                let ops = ToneOperator::ALL;
+                let i = ops.iter().position(|o| *o == self.settings.tone.operator).unwrap_or(0);
+                self.settings.tone.operator = ops[(i + 1) % ops.len()];
+                log::info!("tone mapping: {}", self.settings.tone.describe());
+                self.window.set_title(&self.title());
+            }
+            KeyCode::KeyX => {
+                self.settings.tone.auto_exposure = match self.settings.tone.auto_exposure {
+                    AutoExposure::Off => AutoExposure::LogAverage,
+                    AutoExposure::LogAverage => AutoExposure::Histogram,
+                    AutoExposure::Histogram => AutoExposure::Off,
+                };
+                log::info!("tone mapping: {}", self.settings.tone.describe());
+                self.window.set_title(&self.title());
+            }
             KeyCode::F5 => toggle("shadows", &mut self.settings.effects.shadows),
             KeyCode::F6 => toggle("reflections", &mut self.settings.effects.reflections),
             KeyCode::F7 => toggle("refractions", &mut self.settings.effects.refractions),

@@ -12,6 +12,8 @@ pub struct Window {
     frames: u32,
     /// Pass name, summed ms, samples.
     gpu: Vec<(&'static str, f64, u32)>,
+    /// NaN/Inf pixels tone mapping met, summed over the window's frames.
+    bad_pixels: u64,
 }
 
 /// One window's averages.
@@ -22,6 +24,8 @@ pub struct Summary {
     pub frame_ms: f64,
     /// Mean GPU ms per pass, in recording order.
     pub passes: Vec<(&'static str, f64)>,
+    /// NaN/Inf pixels over the window (shown magenta; never silent).
+    pub bad_pixels: u64,
 }
 
 impl Summary {
@@ -37,13 +41,16 @@ impl Summary {
             let parts: Vec<_> = self.passes.iter().map(|(n, ms)| format!("{n} {ms:.2}")).collect();
             s.push_str(&format!(" | GPU {:.2} ms: {}", self.gpu_total(), parts.join(", ")));
         }
+        if self.bad_pixels > 0 {
+            s.push_str(&format!(" | {} NaN/Inf pixels", self.bad_pixels));
+        }
         s
     }
 }
 
 impl Window {
     pub fn new(length: Duration, now: Instant) -> Window {
-        Window { length, start: now, frames: 0, gpu: Vec::new() }
+        Window { length, start: now, frames: 0, gpu: Vec::new(), bad_pixels: 0 }
     }
 
     pub fn frame(&mut self) {
@@ -74,6 +81,7 @@ impl Window {
             fps: self.frames as f64 / secs,
             frame_ms: if self.frames > 0 { secs * 1e3 / self.frames as f64 } else { f64::NAN },
             passes: self.gpu.iter().map(|(n, sum, k)| (*n, sum / (*k).max(1) as f64)).collect(),
+            bad_pixels: self.bad_pixels,
         };
         *self = Window::new(self.length, now);
         Some(s)
@@ -113,6 +121,12 @@ impl FrameStats {
     pub fn gpu(&mut self, timings: &[(&'static str, f64)]) {
         self.title.gpu(timings);
         self.log.gpu(timings);
+    }
+
+    /// NaN/Inf pixels of one frame.
+    pub fn bad_pixels(&mut self, n: u32) {
+        self.title.bad_pixels += n as u64;
+        self.log.bad_pixels += n as u64;
     }
 
     pub fn tick(&mut self, now: Instant) -> Tick {

@@ -6,6 +6,7 @@ pub mod instance;
 pub mod limits;
 pub mod memory;
 pub mod pipeline;
+pub mod reflect;
 pub mod rt_pipeline;
 pub mod timer;
 

@@ -66,6 +66,28 @@ impl Case {
             ..Default::default()
         }
     }
+    /// Tone curve `op` (TONEMAP_*) on an exposed colour, white point `white`.
+    pub fn tonemap(op: u32, c: [f32; 3], white: f32) -> Case {
+        Case {
+            op: shared::PROBE_TONEMAP,
+            b: op as f32,
+            c: white,
+            p: [c[0], c[1], c[2], 0.0],
+            ..Default::default()
+        }
+    }
+    /// `steps` adaptation steps of `dt` from `adapted` towards `target`:
+    /// x log-average, y histogram at (brighten, darken) EV/s.
+    pub fn adapt(adapted: f32, target: f32, dt: f32, steps: u32, speeds: [f32; 2]) -> Case {
+        Case {
+            op: shared::PROBE_ADAPT,
+            a: adapted,
+            b: target,
+            c: dt,
+            p: [speeds[0], speeds[1], steps as f32, 0.0],
+            ..Default::default()
+        }
+    }
     pub fn refract(i: [f32; 3], n: [f32; 3], eta: f32) -> Case {
         Case {
             op: shared::PROBE_REFRACT,

@@ -45,6 +45,35 @@ pub fn uses(io: &[Io], traced: bool) -> Vec<Use> {
     u
 }
 
+/// Fails when a variant of the pass's shader declares a storage image with
+/// a format qualifier other than its target's format (undefined behaviour).
+fn check_formats(name: &str, shader: &Shader, io: &[Io]) -> Result<()> {
+    use crate::gpu::shared::SET_PASS;
+    use crate::vk::reflect::{spirv_image_format, storage_image_formats};
+    let variants: Vec<String> = match shader {
+        Shader::Compute(s) => vec![s.to_string()],
+        Shader::Traced(s) => vec![format!("{s}_query"), format!("{s}_compute"), format!("{s}.rgen")],
+    };
+    for v in variants {
+        let Ok(words) = crate::vk::pipeline::spirv(&v) else { continue };
+        for (set, binding, declared) in storage_image_formats(&words) {
+            let Some(i) = io.iter().find(|i| set == SET_PASS && i.binding == binding) else { continue };
+            if i.access == Access::Sampled {
+                continue;
+            }
+            if let Some(want) = spirv_image_format(i.target.format).filter(|w| *w != declared) {
+                anyhow::bail!(
+                    "pass {name}: shader {v} declares binding {binding} with SPIR-V image format {declared}, \
+                     but it is bound to '{}' ({:?}, SPIR-V format {want})",
+                    i.target.name,
+                    i.target.format
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
 pub struct FullScreen {
     io: Vec<Io>,
     set: DescriptorSet,
@@ -64,6 +93,7 @@ impl FullScreen {
         spec: &Specialization,
     ) -> Result<Box<dyn Pass>> {
         let ctx = init.ctx;
+        check_formats(name, &shader, &io)?;
         let bindings: Vec<(u32, Binding)> = io
             .iter()
             .map(|i| {

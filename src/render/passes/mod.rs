@@ -7,6 +7,7 @@ pub mod composite;
 pub mod direct;
 pub mod fullscreen;
 pub mod gbuffer;
+pub mod luminance;
 pub mod primary;
 pub mod specular;
 pub mod tonemap;
@@ -23,10 +24,17 @@ use crate::vk::Context;
 
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
 /// or camera rays) -> direct light -> reflection/refraction chain ->
-/// composite -> tone map. The scene update (skinning, refit, top level)
+/// composite -> luminance (auto exposure) -> tone map. The scene update (skinning, refit, top level)
 /// comes before it, recorded by `Renderer` and the tracer.
-pub const FRAME: &[PassDesc] =
-    &[gbuffer::PASS, primary::PASS, direct::PASS, specular::PASS, composite::PASS, tonemap::PASS];
+pub const FRAME: &[PassDesc] = &[
+    gbuffer::PASS,
+    primary::PASS,
+    direct::PASS,
+    specular::PASS,
+    composite::PASS,
+    luminance::PASS,
+    tonemap::PASS,
+];
 
 /// What everything a pass needs to be built from.
 pub struct Init<'a> {

@@ -1,5 +1,6 @@
-//! Pass `tonemap`: exposure and Reinhard on luminance, sRGB-encoded into the
-//! 8-bit output that is read back or presented (glsl/tonemap.comp).
+//! Pass `tonemap`: exposure (fixed, or adapted by the `luminance` pass),
+//! the tone curve (render/tone.rs), sRGB-encoded into the 8-bit output that
+//! is read back or presented (glsl/tonemap.comp). Counts NaN/Inf pixels.
 
 use ash::vk;
 
@@ -7,7 +8,7 @@ use super::composite::HDR;
 use super::fullscreen::{self, FullScreen, Io, Shader};
 use super::{Init, PassDesc};
 use crate::gpu::shared::{TONEMAP_IN, TONEMAP_OUT};
-use crate::render::frame::Access;
+use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
 use crate::render::targets::TargetDesc;
 use crate::vk::pipeline::Specialization;
@@ -22,7 +23,15 @@ fn io(_: &ShadingConfig) -> Vec<Io> {
 pub const PASS: PassDesc = PassDesc {
     name: "tonemap",
     skip: |_| None,
-    uses: |c| fullscreen::uses(&io(c), false),
+    uses: |c| {
+        let mut u = fullscreen::uses(&io(c), false);
+        // The bad-pixel counter; the measured exposure when there is one.
+        u.push(Use::buffer(SharedBuffer::Counters, Access::ShaderWrite));
+        if c.luminance {
+            u.push(Use::buffer(SharedBuffer::Exposure, Access::ShaderRead));
+        }
+        u
+    },
     create: |i: &Init| {
         FullScreen::create(
             i,
