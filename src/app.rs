@@ -49,6 +49,8 @@ pub struct GpuOptions {
     pub sync_validation: bool,
     pub device: DeviceSelector,
     pub disable_ray_tracing: bool,
+    /// `--vulkan-api 1.2`: use the device as a Vulkan 1.2 device.
+    pub max_api_version: Option<u32>,
 }
 
 impl GpuOptions {
@@ -60,6 +62,7 @@ impl GpuOptions {
             disable_ray_tracing: self.disable_ray_tracing,
             surface_extensions: Vec::new(),
             swapchain: false,
+            max_api_version: self.max_api_version,
         })
     }
 }
@@ -293,9 +296,10 @@ fn print_timings(t: &[(&'static str, f64)]) {
 pub fn info_command(gpu: &GpuOptions) -> Result<String> {
     let instance = crate::vk::Instance::new(&crate::vk::InstanceOptions {
         validation: gpu.validation,
+        max_api_version: gpu.max_api_version,
         ..Default::default()
     })?;
-    let devices = crate::vk::device::enumerate(&instance.raw)?;
+    let devices = crate::vk::device::enumerate(&instance.raw, instance.api_version)?;
     if devices.is_empty() {
         bail!("no Vulkan device found");
     }

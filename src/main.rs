@@ -40,6 +40,11 @@ struct GpuArgs {
     /// Do not enable any ray-tracing extension even if the device has them.
     #[arg(long, global = true)]
     no_rt: bool,
+    /// Highest Vulkan API version to use (1.2 or 1.3): 1.2 takes the path a
+    /// 1.2 device takes (RenderDoc 1.24 shows lavapipe as one), the 1.3
+    /// features through their extensions.
+    #[arg(long, global = true, value_parser = parse_vulkan_api)]
+    vulkan_api: Option<u32>,
     /// Log level (error, warn, info, debug, trace); RUST_LOG overrides.
     #[arg(long, global = true, default_value = "info")]
     log: String,
@@ -376,6 +381,14 @@ impl Cli {
     }
 }
 
+fn parse_vulkan_api(s: &str) -> Result<u32, String> {
+    match s {
+        "1.2" => Ok(ash::vk::API_VERSION_1_2),
+        "1.3" => Ok(ash::vk::API_VERSION_1_3),
+        _ => Err(format!("'{s}' is not 1.2 or 1.3")),
+    }
+}
+
 fn run(cli: Cli) -> Result<()> {
     let env_validation = std::env::var("HYBRID_RT_VALIDATION").is_ok_and(|v| v != "0" && !v.is_empty());
     let gpu = GpuOptions {
@@ -383,6 +396,7 @@ fn run(cli: Cli) -> Result<()> {
         sync_validation: cli.gpu.sync_validation,
         device: cli.gpu.device.parse::<DeviceSelector>().unwrap_or_default(),
         disable_ray_tracing: cli.gpu.no_rt,
+        max_api_version: cli.gpu.vulkan_api,
     };
     match cli.command {
         Some(Command::Info) => {

@@ -107,6 +107,7 @@ impl Viewer {
             disable_ray_tracing: g.disable_ray_tracing,
             surface_extensions,
             swapchain: true,
+            max_api_version: g.max_api_version,
         })?;
         let mut renderer = Renderer::new(&ctx, &scene, requested)?;
         let presenter = match Presenter::new(&ctx, &window, opts.present_mode) {

@@ -2,6 +2,7 @@
 //! timestamp queries, shader modules.
 
 pub mod device;
+pub mod features;
 pub mod instance;
 pub mod limits;
 pub mod memory;
@@ -18,6 +19,7 @@ use ash::{ext, khr, vk};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
 pub use device::{Capabilities, DeviceSelector, RtEnables};
+pub use features::FeaturePath;
 pub use instance::{Instance, InstanceOptions, ValidationCounters};
 pub use memory::{Buffer, Image};
 
@@ -32,6 +34,8 @@ pub struct ContextOptions {
     pub disable_ray_tracing: bool,
     pub surface_extensions: Vec<*const std::ffi::c_char>,
     pub swapchain: bool,
+    /// At most this Vulkan API version (see `InstanceOptions`).
+    pub max_api_version: Option<u32>,
 }
 
 /// Everything a pass needs to talk to the GPU.
@@ -79,8 +83,9 @@ impl Context {
             validation: opts.validation,
             sync_validation: opts.sync_validation,
             surface_extensions: opts.surface_extensions.clone(),
+            max_api_version: opts.max_api_version,
         })?;
-        let devices = device::enumerate(&instance.raw)?;
+        let devices = device::enumerate(&instance.raw, instance.api_version)?;
         for (_, c) in &devices {
             log::debug!("found {}", c.report().trim_end());
         }
@@ -95,7 +100,7 @@ impl Context {
             }
         };
         log::info!(
-            "using {} ({}, {} {}), Vulkan {}; ray-tracing extensions enabled: AS {} / query {} / pipeline {}",
+            "using {} ({}, {} {}), Vulkan {} ({}); ray-tracing extensions enabled: AS {} / query {} / pipeline {}",
             caps.name,
             match caps.device_type {
                 vk::PhysicalDeviceType::CPU => "software",
@@ -105,7 +110,8 @@ impl Context {
             },
             caps.driver_name,
             caps.driver_info,
-            caps.api_string(),
+            caps.api_used_string(),
+            caps.feature_path_string(),
             rt.acceleration_structure,
             rt.ray_query,
             rt.ray_tracing_pipeline
@@ -117,7 +123,8 @@ impl Context {
             device: device.clone(),
             physical_device: pd,
             debug_settings: Default::default(),
-            buffer_device_address: true,
+            // Memory for device addresses only where the feature is on.
+            buffer_device_address: caps.buffer_device_address,
             allocation_sizes: Default::default(),
         })
         .context("creating the GPU memory allocator")?;
