@@ -11,7 +11,7 @@ use crate::accel::dynamic::RebuildPolicy;
 use crate::render::shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
 use crate::render::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
-use crate::vk::{Context, ContextOptions, DeviceSelector};
+use crate::vk::{Context, ContextOptions, DeviceSelector, RenderDocUse};
 
 /// The bundled default scene, looked for in the working directory, next to
 /// the executable (an installed copy, or `target/<profile>/` inside the
@@ -51,6 +51,9 @@ pub struct GpuOptions {
     pub disable_ray_tracing: bool,
     /// `--vulkan-api 1.2`: use the device as a Vulkan 1.2 device.
     pub max_api_version: Option<u32>,
+    /// `--capture-frame N` (render, bench, view): capture frame N with
+    /// RenderDoc's in-application API.
+    pub capture_frame: Option<u64>,
 }
 
 impl GpuOptions {
@@ -63,6 +66,8 @@ impl GpuOptions {
             surface_extensions: Vec::new(),
             swapchain: false,
             max_api_version: self.max_api_version,
+            renderdoc: if self.capture_frame.is_some() { RenderDocUse::Required } else { RenderDocUse::Off },
+            capture_frame: self.capture_frame,
         })
     }
 }
@@ -187,7 +192,18 @@ pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
     let camera = job.camera.resolve(&scene)?;
     resolve_shading(ctx, &scene, &job.settings)?;
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
-    let out = renderer.render(ctx, &scene, &camera, &job.settings);
+    // With --capture-frame N the same view is rendered N + 1 times and
+    // frame N captured (frame 0 also compiles pipelines and builds targets).
+    let frames = ctx.capture_frame.map_or(1, |n| n + 1);
+    let mut out = Err(anyhow!("no frame rendered"));
+    for i in 0..frames {
+        out = ctx.capture_frame_if(i, &format!("render frame {i}"), || {
+            renderer.render(ctx, &scene, &camera, &job.settings)
+        });
+        if out.is_err() {
+            break;
+        }
+    }
     renderer.destroy(ctx);
     if let Some(w) = out.as_ref().ok().and_then(FrameOutput::truncation_warning) {
         log::warn!("{w}");
@@ -457,6 +473,31 @@ fn bench_frame(
     variant: BenchVariant,
     i: usize,
     (warmup, frames): (usize, usize),
+    frame_no: &mut u64,
+) -> Result<BenchFrame> {
+    let what = format!(
+        "bench frame {frame_no} ({:?} mode, {:?} backend, {} frame {i})",
+        variant.mode,
+        variant.backend,
+        if i < warmup { "warm-up" } else { "path" }
+    );
+    *frame_no += 1;
+    ctx.capture_frame_if(*frame_no - 1, &what, || {
+        bench_frame_inner(ctx, renderer, scene, anim, job, base_camera, variant, i, (warmup, frames))
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn bench_frame_inner(
+    ctx: &Context,
+    renderer: &mut Renderer,
+    scene: &mut Scene,
+    anim: Option<usize>,
+    job: &RenderJob,
+    base_camera: &Camera,
+    variant: BenchVariant,
+    i: usize,
+    (warmup, frames): (usize, usize),
 ) -> Result<BenchFrame> {
     let settings = RenderSettings { mode: variant.mode, backend: variant.backend, ..job.settings };
     renderer.rebuild_policy = match variant.accel {
@@ -513,9 +554,18 @@ pub fn bench(
     if !unavailable.is_empty() {
         bail!("bench: not every variant asked for can run on {}: {}", ctx.caps.name, unavailable.join("; "));
     }
+    // Frames in the order rendered: per variant a ray-counting frame and the
+    // warm-up, then per variant (after one re-warm frame when several
+    // alternate) the measured frames; `--capture-frame` counts the same way.
+    let n = variants.len();
+    let rewarm = usize::from(n > 1 && warmup > 0);
+    let total = n * (1 + warmup) + n * (rewarm + frames);
+    if let Some(c) = ctx.capture_frame.filter(|&c| c >= total as u64) {
+        bail!("--capture-frame {c}: this bench renders {total} frames (0..={})", total - 1);
+    }
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let mut reports = Vec::new();
-    let n = variants.len();
+    let mut frame_no = 0u64;
     let result: Result<()> = (|| {
         let mut rays = Vec::new();
         for (k, &v) in variants.iter().enumerate() {
@@ -530,9 +580,26 @@ pub fn bench(
             let settings = RenderSettings { mode: v.mode, backend: v.backend, ..job.settings };
             let counting =
                 RenderSettings { effects: Effects { count_rays: true, ..settings.effects }, ..settings };
-            rays.push(renderer.render(ctx, &scene, &base_camera, &counting)?.ray_counts);
+            let what =
+                format!("bench frame {frame_no} ({:?} mode, {:?} backend, ray counts)", v.mode, v.backend);
+            frame_no += 1;
+            let counted = ctx.capture_frame_if(frame_no - 1, &what, || {
+                renderer.render(ctx, &scene, &base_camera, &counting)
+            })?;
+            rays.push(counted.ray_counts);
             for i in 0..warmup {
-                bench_frame(ctx, &mut renderer, &mut scene, anim, job, &base_camera, v, i, (warmup, frames))?;
+                bench_frame(
+                    ctx,
+                    &mut renderer,
+                    &mut scene,
+                    anim,
+                    job,
+                    &base_camera,
+                    v,
+                    i,
+                    (warmup, frames),
+                    &mut frame_no,
+                )?;
             }
         }
         for (k, &v) in variants.iter().enumerate() {
@@ -549,6 +616,7 @@ pub fn bench(
                     v,
                     warmup - 1,
                     (warmup, frames),
+                    &mut frame_no,
                 )?;
             }
             let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
@@ -565,6 +633,7 @@ pub fn bench(
                     v,
                     i,
                     (warmup, frames),
+                    &mut frame_no,
                 )?;
                 counts = [counts[0] + f.counts[0], counts[1] + f.counts[1]];
                 let mut total = 0.0;

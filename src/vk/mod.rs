@@ -7,11 +7,13 @@ pub mod instance;
 pub mod limits;
 pub mod memory;
 pub mod pipeline;
+pub mod renderdoc;
 pub mod rt_pipeline;
 pub mod timer;
 
 use std::ffi::CString;
 use std::mem::ManuallyDrop;
+use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use anyhow::{Context as _, Result};
@@ -22,6 +24,7 @@ pub use device::{Capabilities, DeviceSelector, RtEnables};
 pub use features::FeaturePath;
 pub use instance::{Instance, InstanceOptions, ValidationCounters};
 pub use memory::{Buffer, Image};
+pub use renderdoc::RenderDoc;
 
 /// How to create the Vulkan context.
 #[derive(Clone, Debug, Default)]
@@ -36,6 +39,21 @@ pub struct ContextOptions {
     pub swapchain: bool,
     /// At most this Vulkan API version (see `InstanceOptions`).
     pub max_api_version: Option<u32>,
+    /// RenderDoc's in-application API: load it (before the instance).
+    pub renderdoc: RenderDocUse,
+    /// `--capture-frame N`: the frame to capture with RenderDoc.
+    pub capture_frame: Option<u64>,
+}
+
+/// Whether a context loads RenderDoc's in-application API.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RenderDocUse {
+    #[default]
+    Off,
+    /// When the process runs under RenderDoc (the viewer's capture key).
+    IfRunning,
+    /// Load it or fail (`--capture-frame`).
+    Required,
 }
 
 /// Everything a pass needs to talk to the GPU.
@@ -56,6 +74,10 @@ pub struct Context {
     pub sync_validation: bool,
     /// Fault injection for tests of error paths (off unless armed).
     pub alloc_fault: AllocationFault,
+    /// RenderDoc's in-application API, when loaded.
+    pub renderdoc: Option<renderdoc::RenderDoc>,
+    /// The frame `--capture-frame` asked for.
+    pub capture_frame: Option<u64>,
 }
 
 /// Makes the n-th buffer or image allocation from now fail, as running out
@@ -79,6 +101,12 @@ impl AllocationFault {
 
 impl Context {
     pub fn new(opts: &ContextOptions) -> Result<Context> {
+        // Before the instance: loading RenderDoc enables its Vulkan layer.
+        let renderdoc = match opts.renderdoc {
+            RenderDocUse::Off => None,
+            RenderDocUse::IfRunning => renderdoc::RenderDoc::running().transpose()?,
+            RenderDocUse::Required => Some(renderdoc::RenderDoc::load()?),
+        };
         let instance = Instance::new(&InstanceOptions {
             validation: opts.validation,
             sync_validation: opts.sync_validation,
@@ -157,6 +185,8 @@ impl Context {
             rt_pipeline,
             sync_validation: opts.validation && opts.sync_validation,
             alloc_fault: AllocationFault::default(),
+            renderdoc,
+            capture_frame: opts.capture_frame,
         };
         ctx.name(ctx.queue, "main queue");
         ctx.name(ctx.command_pool, "main command pool");
@@ -262,6 +292,45 @@ impl Context {
         };
         unsafe { self.device.destroy_fence(fence, None) };
         r.context("queue submit / wait (device lost?)")
+    }
+
+    /// Whether `frame` is the frame `--capture-frame` asked for.
+    pub fn wants_capture(&self, frame: u64) -> bool {
+        self.capture_frame == Some(frame)
+    }
+
+    /// Starts a RenderDoc capture of everything submitted until
+    /// [`Context::end_capture`]; `what` names it in the log.
+    pub fn start_capture(&self, what: &str) -> Result<()> {
+        let rd = self.renderdoc.as_ref().context(
+            "RenderDoc is not loaded: run under `renderdoccmd capture ...` or pass --capture-frame N",
+        )?;
+        rd.start(self.instance.raw.handle());
+        anyhow::ensure!(rd.is_capturing(), "RenderDoc did not start capturing {what}");
+        log::info!("renderdoc: capturing {what}");
+        Ok(())
+    }
+
+    /// Ends the capture; logs and returns the capture file.
+    pub fn end_capture(&self, what: &str) -> Result<PathBuf> {
+        let rd = self.renderdoc.as_ref().context("RenderDoc is not loaded")?;
+        let path = rd.end(self.instance.raw.handle())?;
+        log::info!("renderdoc: captured {what} to {}", path.display());
+        Ok(path)
+    }
+
+    /// Runs `f` inside a capture when `frame` is the one asked for; the
+    /// capture is ended on `f`'s error too.
+    pub fn capture_frame_if<R>(&self, frame: u64, what: &str, f: impl FnOnce() -> Result<R>) -> Result<R> {
+        if !self.wants_capture(frame) {
+            return f();
+        }
+        self.start_capture(what)?;
+        let r = f();
+        let ended = self.end_capture(what);
+        let r = r?;
+        ended?;
+        Ok(r)
     }
 
     /// Bytes of device memory currently allocated through gpu-allocator.
