@@ -151,8 +151,11 @@ fn compile(compiler: &shaderc::Compiler, glsl: &Path, out_dir: &Path, job: &Job)
     let kind = stage_of(&job.source).ok_or_else(|| format!("{}: unknown stage", job.source.display()))?;
     let text = std::fs::read_to_string(&job.source).map_err(|e| format!("{}: {e}", job.source.display()))?;
     let mut opts = shaderc::CompileOptions::new().map_err(|e| format!("shaderc options: {e}"))?;
-    opts.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);
-    opts.set_target_spirv(shaderc::SpirvVersion::V1_6);
+    // Vulkan 1.2 / SPIR-V 1.5: the highest a 1.2 device accepts (RenderDoc
+    // 1.24 shows lavapipe as one), and enough for ray queries and ray-tracing
+    // pipelines (they need 1.4); a 1.3 device runs the same modules.
+    opts.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
+    opts.set_target_spirv(shaderc::SpirvVersion::V1_5);
     opts.set_generate_debug_info(); // readable names in RenderDoc / Nsight
     opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
     for (k, v) in &job.defines {

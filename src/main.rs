@@ -41,6 +41,11 @@ struct GpuArgs {
     /// Do not enable any ray-tracing extension even if the device has them.
     #[arg(long, global = true)]
     no_rt: bool,
+    /// Highest Vulkan API version to use (1.2 or 1.3): 1.2 takes the path a
+    /// 1.2 device takes (RenderDoc 1.24 shows lavapipe as one), the 1.3
+    /// features through their extensions.
+    #[arg(long, global = true, value_parser = parse_vulkan_api)]
+    vulkan_api: Option<u32>,
     /// Log level (error, warn, info, debug, trace); RUST_LOG overrides.
     #[arg(long, global = true, default_value = "info")]
     log: String,
@@ -64,6 +69,11 @@ enum Command {
         /// pixels are logged and written marked (magenta PNG, 0 HDR).
         #[arg(long)]
         strict: bool,
+        /// Capture frame N (0-based; the view is rendered N + 1 times) with RenderDoc's in-application API
+        /// (under `renderdoccmd capture`, or with librenderdoc.so loadable);
+        /// the log names the capture file.
+        #[arg(long, value_name = "N")]
+        capture_frame: Option<u64>,
     },
     /// Render N frames along the scene's camera path; print per-pass GPU times.
     Bench {
@@ -90,6 +100,12 @@ enum Command {
         /// Also write the tables as CSV (one row per variant and pass).
         #[arg(long)]
         csv: Option<PathBuf>,
+        /// Capture frame N (0-based, in the order rendered: per variant the ray-counting
+        /// frame and the warm-up, then the measured frames) with RenderDoc's in-application API
+        /// (under `renderdoccmd capture`, or with librenderdoc.so loadable);
+        /// the log names the capture file.
+        #[arg(long, value_name = "N")]
+        capture_frame: Option<u64>,
     },
     /// Image error (ꟻLIP, PSNR) against GPU time for every quality knob:
     /// report.md, report.csv, error_vs_time.png and error maps in --out.
@@ -180,6 +196,12 @@ enum Command {
         /// Test automation: resize the window twice, minimize and restore it.
         #[arg(long, hide = true)]
         test_resize: bool,
+        /// Capture presented frame N (0-based; F9 captures the next frame
+        /// whenever the viewer runs under RenderDoc) with RenderDoc's in-application API
+        /// (under `renderdoccmd capture`, or with librenderdoc.so loadable);
+        /// the log names the capture file.
+        #[arg(long, value_name = "N")]
+        capture_frame: Option<u64>,
     },
 }
 
@@ -488,20 +510,31 @@ impl Cli {
     }
 }
 
+fn parse_vulkan_api(s: &str) -> Result<u32, String> {
+    match s {
+        "1.2" => Ok(ash::vk::API_VERSION_1_2),
+        "1.3" => Ok(ash::vk::API_VERSION_1_3),
+        _ => Err(format!("'{s}' is not 1.2 or 1.3")),
+    }
+}
+
 fn run(cli: Cli) -> Result<()> {
     let env_validation = std::env::var("HYBRID_RT_VALIDATION").is_ok_and(|v| v != "0" && !v.is_empty());
-    let gpu = GpuOptions {
+    let mut gpu = GpuOptions {
         validation: cli.gpu.validation || cli.gpu.sync_validation || env_validation,
         sync_validation: cli.gpu.sync_validation,
         device: cli.gpu.device.parse::<DeviceSelector>().unwrap_or_default(),
         disable_ray_tracing: cli.gpu.no_rt,
+        max_api_version: cli.gpu.vulkan_api,
+        capture_frame: None,
     };
     match cli.command {
         Some(Command::Info) => {
             print!("{}", app::info_command(&gpu)?);
             Ok(())
         }
-        Some(Command::Render { view, out, hdr_out, strict }) => {
+        Some(Command::Render { view, out, hdr_out, strict, capture_frame }) => {
+            gpu.capture_frame = capture_frame;
             app::render_command(&gpu, &view.job()?, &out, hdr_out.as_deref(), strict)
         }
         Some(Command::Bench {
@@ -513,7 +546,9 @@ fn run(cli: Cli) -> Result<()> {
             accel_update,
             compare_accel_updates,
             csv,
+            capture_frame,
         }) => {
+            gpu.capture_frame = capture_frame;
             let modes = if compare_modes { vec![Mode::Hybrid, Mode::Rt] } else { vec![view.mode] };
             let backends = if compare_backends {
                 vec![Backend::Query, Backend::Pipeline, Backend::Compute]
@@ -592,7 +627,17 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Some(Command::View { view, present_mode, frames, screenshot, test_resize }) => {
+        Some(Command::View { view, present_mode, frames, screenshot, test_resize, capture_frame }) => {
+            if let (Some(c), Some(f)) = (capture_frame, frames) {
+                if c >= f as u64 {
+                    let mut cli = Cli::command();
+                    let sub = cli.find_subcommand_mut("view").expect("a defined subcommand");
+                    sub.set_bin_name("hybrid-rt view");
+                    let msg = format!("--capture-frame {c}: the viewer presents only --frames {f} frames");
+                    sub.error(ErrorKind::ValueValidation, msg).exit();
+                }
+            }
+            gpu.capture_frame = capture_frame;
             let event_loop = viewer::open_display()?;
             let opts = ViewerOptions {
                 gpu,

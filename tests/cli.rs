@@ -243,7 +243,7 @@ fn info_reports_devices() {
     let printed = parse_info(&s);
 
     let instance = hybrid_rt::vk::Instance::new(&Default::default()).unwrap();
-    let devices = hybrid_rt::vk::device::enumerate(&instance.raw).unwrap();
+    let devices = hybrid_rt::vk::device::enumerate(&instance.raw, instance.api_version).unwrap();
     assert_eq!(printed.len(), devices.len(), "one block per device:\n{s}");
     let (_, chosen) = hybrid_rt::vk::device::select(&devices, &Default::default()).unwrap();
     let yn = |b: bool| if b { "yes" } else { "no" };

@@ -342,7 +342,11 @@ fn upload_geometry(ctx: &Context, scene: &Scene) -> Result<Geometry> {
         vertex_data.extend(posed);
     }
     // The usage flags every consumer needs, so no second copy is ever made.
-    let mut usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+    let mut usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    if ctx.caps.buffer_device_address {
+        // Acceleration-structure builds read the geometry by address.
+        usage |= vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+    }
     if ctx.rt.acceleration_structure {
         usage |= vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR;
     }

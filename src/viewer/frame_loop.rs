@@ -143,7 +143,7 @@ impl Viewer {
         self.last_frame = now;
         let dev = &self.ctx.device;
         let s = self.slot;
-        let FrameSlot { cmd, fence, image_available } = self.slots[s];
+        let FrameSlot { fence, image_available, .. } = self.slots[s];
         // This slot's previous frame (two ago) must be done with its command
         // buffer and image-available semaphore.
         unsafe { dev.wait_for_fences(&[fence], true, u64::MAX) }
@@ -172,6 +172,44 @@ impl Viewer {
             self.stats.bad_pixels(bad);
         }
 
+        // --capture-frame N or F9: this frame, from its uniforms to its
+        // present, in a RenderDoc capture.
+        let capture = self.ctx.wants_capture(self.presented) || std::mem::take(&mut self.capture_request);
+        let what = format!("viewer frame {}", self.presented);
+        if capture {
+            self.ctx.start_capture(&what)?;
+        }
+        let drawn = self.draw(dt, s, index);
+        if capture {
+            // The frame's own error, if any, says more than the capture's.
+            let ended = self.ctx.end_capture(&what);
+            if drawn.is_ok() {
+                ended?;
+            }
+        }
+        let last = drawn?;
+
+        let tick = self.stats.tick(Instant::now());
+        if tick.title.is_some() {
+            self.window.set_title(&self.title());
+        }
+        if let Some(line) = tick.log {
+            log::info!("{line}");
+        }
+        if last {
+            unsafe { self.ctx.device.device_wait_idle() }.context("vkDeviceWaitIdle")?;
+            self.renderer.finish_scene_update(&self.ctx)?;
+            self.collect_gpu_times()?;
+            self.finish_screenshot()?;
+            return Ok(Flow::Exit);
+        }
+        Ok(Flow::Continue)
+    }
+
+    /// Updates camera and animation, records, submits and presents frame
+    /// slot `s` into swapchain image `index`; true when it was the last.
+    fn draw(&mut self, dt: f32, s: usize, index: u32) -> Result<bool> {
+        let FrameSlot { cmd, fence, image_available } = self.slots[s];
         self.controller.update(dt);
         // Eye adaptation follows the wall clock (the first frame converges).
         self.renderer.adapt_dt = (self.presented > 0).then_some(dt);
@@ -239,21 +277,7 @@ impl Viewer {
         self.slot = (s + 1) % FRAMES_IN_FLIGHT;
         self.stats.frame_presented();
 
-        let tick = self.stats.tick(Instant::now());
-        if tick.title.is_some() {
-            self.window.set_title(&self.title());
-        }
-        if let Some(line) = tick.log {
-            log::info!("{line}");
-        }
-        if last {
-            unsafe { self.ctx.device.device_wait_idle() }.context("vkDeviceWaitIdle")?;
-            self.renderer.finish_scene_update(&self.ctx)?;
-            self.collect_gpu_times()?;
-            self.finish_screenshot()?;
-            return Ok(Flow::Exit);
-        }
-        Ok(Flow::Continue)
+        Ok(last)
     }
 
     /// The frame's commands: the scene update when `update`, the renderer's

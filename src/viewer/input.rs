@@ -88,6 +88,17 @@ impl Viewer {
                 };
                 self.shot_request = Some(path);
             }
+            KeyCode::F9 => {
+                if self.ctx.renderdoc.is_some() {
+                    log::info!("renderdoc: capturing the next frame");
+                    self.capture_request = true;
+                } else {
+                    log::warn!(
+                        "F9: RenderDoc is not loaded: start the viewer under `renderdoccmd capture ...` \
+                         or with --capture-frame N"
+                    );
+                }
+            }
             KeyCode::KeyV => {
                 let i = DEBUG_VIEWS.iter().position(|v| *v == self.settings.debug_view).unwrap_or(0);
                 self.set_debug_view(DEBUG_VIEWS[(i + 1) % DEBUG_VIEWS.len()]);

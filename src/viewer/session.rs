@@ -22,7 +22,7 @@ use super::{NoDisplay, ViewerOptions, FRAMES_IN_FLIGHT};
 use crate::app::{CameraChoice, RenderJob};
 use crate::render::{RenderSettings, Renderer};
 use crate::scene::Scene;
-use crate::vk::{Context, ContextOptions};
+use crate::vk::{Context, ContextOptions, RenderDocUse};
 
 pub(super) struct Viewer {
     pub(super) renderer: Renderer,
@@ -32,6 +32,8 @@ pub(super) struct Viewer {
     pub(super) shot: Option<PendingShot>,
     pub(super) shot_request: Option<PathBuf>,
     pub(super) shots_taken: u32,
+    /// F9: capture the next frame with RenderDoc.
+    pub(super) capture_request: bool,
     pub(super) scene: Scene,
     /// Animation being played: (index, clock in seconds, paused).
     pub(super) animation: Option<(usize, f32, bool)>,
@@ -107,6 +109,14 @@ impl Viewer {
             disable_ray_tracing: g.disable_ray_tracing,
             surface_extensions,
             swapchain: true,
+            max_api_version: g.max_api_version,
+            // The capture key works whenever the viewer runs under RenderDoc.
+            renderdoc: if g.capture_frame.is_some() {
+                RenderDocUse::Required
+            } else {
+                RenderDocUse::IfRunning
+            },
+            capture_frame: g.capture_frame,
         })?;
         let mut renderer = Renderer::new(&ctx, &scene, requested)?;
         let presenter = match Presenter::new(&ctx, &window, opts.present_mode) {
@@ -126,6 +136,7 @@ impl Viewer {
             shot: None,
             shot_request: None,
             shots_taken: 0,
+            capture_request: false,
             scene,
             animation,
             scene_dirty: false,
@@ -158,7 +169,7 @@ impl Viewer {
         v.recreate()?;
         log::info!(
             "viewer: {} at {}x{}; keys: WASD/QE move, mouse drag look, O orbit, C/Ctrl+N cameras, R reset, \
-             1-5/V/0 debug views, -/= exposure, F5-F7 effects, T hybrid/rt, P/F12 screenshot, Esc quit",
+             1-5/V/0 debug views, -/= exposure, F5-F7 effects, T hybrid/rt, P/F12 screenshot, F9 RenderDoc capture, Esc quit",
             v.scene_name,
             requested.width,
             requested.height

@@ -4,7 +4,9 @@
 use std::ffi::CStr;
 
 use anyhow::{bail, Context as _, Result};
-use ash::{khr, vk};
+use ash::{ext, khr, vk};
+
+use super::features::{self, FeaturePath};
 
 /// What a physical device offers, as far as this renderer cares.
 #[derive(Clone, Debug)]
@@ -15,6 +17,15 @@ pub struct Capabilities {
     pub driver_name: String,
     pub driver_info: String,
     pub api_version: u32,
+    /// The version the device is used at: the lower of `api_version` and
+    /// the instance's (RenderDoc 1.24 reports lavapipe as 1.2.0).
+    pub used_api_version: u32,
+    /// bufferDeviceAddress: enabled when offered; acceleration structures
+    /// need it, the compute backend does not.
+    pub buffer_device_address: bool,
+    /// How the 1.3 features are reached (core, or 1.2 + extensions); `None`
+    /// when neither works (then `unusable` says why).
+    pub feature_path: Option<FeaturePath>,
     pub acceleration_structure: bool,
     pub ray_query: bool,
     pub ray_tracing_pipeline: bool,
@@ -36,17 +47,33 @@ impl Capabilities {
         )
     }
 
+    /// "1.4.305", or "1.4.305 used as 1.2" when the instance asks for less.
+    pub fn api_used_string(&self) -> String {
+        let minor = |v: u32| (vk::api_version_major(v), vk::api_version_minor(v));
+        if minor(self.used_api_version) == minor(self.api_version) {
+            return self.api_string();
+        }
+        let (major, minor) = minor(self.used_api_version);
+        format!("{} used as {major}.{minor}", self.api_string())
+    }
+
+    /// "Vulkan 1.3 core", "Vulkan 1.2 + extensions ..." or "none".
+    pub fn feature_path_string(&self) -> String {
+        self.feature_path.as_ref().map_or_else(|| "none".to_string(), FeaturePath::describe)
+    }
+
     /// Human-readable multi-line report (the `info` command).
     pub fn report(&self) -> String {
         let yn = |b: bool| if b { "yes" } else { "no" };
         let mut s = format!(
-            "device {}: {} ({:?})\n  driver: {} {}\n  Vulkan API: {}\n  acceleration structures: {}\n  ray query: {}\n  ray-tracing pipeline: {}\n  timestamps: {} ({} ns/tick)\n",
+            "device {}: {} ({:?})\n  driver: {} {}\n  Vulkan API: {}\n  1.3 features: {}\n  acceleration structures: {}\n  ray query: {}\n  ray-tracing pipeline: {}\n  timestamps: {} ({} ns/tick)\n",
             self.index,
             self.name,
             self.device_type,
             self.driver_name,
             self.driver_info,
             self.api_string(),
+            self.feature_path_string(),
             yn(self.acceleration_structure),
             yn(self.ray_query),
             yn(self.ray_tracing_pipeline),
@@ -64,24 +91,43 @@ fn has_ext(exts: &[vk::ExtensionProperties], name: &CStr) -> bool {
     exts.iter().any(|e| e.extension_name_as_c_str() == Ok(name))
 }
 
-pub fn query_capabilities(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) -> Capabilities {
+/// What device `pd` offers when used through an instance of API version
+/// `instance_api`.
+pub fn query_capabilities(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    index: usize,
+    instance_api: u32,
+) -> Capabilities {
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let props = props2.properties;
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
+    // What a layer lets through differs from the driver (RenderDoc hides
+    // what it cannot capture): `--log debug` lists it.
+    log::debug!(
+        "device {index}: API {}.{}, extensions {}",
+        vk::api_version_major(props.api_version),
+        vk::api_version_minor(props.api_version),
+        exts.iter()
+            .filter_map(|e| e.extension_name_as_c_str().ok().map(|n| n.to_string_lossy()))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
 
     let mut asf = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
     let mut rqf = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
     let mut rtf = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default();
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
-    let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
     let has_as = has_ext(&exts, khr::acceleration_structure::NAME)
         && has_ext(&exts, khr::deferred_host_operations::NAME);
     let has_rq = has_ext(&exts, khr::ray_query::NAME);
     let has_rt = has_ext(&exts, khr::ray_tracing_pipeline::NAME);
     {
-        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12).push_next(&mut v13);
+        // Vulkan12Features is valid on 1.2; the 1.3 ones are queried by
+        // features::choose (VkPhysicalDeviceVulkan13Features is not, there).
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12);
         if has_as {
             f2 = f2.push_next(&mut asf);
         }
@@ -102,24 +148,44 @@ pub fn query_capabilities(instance: &ash::Instance, pd: vk::PhysicalDevice, inde
     let timestamps = gfx.map(|g| families[g].timestamp_valid_bits > 0).unwrap_or(false)
         && props.limits.timestamp_period > 0.0;
 
+    let used_api_version = props.api_version.min(instance_api);
+    let feature_path = features::choose(instance, pd, used_api_version, &exts);
     let mut unusable = None;
-    if props.api_version < vk::API_VERSION_1_3 {
-        unusable = Some("Vulkan 1.3 required".to_string());
+    if let Err(why) = &feature_path {
+        unusable = Some(why.clone());
     } else if gfx.is_none() {
         unusable = Some("no graphics+compute queue".to_string());
     } else if base.geometry_shader == 0 {
         // gl_PrimitiveID in the G-buffer fragment shader needs it.
         unusable = Some("geometryShader feature required (fragment gl_PrimitiveID)".to_string());
-    } else if v13.dynamic_rendering == 0 || v13.synchronization2 == 0 {
-        unusable = Some("dynamic rendering and synchronization2 required".to_string());
-    } else if v12.buffer_device_address == 0
-        || v12.descriptor_indexing == 0
-        || v12.runtime_descriptor_array == 0
-        || v12.descriptor_binding_partially_bound == 0
-        || v12.shader_sampled_image_array_non_uniform_indexing == 0
-        || v12.scalar_block_layout == 0
-    {
-        unusable = Some("buffer device address, descriptor indexing and scalar layout required".to_string());
+    } else {
+        // Every Vulkan 1.2 feature create_device enables, except buffer
+        // device addresses: only acceleration structures and the SBT need
+        // those, and RenderDoc 1.24 hides them on lavapipe (no
+        // bufferDeviceAddressCaptureReplay), leaving the compute backend.
+        let missing: Vec<&str> = [
+            (v12.descriptor_indexing, "descriptorIndexing"),
+            (v12.runtime_descriptor_array, "runtimeDescriptorArray"),
+            (v12.descriptor_binding_partially_bound, "descriptorBindingPartiallyBound"),
+            (v12.descriptor_binding_variable_descriptor_count, "descriptorBindingVariableDescriptorCount"),
+            (
+                v12.shader_sampled_image_array_non_uniform_indexing,
+                "shaderSampledImageArrayNonUniformIndexing",
+            ),
+            (
+                v12.shader_storage_buffer_array_non_uniform_indexing,
+                "shaderStorageBufferArrayNonUniformIndexing",
+            ),
+            (v12.scalar_block_layout, "scalarBlockLayout"),
+            (v12.host_query_reset, "hostQueryReset"),
+        ]
+        .into_iter()
+        .filter(|(on, _)| *on == 0)
+        .map(|(_, name)| name)
+        .collect();
+        if !missing.is_empty() {
+            unusable = Some(format!("Vulkan 1.2 features required: {}", missing.join(", ")));
+        }
     }
 
     let as_ok = has_as && asf.acceleration_structure != 0 && v12.buffer_device_address != 0;
@@ -136,6 +202,9 @@ pub fn query_capabilities(instance: &ash::Instance, pd: vk::PhysicalDevice, inde
             .map(|c| c.to_string_lossy().into_owned())
             .unwrap_or_default(),
         api_version: props.api_version,
+        used_api_version,
+        buffer_device_address: v12.buffer_device_address != 0,
+        feature_path: feature_path.ok(),
         acceleration_structure: as_ok,
         ray_query: as_ok && has_rq && rqf.ray_query != 0,
         ray_tracing_pipeline: as_ok && has_rt && rtf.ray_tracing_pipeline != 0,
@@ -178,9 +247,16 @@ fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
     }
 }
 
-pub fn enumerate(instance: &ash::Instance) -> Result<Vec<(vk::PhysicalDevice, Capabilities)>> {
+pub fn enumerate(
+    instance: &ash::Instance,
+    instance_api: u32,
+) -> Result<Vec<(vk::PhysicalDevice, Capabilities)>> {
     let pds = unsafe { instance.enumerate_physical_devices() }.context("vkEnumeratePhysicalDevices")?;
-    Ok(pds.into_iter().enumerate().map(|(i, pd)| (pd, query_capabilities(instance, pd, i))).collect())
+    Ok(pds
+        .into_iter()
+        .enumerate()
+        .map(|(i, pd)| (pd, query_capabilities(instance, pd, i, instance_api)))
+        .collect())
 }
 
 pub fn select(
@@ -254,10 +330,13 @@ pub fn create_device(
         exts.push(khr::ray_tracing_pipeline::NAME.as_ptr());
     }
 
+    let path = caps.feature_path.as_ref().context("device has no usable feature path")?;
+    exts.extend(path.extensions().iter().map(|e| e.as_ptr()));
+
     let base = vk::PhysicalDeviceFeatures::default().geometry_shader(true);
     let mut v11 = vk::PhysicalDeviceVulkan11Features::default();
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
-        .buffer_device_address(true)
+        .buffer_device_address(caps.buffer_device_address)
         .descriptor_indexing(true)
         .runtime_descriptor_array(true)
         .descriptor_binding_partially_bound(true)
@@ -271,15 +350,31 @@ pub fn create_device(
         .synchronization2(true)
         .maintenance4(true)
         .shader_demote_to_helper_invocation(true);
+    // The same features on a 1.2 device, one structure per extension.
+    let mut sync2 = vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true);
+    let mut dynr = vk::PhysicalDeviceDynamicRenderingFeatures::default().dynamic_rendering(true);
+    let mut eds = vk::PhysicalDeviceExtendedDynamicStateFeaturesEXT::default().extended_dynamic_state(true);
+    let mut m4 = vk::PhysicalDeviceMaintenance4Features::default().maintenance4(true);
+    let mut demote = vk::PhysicalDeviceShaderDemoteToHelperInvocationFeatures::default()
+        .shader_demote_to_helper_invocation(true);
     let mut asf = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
     let mut rqf = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
     let mut rtf = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true);
 
-    let mut f2 = vk::PhysicalDeviceFeatures2::default()
-        .features(base)
-        .push_next(&mut v11)
-        .push_next(&mut v12)
-        .push_next(&mut v13);
+    let mut f2 =
+        vk::PhysicalDeviceFeatures2::default().features(base).push_next(&mut v11).push_next(&mut v12);
+    match path {
+        FeaturePath::Core13 => f2 = f2.push_next(&mut v13),
+        FeaturePath::Extensions12(_) => {
+            f2 = f2.push_next(&mut sync2).push_next(&mut dynr).push_next(&mut eds);
+            if path.has(khr::maintenance4::NAME) {
+                f2 = f2.push_next(&mut m4);
+            }
+            if path.has(ext::shader_demote_to_helper_invocation::NAME) {
+                f2 = f2.push_next(&mut demote);
+            }
+        }
+    }
     if rt.acceleration_structure {
         f2 = f2.push_next(&mut asf);
     }
@@ -293,5 +388,7 @@ pub fn create_device(
         .queue_create_infos(&queues)
         .enabled_extension_names(&exts)
         .push_next(&mut f2);
-    unsafe { instance.create_device(pd, &info, None) }.context("vkCreateDevice failed")
+    let device = unsafe { instance.create_device(pd, &info, None) }.context("vkCreateDevice failed")?;
+    // Reloaded so that on 1.2 the 1.3 entry points are the extensions' ones.
+    Ok(features::load_device(instance, device.handle(), path))
 }

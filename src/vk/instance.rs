@@ -35,6 +35,10 @@ pub struct InstanceOptions {
     pub sync_validation: bool,
     /// Surface extensions a window needs (from ash-window), empty when headless.
     pub surface_extensions: Vec<*const std::ffi::c_char>,
+    /// Ask for at most this Vulkan API version (`--vulkan-api 1.2`): the
+    /// device is then used as a 1.2 device whatever it supports, which is
+    /// how the extension path RenderDoc 1.24 needs is tested without it.
+    pub max_api_version: Option<u32>,
 }
 
 pub struct Instance {
@@ -44,6 +48,9 @@ pub struct Instance {
     messenger: vk::DebugUtilsMessengerEXT,
     pub counters: Arc<ValidationCounters>,
     pub validation: bool,
+    /// The API version the instance was created with: a device is used at
+    /// the lower of this and its own version.
+    pub api_version: u32,
 }
 
 unsafe extern "system" fn debug_callback(
@@ -75,13 +82,23 @@ impl Instance {
         // SAFETY: loads the system Vulkan loader; failure is reported, not UB.
         let entry = unsafe { ash::Entry::load() }
             .context("cannot load the Vulkan loader (libvulkan.so.1); install libvulkan1 and a driver")?;
-        let api = unsafe { entry.try_enumerate_instance_version()? }.unwrap_or(vk::API_VERSION_1_0);
-        if api < vk::API_VERSION_1_3 {
+        let loader = unsafe { entry.try_enumerate_instance_version()? }.unwrap_or(vk::API_VERSION_1_0);
+        // 1.2 is enough: the 1.3 features the renderer uses are also
+        // extensions of 1.2 (see device.rs, FeaturePath).
+        if loader < vk::API_VERSION_1_2 {
             bail!(
-                "the Vulkan loader supports API {}.{}, this renderer needs 1.3",
-                vk::api_version_major(api),
-                vk::api_version_minor(api)
+                "the Vulkan loader supports API {}.{}, this renderer needs 1.2 (1.3 preferred)",
+                vk::api_version_major(loader),
+                vk::api_version_minor(loader)
             );
+        }
+        let api = [Some(vk::API_VERSION_1_3), Some(loader), opts.max_api_version]
+            .into_iter()
+            .flatten()
+            .min()
+            .unwrap_or(vk::API_VERSION_1_3);
+        if api < vk::API_VERSION_1_2 {
+            bail!("a Vulkan API version below 1.2 was asked for; the renderer needs 1.2");
         }
 
         let layers = unsafe { entry.enumerate_instance_layer_properties()? };
@@ -112,7 +129,7 @@ impl Instance {
             .application_name(&app_name)
             .application_version(1)
             .engine_name(&app_name)
-            .api_version(vk::API_VERSION_1_3);
+            .api_version(api);
 
         let counters = Arc::new(ValidationCounters::default());
         let severity = vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
@@ -163,7 +180,15 @@ impl Instance {
             }
             _ => vk::DebugUtilsMessengerEXT::null(),
         };
-        Ok(Instance { entry, raw, debug_utils, messenger, counters, validation: opts.validation })
+        Ok(Instance {
+            entry,
+            raw,
+            debug_utils,
+            messenger,
+            counters,
+            validation: opts.validation,
+            api_version: api,
+        })
     }
 }
 

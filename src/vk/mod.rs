@@ -2,16 +2,19 @@
 //! timestamp queries, shader modules.
 
 pub mod device;
+pub mod features;
 pub mod instance;
 pub mod limits;
 pub mod memory;
 pub mod pipeline;
 pub mod reflect;
+pub mod renderdoc;
 pub mod rt_pipeline;
 pub mod timer;
 
 use std::ffi::CString;
 use std::mem::ManuallyDrop;
+use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use anyhow::{Context as _, Result};
@@ -19,8 +22,10 @@ use ash::{ext, khr, vk};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
 pub use device::{Capabilities, DeviceSelector, RtEnables};
+pub use features::FeaturePath;
 pub use instance::{Instance, InstanceOptions, ValidationCounters};
 pub use memory::{Buffer, Image};
+pub use renderdoc::RenderDoc;
 
 /// How to create the Vulkan context.
 #[derive(Clone, Debug, Default)]
@@ -33,6 +38,23 @@ pub struct ContextOptions {
     pub disable_ray_tracing: bool,
     pub surface_extensions: Vec<*const std::ffi::c_char>,
     pub swapchain: bool,
+    /// At most this Vulkan API version (see `InstanceOptions`).
+    pub max_api_version: Option<u32>,
+    /// RenderDoc's in-application API: load it (before the instance).
+    pub renderdoc: RenderDocUse,
+    /// `--capture-frame N`: the frame to capture with RenderDoc.
+    pub capture_frame: Option<u64>,
+}
+
+/// Whether a context loads RenderDoc's in-application API.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RenderDocUse {
+    #[default]
+    Off,
+    /// When the process runs under RenderDoc (the viewer's capture key).
+    IfRunning,
+    /// Load it or fail (`--capture-frame`).
+    Required,
 }
 
 /// Everything a pass needs to talk to the GPU.
@@ -53,6 +75,10 @@ pub struct Context {
     pub sync_validation: bool,
     /// Fault injection for tests of error paths (off unless armed).
     pub alloc_fault: AllocationFault,
+    /// RenderDoc's in-application API, when loaded.
+    pub renderdoc: Option<renderdoc::RenderDoc>,
+    /// The frame `--capture-frame` asked for.
+    pub capture_frame: Option<u64>,
 }
 
 /// Makes the n-th buffer or image allocation from now fail, as running out
@@ -76,12 +102,19 @@ impl AllocationFault {
 
 impl Context {
     pub fn new(opts: &ContextOptions) -> Result<Context> {
+        // Before the instance: loading RenderDoc enables its Vulkan layer.
+        let renderdoc = match opts.renderdoc {
+            RenderDocUse::Off => None,
+            RenderDocUse::IfRunning => renderdoc::RenderDoc::running().transpose()?,
+            RenderDocUse::Required => Some(renderdoc::RenderDoc::load()?),
+        };
         let instance = Instance::new(&InstanceOptions {
             validation: opts.validation,
             sync_validation: opts.sync_validation,
             surface_extensions: opts.surface_extensions.clone(),
+            max_api_version: opts.max_api_version,
         })?;
-        let devices = device::enumerate(&instance.raw)?;
+        let devices = device::enumerate(&instance.raw, instance.api_version)?;
         for (_, c) in &devices {
             log::debug!("found {}", c.report().trim_end());
         }
@@ -96,7 +129,7 @@ impl Context {
             }
         };
         log::info!(
-            "using {} ({}, {} {}), Vulkan {}; ray-tracing extensions enabled: AS {} / query {} / pipeline {}",
+            "using {} ({}, {} {}), Vulkan {} ({}); ray-tracing extensions enabled: AS {} / query {} / pipeline {}",
             caps.name,
             match caps.device_type {
                 vk::PhysicalDeviceType::CPU => "software",
@@ -106,7 +139,8 @@ impl Context {
             },
             caps.driver_name,
             caps.driver_info,
-            caps.api_string(),
+            caps.api_used_string(),
+            caps.feature_path_string(),
             rt.acceleration_structure,
             rt.ray_query,
             rt.ray_tracing_pipeline
@@ -118,7 +152,8 @@ impl Context {
             device: device.clone(),
             physical_device: pd,
             debug_settings: Default::default(),
-            buffer_device_address: true,
+            // Memory for device addresses only where the feature is on.
+            buffer_device_address: caps.buffer_device_address,
             allocation_sizes: Default::default(),
         })
         .context("creating the GPU memory allocator")?;
@@ -151,6 +186,8 @@ impl Context {
             rt_pipeline,
             sync_validation: opts.validation && opts.sync_validation,
             alloc_fault: AllocationFault::default(),
+            renderdoc,
+            capture_frame: opts.capture_frame,
         };
         ctx.name(ctx.queue, "main queue");
         ctx.name(ctx.command_pool, "main command pool");
@@ -256,6 +293,45 @@ impl Context {
         };
         unsafe { self.device.destroy_fence(fence, None) };
         r.context("queue submit / wait (device lost?)")
+    }
+
+    /// Whether `frame` is the frame `--capture-frame` asked for.
+    pub fn wants_capture(&self, frame: u64) -> bool {
+        self.capture_frame == Some(frame)
+    }
+
+    /// Starts a RenderDoc capture of everything submitted until
+    /// [`Context::end_capture`]; `what` names it in the log.
+    pub fn start_capture(&self, what: &str) -> Result<()> {
+        let rd = self.renderdoc.as_ref().context(
+            "RenderDoc is not loaded: run under `renderdoccmd capture ...` or pass --capture-frame N",
+        )?;
+        rd.start(self.instance.raw.handle());
+        anyhow::ensure!(rd.is_capturing(), "RenderDoc did not start capturing {what}");
+        log::info!("renderdoc: capturing {what}");
+        Ok(())
+    }
+
+    /// Ends the capture; logs and returns the capture file.
+    pub fn end_capture(&self, what: &str) -> Result<PathBuf> {
+        let rd = self.renderdoc.as_ref().context("RenderDoc is not loaded")?;
+        let path = rd.end(self.instance.raw.handle())?;
+        log::info!("renderdoc: captured {what} to {}", path.display());
+        Ok(path)
+    }
+
+    /// Runs `f` inside a capture when `frame` is the one asked for; the
+    /// capture is ended on `f`'s error too.
+    pub fn capture_frame_if<R>(&self, frame: u64, what: &str, f: impl FnOnce() -> Result<R>) -> Result<R> {
+        if !self.wants_capture(frame) {
+            return f();
+        }
+        self.start_capture(what)?;
+        let r = f();
+        let ended = self.end_capture(what);
+        let r = r?;
+        ended?;
+        Ok(r)
     }
 
     /// Bytes of device memory currently allocated through gpu-allocator.
