@@ -29,7 +29,6 @@ use hybrid_rt::accel::dynamic::RebuildPolicy;
 use hybrid_rt::gpu::GpuScene;
 use hybrid_rt::metrics::diff_stats;
 use hybrid_rt::render::frame::{Access, Use};
-use hybrid_rt::render::passes::tonemap::LDR;
 use hybrid_rt::render::shading::{Backend, Mode};
 use hybrid_rt::render::skinning::Skinning;
 use hybrid_rt::render::{RenderSettings, Renderer};
@@ -176,9 +175,11 @@ fn render_in_one_submission(
     r.prepare(ctx, scene, camera, settings).unwrap();
     ctx.begin_commands(cmd).unwrap();
     r.record_scene_update(ctx, cmd, scene).unwrap();
-    let uses = [Use::image(&LDR, Access::TransferRead)];
+    // The frame's final image (anti-aliased by default), as `render` reads it.
+    let output = r.output_ldr().unwrap();
+    let uses = [Use::image(output, Access::TransferRead)];
     r.record_with(ctx, cmd, |rec, t| {
-        let ldr = t.get(&LDR).unwrap();
+        let ldr = t.get(output).unwrap();
         rec.pass("readback", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
             let region = [vk::BufferImageCopy::default()
                 .image_subresource(

@@ -38,6 +38,10 @@ shared! {
     // Set 1 of the tone-mapping pass.
     id TONEMAP_IN = 0;
     id TONEMAP_OUT = 1;
+    // Set 1 of the anti-aliasing passes (render/passes/edge_aa.rs, fxaa.rs):
+    // the edge filter also reads GB_NORMAL and GB_HIT.
+    id AA_IN = 5;
+    id AA_OUT = 6;
 
     // Set 2: the ray-query and RT-pipeline tracers bind the TLAS ...
     id TRACE_TLAS = 0;
