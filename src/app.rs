@@ -8,6 +8,7 @@ use ash::vk as avk;
 use glam::Vec3;
 
 use crate::render::shading::{Backend, SceneNeeds, ShadingConfig};
+use crate::render::supersample::{self, Supersample};
 use crate::render::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::vk::{Context, ContextOptions, DeviceSelector, RenderDocUse};
@@ -124,6 +125,8 @@ pub struct RenderJob {
     pub time: f32,
     /// Fixed animation step for benchmarks: frame i is at time i / fps.
     pub fps: f32,
+    /// `render --supersample K`: K×K samples per pixel, filtered down.
+    pub supersample: Option<Supersample>,
 }
 
 impl RenderJob {
@@ -137,6 +140,7 @@ impl RenderJob {
             animation: None,
             time: 0.0,
             fps: 30.0,
+            supersample: None,
         }
     }
 
@@ -193,6 +197,9 @@ pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
     let (scene, _) = load_posed(job)?;
     let camera = job.camera.resolve(&scene)?;
     resolve_shading(ctx, &scene, &job.settings)?;
+    if let Some(ss) = &job.supersample {
+        return supersample::render_supersampled(ctx, &scene, &camera, extent, &job.settings, ss);
+    }
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     // With --capture-frame N the same view is rendered N + 1 times and
     // frame N captured (frame 0 also compiles pipelines and builds targets).

@@ -10,7 +10,8 @@ use clap::{error::ErrorKind, Args, CommandFactory, Parser, Subcommand};
 use glam::Vec3;
 
 use hybrid_rt::app::{self, AccelUpdate, CameraChoice, GpuOptions, RenderJob};
-use hybrid_rt::render::shading::{Backend, Effects, Mode};
+use hybrid_rt::render::shading::{AaMode, Backend, Effects, Mode};
+use hybrid_rt::render::supersample::{self, SampleFilter, Supersample};
 use hybrid_rt::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use hybrid_rt::render::{DebugView, RenderSettings};
 use hybrid_rt::report::{self, ReferenceSettings, ReportOptions};
@@ -74,6 +75,14 @@ enum Command {
         /// the log names the capture file.
         #[arg(long, value_name = "N")]
         capture_frame: Option<u64>,
+        /// Render K×K samples per pixel (1..=16) at K·W x K·H and filter
+        /// them down: a reference to measure anti-aliasing against (the
+        /// large frame is not post-filtered: no --aa).
+        #[arg(long, value_parser = parse_supersample, allow_hyphen_values = true)]
+        supersample: Option<u32>,
+        /// With --supersample: how the samples of a pixel are weighted [default: box].
+        #[arg(long, value_enum, requires = "supersample")]
+        ss_filter: Option<SampleFilter>,
     },
     /// Render N frames along the scene's camera path; print per-pass GPU times.
     Bench {
@@ -121,7 +130,7 @@ enum Command {
         warmup: usize,
         /// Knobs to sweep, comma-separated, each optionally with its values
         /// after '=' separated by ':' (e.g. "max-depth=0:2:8,mode"); knobs:
-        /// max-depth, min-weight, effects, mode, backend, resolution-scale.
+        /// max-depth, min-weight, effects, mode, backend, aa, resolution-scale.
         /// Default: all, with their full value lists.
         #[arg(long)]
         knobs: Option<String>,
@@ -141,11 +150,18 @@ enum Command {
         /// Do not count rays per frame (saves a pipeline compile per setting).
         #[arg(long)]
         no_ray_counts: bool,
+        /// The aa knob's reference: the base settings with K×K samples per
+        /// pixel (1..=16).
+        #[arg(long, default_value_t = 4, value_parser = parse_supersample, allow_hyphen_values = true)]
+        ref_supersample: u32,
+        /// How the aa knob's reference weighs its samples.
+        #[arg(long, value_enum, default_value_t = SampleFilter::Box)]
+        ref_ss_filter: SampleFilter,
         /// Numerical-stability report instead: stiff and extreme variants
         /// of the scene (moved far from the origin, scaled, grazing and
         /// facing mirrors, IOR near 1, a 1e5 environment texel, ...) on
         /// every available backend, with pass/fail thresholds.
-        #[arg(long, conflicts_with_all = ["knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts"])]
+        #[arg(long, conflicts_with_all = ["knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts", "ref_supersample", "ref_ss_filter"])]
         stability: bool,
         /// With --stability: only these cases (comma-separated; the
         /// canonicals they are compared with are added), e.g.
@@ -244,6 +260,10 @@ struct ViewArgs {
     /// Ray traversal backend.
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
+    /// Anti-aliasing after tone mapping: edge (G-buffer depth and normal
+    /// discontinuities), fxaa (luminance edges) or none [default: edge].
+    #[arg(long, value_enum)]
+    aa: Option<AaMode>,
     #[arg(long)]
     no_shadows: bool,
     #[arg(long)]
@@ -401,6 +421,10 @@ fn parse_count(s: &str) -> Result<usize, String> {
     parse_int(s, 1, i64::MAX, "a frame count of").map(|v| v as usize)
 }
 
+fn parse_supersample(s: &str) -> Result<u32, String> {
+    parse_int(s, 1, supersample::MAX_FACTOR as i64, "samples per axis").map(|v| v as u32)
+}
+
 fn parse_exposure(s: &str) -> Result<f32, String> {
     parse_f32(s, "finite, > 0", |v| v > 0.0)
 }
@@ -473,6 +497,7 @@ impl ViewArgs {
                 debug_view: self.debug_view,
                 mode: self.mode,
                 backend: self.backend,
+                aa: self.aa.unwrap_or_default(),
                 effects: Effects {
                     shadows: !self.no_shadows,
                     reflections: !self.no_reflections,
@@ -485,6 +510,7 @@ impl ViewArgs {
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),
             fps: self.fps.unwrap_or(30.0),
+            supersample: None,
         })
     }
 }
@@ -500,7 +526,18 @@ impl Cli {
             Some(Command::View { view, .. }) => ("view", view),
             Some(Command::Info) | Some(Command::Compare { .. }) | None => return,
         };
-        if let Some(p) = view.without_effect(name) {
+        let problem = match &self.command {
+            Some(Command::Render { supersample: Some(k), .. })
+                if view.aa.is_some_and(|a| a != AaMode::None) =>
+            {
+                Some(format!(
+                    "--aa has no effect with --supersample {k}: the {k}x{k} samples are the anti-aliasing \
+                     (the large frame is filtered down, not post-filtered)"
+                ))
+            }
+            _ => view.without_effect(name),
+        };
+        if let Some(p) = problem {
             // The subcommand's own usage line under the message.
             let mut cli = Cli::command();
             let sub = cli.find_subcommand_mut(name).expect("a defined subcommand");
@@ -533,9 +570,12 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", app::info_command(&gpu)?);
             Ok(())
         }
-        Some(Command::Render { view, out, hdr_out, strict, capture_frame }) => {
+        Some(Command::Render { view, out, hdr_out, strict, capture_frame, supersample, ss_filter }) => {
             gpu.capture_frame = capture_frame;
-            app::render_command(&gpu, &view.job()?, &out, hdr_out.as_deref(), strict)
+            let mut job = view.job()?;
+            job.supersample =
+                supersample.map(|factor| Supersample { factor, filter: ss_filter.unwrap_or_default() });
+            app::render_command(&gpu, &job, &out, hdr_out.as_deref(), strict)
         }
         Some(Command::Bench {
             view,
@@ -580,6 +620,8 @@ fn run(cli: Cli) -> Result<()> {
             ref_backend,
             ref_mode,
             no_ray_counts,
+            ref_supersample,
+            ref_ss_filter,
             stability,
             cases,
             tone_sheet,
@@ -615,6 +657,7 @@ fn run(cli: Cli) -> Result<()> {
                     mode: ref_mode,
                 },
                 count_rays: !no_ray_counts,
+                aa_reference: Supersample { factor: ref_supersample, filter: ref_ss_filter },
                 ..ReportOptions::new(view.job()?, out)
             };
             report::report_command(&gpu, &opts)

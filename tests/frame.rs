@@ -4,7 +4,7 @@
 //! validation on every backend in both modes.
 mod common;
 
-use hybrid_rt::render::shading::{Backend, Mode};
+use hybrid_rt::render::shading::{AaMode, Backend, Mode};
 use hybrid_rt::render::{DebugView, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
 
@@ -35,11 +35,15 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
     for backend in BACKENDS {
         let hybrid = RenderSettings { backend, ..Default::default() };
         let (h, targets) = frame_of(&ctx, &scene, &hybrid);
-        assert_eq!(h, ["gbuffer", "direct", "specular", "composite", "tonemap"], "{backend:?} hybrid");
+        assert_eq!(
+            h,
+            ["gbuffer", "direct", "specular", "composite", "tonemap", "edge aa"],
+            "{backend:?} hybrid"
+        );
         assert!(targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
         let rt = RenderSettings { backend, mode: Mode::Rt, ..Default::default() };
         let (p, targets) = frame_of(&ctx, &scene, &rt);
-        assert_eq!(p, ["primary", "direct", "specular", "composite", "tonemap"], "{backend:?} rt");
+        assert_eq!(p, ["primary", "direct", "specular", "composite", "tonemap", "edge aa"], "{backend:?} rt");
         // Pure RT differs by exactly one pass, and needs no depth buffer.
         assert_eq!(h[1..], p[1..]);
         assert!(!targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
@@ -83,7 +87,7 @@ material = "clay"
 "#,
     );
     let (passes, targets) = frame_of(&ctx, &plain, &RenderSettings::default());
-    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap"]);
+    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap", "edge aa"]);
     assert!(!targets.contains(&"specular chain"), "{targets:?}");
 
     // The default scene with reflections and refractions switched off.
@@ -92,13 +96,23 @@ material = "clay"
     s.effects.reflections = false;
     s.effects.refractions = false;
     let (passes, targets) = frame_of(&ctx, &scene, &s);
-    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap"]);
+    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap", "edge aa"]);
     assert!(!targets.contains(&"specular chain"), "{targets:?}");
 
-    // A debug view shows the G-buffer: no light pass at all.
+    // --aa none: tone mapping's image is the result, no AA target; fxaa
+    // instead of the edge filter.
+    let none = RenderSettings { aa: AaMode::None, ..s };
+    let (passes, targets) = frame_of(&ctx, &scene, &none);
+    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap"]);
+    assert!(!targets.contains(&"anti-aliased output"), "{targets:?}");
+    let (passes, _) = frame_of(&ctx, &scene, &RenderSettings { aa: AaMode::Fxaa, ..s });
+    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap", "fxaa"]);
+
+    // A debug view shows the G-buffer: no light pass at all, and unfiltered.
     let debug = RenderSettings { debug_view: DebugView::Normal, ..Default::default() };
     let (passes, targets) = frame_of(&ctx, &scene, &debug);
     assert_eq!(passes, ["gbuffer", "composite", "tonemap"]);
+    assert!(!targets.contains(&"anti-aliased output"), "{targets:?}");
     assert!(!targets.contains(&"direct light"), "{targets:?}");
     common::assert_validation_clean(&ctx);
 }

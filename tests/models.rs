@@ -6,11 +6,14 @@
 //! and one object's material changed must fail (tested below).
 mod common;
 
+use hybrid_rt::render::shading::AaMode;
 use hybrid_rt::render::{FrameOutput, RenderSettings};
 use hybrid_rt::scene::{AlphaMode, Scene};
 
 fn render(scene: &Scene, w: u32, h: u32) -> FrameOutput {
-    common::render_scene(scene, w, h, &RenderSettings::default())
+    // The goldens pin the shading before anti-aliasing (tests/antialias.rs
+    // tests the filters).
+    common::render_scene(scene, w, h, &RenderSettings { aa: AaMode::None, ..Default::default() })
 }
 
 fn assert_lit(frame: &FrameOutput, min_mean: f64) {

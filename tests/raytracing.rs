@@ -6,14 +6,16 @@ mod common;
 use common::scenes::*;
 
 use glam::Vec3;
-use hybrid_rt::render::shading::{Effects, Mode};
+use hybrid_rt::render::shading::{AaMode, Effects, Mode};
 use hybrid_rt::render::{DebugView, FrameOutput, RenderSettings};
 
 const W: u32 = 160;
 const H: u32 = 90;
 
+/// The closed-form checks and the golden probe shading, before
+/// anti-aliasing (tests/antialias.rs tests the filters).
 fn settings() -> RenderSettings {
-    RenderSettings::default()
+    RenderSettings { aa: AaMode::None, ..Default::default() }
 }
 
 /// Per pixel of the unscaled shadow scene: None where the camera sees the

@@ -12,7 +12,7 @@ use hybrid_rt::gpu::shared::{
     HIST_BINS, HIST_MAX_LOG2, HIST_MIN_LOG2, LOG_AVERAGE_DELTA, TONEMAP_ACES, TONEMAP_NONE, TONEMAP_REINHARD,
     TONEMAP_REINHARD_WHITE,
 };
-use hybrid_rt::render::shading::Backend;
+use hybrid_rt::render::shading::{AaMode, Backend};
 use hybrid_rt::render::tone::{AutoExposure, ExposureState, ToneOperator, ToneSettings};
 use hybrid_rt::render::{FrameOutput, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
@@ -159,8 +159,13 @@ yfov_deg = 100
     )
 }
 
+/// Auto exposure `mode`, no anti-aliasing (the checks read exact pixels).
 fn auto(mode: AutoExposure) -> RenderSettings {
-    RenderSettings { tone: ToneSettings { auto_exposure: mode, ..Default::default() }, ..Default::default() }
+    RenderSettings {
+        tone: ToneSettings { auto_exposure: mode, ..Default::default() },
+        aa: AaMode::None,
+        ..Default::default()
+    }
 }
 
 fn luminance(p: [f32; 3]) -> f64 {
@@ -381,7 +386,7 @@ fn black_blinding_and_nan_inf_frames_stay_finite_and_sensible_on_every_backend()
             let settings = RenderSettings {
                 backend,
                 tone: ToneSettings { auto_exposure: mode, operator: op, ..Default::default() },
-                ..Default::default()
+                ..auto(mode)
             };
             let what = format!("{backend:?}, {mode:?}, {op:?}");
             // Black: black, and a finite exposure.

@@ -67,6 +67,10 @@ shared! {
     // (1 - ADAPT_BASE^(ADAPT_FPS * dt)), frame-rate independent.
     float ADAPT_BASE = 0.98;
     float ADAPT_FPS = 60.0;
+    // Set 1 of the anti-aliasing passes (render/passes/edge_aa.rs, fxaa.rs):
+    // the edge filter also reads GB_NORMAL and GB_HIT.
+    id AA_IN = 5;
+    id AA_OUT = 6;
 
     // Set 2: the ray-query and RT-pipeline tracers bind the TLAS ...
     id TRACE_TLAS = 0;

@@ -10,6 +10,7 @@ pub mod output;
 pub mod passes;
 pub mod shading;
 pub mod skinning;
+pub mod supersample;
 pub mod targets;
 pub mod tone;
 pub mod tracer;
@@ -27,8 +28,8 @@ use crate::scene::{Camera, Scene};
 use crate::vk::timer::GpuTimer;
 use crate::vk::{Buffer, Context};
 use frame::{Access, Recorder, SharedBuffer, Use};
-use passes::{composite::HDR, tonemap::LDR, Cx, Init, Pass, FRAME};
-use shading::{Backend, Effects, Mode, SceneNeeds, ShadingConfig};
+use passes::{antialias::final_ldr, composite::HDR, Cx, Init, Pass, FRAME};
+use shading::{AaMode, Backend, Effects, Mode, SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;
 use tone::{ExposureState, ToneOperator, ToneSettings};
@@ -70,6 +71,8 @@ pub struct RenderSettings {
     pub mode: Mode,
     pub effects: Effects,
     pub backend: Backend,
+    /// Anti-aliasing after tone mapping (edge by default).
+    pub aa: AaMode,
 }
 
 impl Default for RenderSettings {
@@ -81,6 +84,7 @@ impl Default for RenderSettings {
             mode: Mode::Hybrid,
             effects: Effects::default(),
             backend: Backend::Auto,
+            aa: AaMode::Edge,
         }
     }
 }
@@ -111,7 +115,8 @@ fn tone_uniforms(t: &ToneSettings, adapt_dt: Option<f32>) -> GpuFrame {
 pub struct FrameOutput {
     pub width: u32,
     pub height: u32,
-    /// Tone-mapped sRGB, RGBA8, row-major, top row first.
+    /// The final displayable image (tone-mapped, anti-aliased unless
+    /// `--aa none`), sRGB, RGBA8, row-major, top row first.
     pub ldr: Vec<u8>,
     /// Linear radiance, RGBA32F.
     pub hdr: Vec<f32>,
@@ -138,8 +143,11 @@ struct Recorded {
     pass: Box<dyn Pass>,
 }
 
-/// The readback and the viewer's blit copy these out of the frame.
-const OUTPUTS: [Use; 2] = [Use::image(&LDR, Access::TransferRead), Use::image(&HDR, Access::TransferRead)];
+/// The readback and the viewer's blit copy these out of the frame: its
+/// final LDR image (anti-aliased, or tone mapping's) and the radiance.
+fn outputs(config: &ShadingConfig) -> [Use; 2] {
+    [Use::image(final_ldr(config), Access::TransferRead), Use::image(&HDR, Access::TransferRead)]
+}
 
 pub struct Renderer {
     pub gpu: GpuScene,
@@ -259,17 +267,20 @@ impl Renderer {
         (self.readback_ldr, self.readback_hdr) = readback_buffers(ctx, extent)?;
         self.extent = extent;
         let uses: Vec<Use> = self.passes.iter().flat_map(|p| p.uses.iter().copied()).collect();
-        self.allocate_targets(ctx, &uses)?;
+        if let Some(config) = self.config {
+            self.allocate_targets(ctx, &config, &uses)?;
+        }
         for p in &self.passes {
             p.pass.bind(ctx, &self.targets);
         }
         Ok(())
     }
 
-    /// Allocates exactly the targets `uses` (the passes' declarations) name.
-    fn allocate_targets(&mut self, ctx: &Context, uses: &[Use]) -> Result<()> {
+    /// Allocates exactly the targets `uses` (the passes' declarations) and
+    /// the outputs of `config` name.
+    fn allocate_targets(&mut self, ctx: &Context, config: &ShadingConfig, uses: &[Use]) -> Result<()> {
         self.targets.destroy(ctx);
-        let all: Vec<Use> = uses.iter().copied().chain(OUTPUTS).collect();
+        let all: Vec<Use> = uses.iter().copied().chain(outputs(config)).collect();
         self.targets = Targets::new(ctx, self.extent, &all)?;
         Ok(())
     }
@@ -392,6 +403,12 @@ impl Renderer {
         self.config
     }
 
+    /// The current frame's final LDR target (after `prepare`): what is
+    /// read back and presented.
+    pub fn output_ldr(&self) -> Result<&'static targets::TargetDesc> {
+        self.config.as_ref().map(final_ldr).context("prepare() must run before the output is known")
+    }
+
     /// Names of the passes the current frame records, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
         self.passes.iter().map(|p| p.name).collect()
@@ -428,7 +445,7 @@ impl Renderer {
         // Targets first (passes bind them), from what the passes declare.
         self.passes = Vec::new();
         let uses: Vec<Vec<Use>> = chosen.iter().map(|d| (d.uses)(&config)).collect();
-        self.allocate_targets(ctx, &uses.iter().flatten().copied().collect::<Vec<_>>())?;
+        self.allocate_targets(ctx, &config, &uses.iter().flatten().copied().collect::<Vec<_>>())?;
         for (desc, uses) in chosen.into_iter().zip(uses) {
             let init = Init {
                 ctx,
@@ -494,8 +511,8 @@ impl Renderer {
         self.gpu.write_frame(&frame)
     }
 
-    /// Records every pass of one frame; the tone-mapped result is in the
-    /// `tonemap::LDR` target for the caller (readback or present).
+    /// Records every pass of one frame; the displayable result is in the
+    /// `output_ldr()` target for the caller (readback or present).
     pub fn record(&mut self, ctx: &Context, cmd: vk::CommandBuffer) -> Result<()> {
         self.record_with(ctx, cmd, |_, _| Ok(()))
     }
@@ -538,9 +555,11 @@ impl Renderer {
         let cmd = self.cmd;
         ctx.begin_commands(cmd)?;
         let (ldr_buf, hdr_buf) = (self.readback_ldr.raw, self.readback_hdr.raw);
+        let ldr = self.output_ldr()?;
+        let uses = outputs(&self.config.context("prepared above")?);
         self.record_with(ctx, cmd, |rec, t| {
-            rec.pass("readback", vk::PipelineStageFlags2::NONE, &OUTPUTS, |cmd| {
-                for (desc, buf) in [(&LDR, ldr_buf), (&HDR, hdr_buf)] {
+            rec.pass("readback", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
+                for (desc, buf) in [(ldr, ldr_buf), (&HDR, hdr_buf)] {
                     let img = t.get(desc).context("output target missing")?;
                     let region = [vk::BufferImageCopy::default()
                         .image_subresource(

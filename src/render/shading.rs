@@ -38,6 +38,32 @@ pub enum Backend {
     Compute,
 }
 
+/// Anti-aliasing of the tone-mapped frame (render/passes/antialias.rs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum AaMode {
+    /// The tone-mapped frame as it is.
+    None,
+    /// Geometric edge filter: depth and normal discontinuities of the
+    /// G-buffer pick the pixels to blur (Shishkovtsov; Sabino Eq. 4.2).
+    #[default]
+    Edge,
+    /// Luminance edge filter in the style of FXAA 3.11 (quality preset).
+    Fxaa,
+}
+
+impl AaMode {
+    pub const ALL: [AaMode; 3] = [AaMode::None, AaMode::Edge, AaMode::Fxaa];
+
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            AaMode::None => "none",
+            AaMode::Edge => "edge",
+            AaMode::Fxaa => "fxaa",
+        }
+    }
+}
+
 /// User-facing switches (all on by default; the scene may still not need them).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Effects {
@@ -186,6 +212,8 @@ pub struct ShadingConfig {
     /// The frame's luminance is measured (auto exposure, or the white point
     /// of `reinhard-white` from the frame's maximum): the `luminance` pass runs.
     pub luminance: bool,
+    /// Anti-aliasing after tone mapping (left out in debug views).
+    pub aa: AaMode,
 }
 
 impl ShadingConfig {
@@ -212,7 +240,7 @@ impl ShadingConfig {
         let backend =
             if !traces { None } else { Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs)?) };
         let luminance = settings.tone.measures_luminance() && !debug_view;
-        Ok(ShadingConfig { mode, effects, backend, debug_view, needs, luminance })
+        Ok(ShadingConfig { mode, effects, backend, debug_view, needs, luminance, aa: settings.aa })
     }
 
     /// Why this backend (for the log).
@@ -251,8 +279,9 @@ impl ShadingConfig {
                 .filter(|(b, _)| *b && self.backend.is_some())
                 .map(|(_, n)| *n)
                 .collect();
+        let aa = if self.debug_view { "none (debug view)" } else { self.aa.name() };
         format!(
-            "mode {:?}, backend {}, secondary effects: {}",
+            "mode {:?}, backend {}, secondary effects: {}, aa {aa}",
             self.mode,
             self.backend.map(|b| format!("{b:?}").to_lowercase()).unwrap_or_else(|| "none".into()),
             if on.is_empty() { "none".to_string() } else { on.join(", ") }

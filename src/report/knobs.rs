@@ -1,10 +1,10 @@
 //! The quality knobs a report sweeps: one table entry per knob, so a later
-//! feature (budget heuristic, SH bands, anti-aliasing, ...) adds itself as
+//! feature (budget heuristic, SH bands, ...) adds itself as
 //! one more row. Each knob changes one thing of the base settings.
 
 use anyhow::{bail, Context as _, Result};
 
-use crate::render::shading::{Backend, Mode};
+use crate::render::shading::{AaMode, Backend, Mode};
 use crate::render::RenderSettings;
 
 /// What one measured setting renders: the frame settings and the
@@ -104,6 +104,23 @@ pub const KNOBS: &[Knob] = &[
             Ok(())
         },
         skip_unavailable: true,
+    },
+    Knob {
+        name: "aa",
+        about: "anti-aliasing after tone mapping: none, edge (G-buffer depth/normal edges) or fxaa \
+                (luminance edges); its rows compare the final 8-bit image with the base settings \
+                supersampled (--ref-supersample), not with the reference",
+        values: &["none", "edge", "fxaa"],
+        apply: |v, s| {
+            v.settings.aa = match s {
+                "none" => AaMode::None,
+                "edge" => AaMode::Edge,
+                "fxaa" => AaMode::Fxaa,
+                _ => bail!("aa '{s}': expected none, edge or fxaa"),
+            };
+            Ok(())
+        },
+        skip_unavailable: false,
     },
     Knob {
         name: "resolution-scale",

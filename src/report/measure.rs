@@ -7,7 +7,7 @@ use anyhow::Result;
 use ash::vk as avk;
 
 use super::knobs::Variant;
-use super::metrics::HdrImage;
+use super::metrics::{HdrImage, LdrImage};
 use crate::render::shading::Effects;
 use crate::render::Renderer;
 use crate::scene::{Camera, Scene};
@@ -24,6 +24,16 @@ pub struct Timing {
     pub frames: usize,
 }
 
+impl Timing {
+    /// Median ms of the anti-aliasing pass, if one ran.
+    pub fn aa_pass(&self) -> Option<f64> {
+        self.passes.iter().find(|(n, _)| AA_PASSES.contains(n)).map(|(_, ms)| *ms)
+    }
+}
+
+/// The anti-aliasing passes (at most one runs).
+pub const AA_PASSES: [&str; 2] = ["edge aa", "fxaa"];
+
 /// A rendered and timed setting.
 pub struct Measured {
     pub variant: Variant,
@@ -38,10 +48,10 @@ pub struct Measured {
     pub rays: Option<[u32; 3]>,
     /// The last timed frame's radiance (at the variant's own size).
     pub image: HdrImage,
+    /// Its final 8-bit image (tone-mapped, anti-aliased per the variant).
+    pub ldr: LdrImage,
     /// Pixels whose radiance was NaN or Inf (set to 0 in `image`).
     pub non_finite: usize,
-    /// The last timed frame as displayed (tone-mapped sRGB).
-    pub ldr: image::RgbImage,
     /// What auto exposure measured in it (None: fixed exposure).
     pub exposure: Option<crate::render::tone::ExposureState>,
 }
@@ -141,8 +151,8 @@ pub fn measure(
         },
         rays,
         image,
+        ldr: LdrImage { width: out.width, height: out.height, rgb: out.rgb8().into_raw() },
         non_finite,
-        ldr: out.rgb8(),
         exposure: out.exposure,
     })
 }

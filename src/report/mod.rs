@@ -26,11 +26,12 @@ use anyhow::{bail, Context as _, Result};
 
 use crate::app::{load_posed, resolve_shading, with_context, GpuOptions, RenderJob};
 use crate::render::shading::{Backend, Mode};
+use crate::render::supersample::{render_supersampled, SampleFilter, Supersample};
 use crate::render::{RenderSettings, Renderer};
 use crate::vk::Context;
 use knobs::{KnobSelection, Variant};
 use measure::Measured;
-use metrics::{Errors, FlipMap};
+use metrics::{Errors, FlipMap, LdrImage};
 
 /// The reference's settings: pure-RT mode and every effect, with these.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,6 +66,8 @@ pub struct ReportOptions {
     /// Count rays by kind in one extra frame per setting (an extra
     /// pipeline compile per setting).
     pub count_rays: bool,
+    /// The `aa` knob's reference: the base settings supersampled like this.
+    pub aa_reference: Supersample,
     pub out: PathBuf,
 }
 
@@ -77,6 +80,7 @@ impl ReportOptions {
             knobs: knobs::parse_selection("").expect("every knob"),
             reference: ReferenceSettings::default(),
             count_rays: true,
+            aa_reference: Supersample { factor: 4, filter: SampleFilter::Box },
             out: out.into(),
         }
     }
@@ -149,6 +153,21 @@ pub struct Report {
     pub rows: Vec<Row>,
     /// Knob values not measured, with why.
     pub skipped: Vec<String>,
+    /// What the `aa` knob's rows were compared with, when it ran.
+    pub aa_reference: Option<AaReference>,
+}
+
+/// The `aa` knob's reference: anti-aliasing changes only the final 8-bit
+/// image (it runs after tone mapping), so its rows are compared with the
+/// base settings rendered K×K supersampled and filtered down, at the base
+/// exposure (frozen: the reference is not re-exposed), on those 8-bit
+/// images — not with the report's reference, whose radiance differences
+/// would drown the edges.
+pub struct AaReference {
+    pub supersample: Supersample,
+    pub ldr: LdrImage,
+    /// GPU ms of the large frame (sum of its passes).
+    pub ms: f64,
 }
 
 impl Report {
@@ -257,6 +276,18 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         }
     }
 
+    let aa_reference = if planned.iter().any(|(k, _, _)| *k == "aa") {
+        let ss = opts.aa_reference;
+        eprintln!("report: the aa knob's reference, the base settings {0}x{0} supersampled", ss.factor);
+        let extent = ash::vk::Extent2D { width, height };
+        let f = render_supersampled(ctx, &scene, &camera, extent, &base.settings, &ss)
+            .context("report: the aa knob's supersampled reference")?;
+        let ms = f.timings.iter().filter(|(n, _)| *n != "readback").map(|(_, ms)| ms).sum();
+        Some(AaReference { supersample: ss, ldr: LdrImage { width, height, rgb: f.rgb8().into_raw() }, ms })
+    } else {
+        None
+    };
+
     let mut renderers = Renderers(Vec::new());
     let result: Result<Vec<Measured>> = (|| {
         let mut measured: Vec<Measured> = Vec::new();
@@ -302,6 +333,14 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
     let against_ref = |i: usize| metrics::compare_hdr(reference_image, &measured[i].image, exposure);
     let mut rows = Vec::new();
     for (knob, value, i) in planned {
+        if let (true, Some(aa)) = (knob == "aa", &aa_reference) {
+            let m = &measured[i];
+            let map = metrics::flip(&aa.ldr, &m.ldr).with_context(|| format!("comparing aa {value}"))?;
+            let psnr = crate::metrics::psnr_rgb8(&aa.ldr.rgb, &m.ldr.rgb, 3, None);
+            // relMSE is a radiance measure; anti-aliasing changes no radiance.
+            rows.push(Row { knob, value, measured: i, flip_mean: map.mean(), psnr, rel_mse: f64::NAN, map });
+            continue;
+        }
         let Errors { flip_mean, psnr, rel_mse, map, .. } =
             against_ref(i).with_context(|| format!("comparing {knob} {value} with the reference"))?;
         rows.push(Row { knob, value, measured: i, flip_mean, psnr, rel_mse, map });
@@ -341,6 +380,7 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         base: hybrid,
         rows,
         skipped,
+        aa_reference,
     })
 }
 

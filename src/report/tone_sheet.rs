@@ -95,7 +95,8 @@ pub fn tone_sheets(
                     let state = m.exposure;
                     let (luminance_ms, tonemap_ms) = (m.pass_ms("luminance"), m.pass_ms("tonemap"));
                     cells.push(Cell {
-                        image: m.ldr,
+                        image: image::RgbImage::from_raw(m.ldr.width, m.ldr.height, m.ldr.rgb)
+                            .context("frame size matches its pixels")?,
                         key,
                         operator: op,
                         exposure: state.map(|s| s.exposure).unwrap_or(job.settings.exposure),

@@ -10,7 +10,8 @@ use crate::render::shading::Mode;
 /// The fixed leading columns of report.csv.
 pub const CSV_HEADER: &str = "knob,value,backend,ms_median,ms_p95,flip_mean,psnr";
 /// Columns after the fixed ones.
-const CSV_EXTRA: &str = "rel_mse,width,height,rays_camera,rays_shadow,rays_secondary,non_finite_pixels";
+const CSV_EXTRA: &str =
+    "rel_mse,width,height,rays_camera,rays_shadow,rays_secondary,non_finite_pixels,aa_pass_ms";
 
 /// One CSV field: quoted (RFC 4180) when it holds a comma, quote or line break.
 pub fn csv_field(s: &str) -> String {
@@ -53,6 +54,7 @@ pub fn csv(report: &Report) -> String {
             m.height.to_string(),
             rays.join(","),
             m.non_finite.to_string(),
+            m.timing.aa_pass().map(|ms| csv_number(ms, 4)).unwrap_or_default(),
         ];
         s.push_str(&fields.join(","));
         s.push('\n');
@@ -156,6 +158,21 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
          - rays/frame: total (camera / shadow / secondary) of one counted frame.\n",
         report.reference_exposure
     );
+    if let Some(aa) = &report.aa_reference {
+        let k = aa.supersample.factor;
+        let _ = writeln!(
+            s,
+            "- aa: anti-aliasing runs after tone mapping and changes no radiance, so these rows \
+             compare the final 8-bit images (LDR-ꟻLIP, 8-bit PSNR; no relMSE) with the base \
+             settings rendered {k}x{k} supersampled ({}x{} samples, {:?} filter, filtered as \
+             linear display values) at the base exposure, frozen ({:.0} ms per frame for the \
+             large frame).\n",
+            report.width * k,
+            report.height * k,
+            aa.supersample.filter,
+            aa.ms
+        );
+    }
     let mut knob_order: Vec<&'static str> = Vec::new();
     for row in &report.rows {
         if !knob_order.contains(&row.knob) {
@@ -170,6 +187,19 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
             "| knob | value | backend | ms median | ms p95 | ꟻLIP mean | PSNR (dB) | relMSE | rays/frame |"
         );
         let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---|");
+        if *knob == "aa" {
+            // The filter's own cost next to what it buys.
+            let cells: Vec<String> = report
+                .rows
+                .iter()
+                .filter(|r| r.knob == "aa")
+                .map(|r| match report.measured[r.measured].timing.aa_pass() {
+                    Some(ms) => format!("{} {ms:.3} ms", r.value),
+                    None => format!("{} no pass", r.value),
+                })
+                .collect();
+            let _ = writeln!(s, "AA pass (median GPU ms): {}.\n", cells.join(", "));
+        }
         for row in report.rows.iter().filter(|r| r.knob == *knob) {
             let m = &report.measured[row.measured];
             let _ = writeln!(

@@ -15,7 +15,6 @@ use super::session::Viewer;
 use super::swapchain::Acquired;
 use super::{Flow, FRAMES_IN_FLIGHT};
 use crate::render::frame::{Access, Use};
-use crate::render::passes::tonemap::LDR;
 use crate::render::FrameOutput;
 use crate::vk::{image_barrier, memory_barrier, Buffer};
 
@@ -297,9 +296,11 @@ impl Viewer {
         }
         let image = self.presenter.images[index as usize];
         let dst = self.presenter.extent;
-        let uses = [Use::image(&LDR, Access::TransferRead)];
+        // The frame's final LDR image: anti-aliased, or tone mapping's.
+        let final_ldr = self.renderer.output_ldr()?;
+        let uses = [Use::image(final_ldr, Access::TransferRead)];
         self.renderer.record_with(ctx, cmd, |rec, t| {
-            let ldr = t.get(&LDR).context("no tone-mapped output")?;
+            let ldr = t.get(final_ldr).context("no displayable output")?;
             rec.pass("present blit", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
                 let src = t.extent;
                 // The swapchain image is outside the frame's targets: its

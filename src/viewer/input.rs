@@ -1,5 +1,5 @@
 //! Window events and keys: camera input goes to the controller, viewer keys
-//! change the render settings (debug view, exposure, tone mapping, effects, mode), the
+//! change the render settings (debug view, exposure, tone mapping, effects, mode, AA), the
 //! animation clock or request a screenshot; the window title shows them.
 
 use std::path::PathBuf;
@@ -11,7 +11,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use super::camera_controller::{self, digit};
 use super::session::Viewer;
 use super::{Flow, DEBUG_VIEWS};
-use crate::render::shading::Mode;
+use crate::render::shading::{AaMode, Mode};
 use crate::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use crate::render::DebugView;
 
@@ -24,6 +24,9 @@ impl Viewer {
         }
         if self.settings.tone != ToneSettings::default() {
             t.push_str(&format!(" - {}", self.settings.tone.describe()));
+        }
+        if self.settings.aa != AaMode::Edge {
+            t.push_str(&format!(" - aa {}", self.settings.aa.name()));
         }
         if self.controller.mode() == camera_controller::Mode::Orbit {
             t.push_str(" - orbit");
@@ -127,6 +130,13 @@ impl Viewer {
             KeyCode::F6 => toggle("reflections", &mut self.settings.effects.reflections),
             KeyCode::F7 => toggle("refractions", &mut self.settings.effects.refractions),
             KeyCode::F8 => log::info!("toggle the per-object heuristic: not available yet"),
+            KeyCode::KeyG => {
+                let all = AaMode::ALL;
+                let i = all.iter().position(|m| *m == self.settings.aa).unwrap_or(0);
+                self.settings.aa = all[(i + 1) % all.len()];
+                log::info!("anti-aliasing: {}", self.settings.aa.name());
+                self.window.set_title(&self.title());
+            }
             KeyCode::Space | KeyCode::Comma | KeyCode::Period => {
                 if let Some((_, clock, paused)) = &mut self.animation {
                     match code {

@@ -169,7 +169,7 @@ impl Viewer {
         v.recreate()?;
         log::info!(
             "viewer: {} at {}x{}; keys: WASD/QE move, mouse drag look, O orbit, C/Ctrl+N cameras, R reset, \
-             1-5/V/0 debug views, -/= exposure, F5-F7 effects, T hybrid/rt, P/F12 screenshot, F9 RenderDoc capture, Esc quit",
+             1-5/V/0 debug views, -/= exposure, M/X tone mapping, G anti-aliasing, F5-F7 effects, T hybrid/rt, P/F12 screenshot, F9 RenderDoc capture, Esc quit",
             v.scene_name,
             requested.width,
             requested.height

@@ -3,9 +3,12 @@
 //! and writes, and how to build it. Adding a pass is one module plus one
 //! line in `FRAME`.
 
+pub mod antialias;
 pub mod composite;
 pub mod direct;
+pub mod edge_aa;
 pub mod fullscreen;
+pub mod fxaa;
 pub mod gbuffer;
 pub mod luminance;
 pub mod primary;
@@ -24,7 +27,7 @@ use crate::vk::Context;
 
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
 /// or camera rays) -> direct light -> reflection/refraction chain ->
-/// composite -> luminance (auto exposure) -> tone map. The scene update (skinning, refit, top level)
+/// composite -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one technique). The scene update (skinning, refit, top level)
 /// comes before it, recorded by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
     gbuffer::PASS,
@@ -34,6 +37,8 @@ pub const FRAME: &[PassDesc] = &[
     composite::PASS,
     luminance::PASS,
     tonemap::PASS,
+    edge_aa::PASS,
+    fxaa::PASS,
 ];
 
 /// What everything a pass needs to be built from.

@@ -1,0 +1,52 @@
+//! Pass `edge aa`: geometric edge anti-aliasing after tone mapping
+//! (Shishkovtsov, GPU Gems 2 ch. 9; Sabino's Eq. 4.2). Depth and normal
+//! differences to the 8 neighbours give each pixel a blur factor; pixels
+//! with factor 0 (away from discontinuities) are copied unchanged, edge
+//! pixels get a blur-factor-weighted average of their neighbours
+//! (glsl/aa_edge.comp).
+//!
+//! Depth comes from the G-buffer's primary hit, not from the depth
+//! attachment: the camera ray through each pixel meets its stored triangle's
+//! plane, giving reversed-Z depth (znear / view depth). Pure-RT mode has no
+//! depth attachment (pass `primary` writes the other G-buffer targets), so
+//! both modes measure the same depth the same way.
+
+use super::antialias::{self, AA_LDR};
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::tonemap::LDR;
+use super::{gbuffer, Init, PassDesc};
+use crate::gpu::shared::{AA_IN, AA_OUT, GB_HIT, GB_NORMAL};
+use crate::render::frame::{Access, SharedBuffer, Use};
+use crate::render::shading::{AaMode, ShadingConfig};
+use crate::vk::pipeline::Specialization;
+
+fn io(_: &ShadingConfig) -> Vec<Io> {
+    vec![
+        Io::new(GB_NORMAL, &gbuffer::NORMAL, Access::Sampled),
+        Io::new(GB_HIT, &gbuffer::HIT, Access::Sampled),
+        Io::new(AA_IN, &LDR, Access::StorageRead),
+        Io::new(AA_OUT, &AA_LDR, Access::StorageWrite),
+    ]
+}
+
+fn uses(c: &ShadingConfig) -> Vec<Use> {
+    let mut u = fullscreen::uses(&io(c), false);
+    // The hit triangles' vertices (skinned ones written by the update).
+    u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));
+    u
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "edge aa",
+    skip: |c| antialias::skip(c, AaMode::Edge),
+    uses,
+    create: |i: &Init| {
+        FullScreen::create(
+            i,
+            "edge aa",
+            io(i.config),
+            Shader::Compute("aa_edge.comp"),
+            &Specialization::new(&[]),
+        )
+    },
+};
