@@ -11,16 +11,9 @@ use hybrid_rt::render::RenderSettings;
 const W: u32 = 96;
 const H: u32 = 54;
 
-/// Writes a `w` x `h` Radiance .hdr whose texel (x, y) is `f(x, y)`.
+/// Writes a `w` x `h` grey Radiance .hdr whose texel (x, y) is `f(x, y)`.
 fn hdr_map(name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> f32) -> PathBuf {
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.hdr"));
-    let pixels: Vec<image::Rgb<f32>> =
-        (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| image::Rgb([f(x, y); 3])).collect();
-    let file = std::fs::File::create(&path).unwrap();
-    image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
-        .encode(&pixels, w as usize, h as usize)
-        .unwrap();
-    path
+    common::write_hdr(name, w, h, |x, y| [f(x, y); 3])
 }
 
 fn sky_scene(map: &std::path::Path) -> String {

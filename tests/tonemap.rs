@@ -120,7 +120,6 @@ fn adaptation_after_one_second_is_the_same_at_30_and_120_fps() {
 /// A `w` x `h` Radiance .hdr whose texels are log-uniform in [1e-3, 1e4],
 /// pseudo-random (fixed seed), grey with some colour.
 fn random_hdr(name: &str, w: u32, h: u32) -> PathBuf {
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.hdr"));
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
     let mut next = move || {
         state ^= state << 13;
@@ -128,17 +127,10 @@ fn random_hdr(name: &str, w: u32, h: u32) -> PathBuf {
         state ^= state << 17;
         (state >> 40) as f32 / (1u64 << 24) as f32
     };
-    let pixels: Vec<image::Rgb<f32>> = (0..w * h)
-        .map(|_| {
-            let l = 10f32.powf(-3.0 + 7.0 * next());
-            image::Rgb([l * (0.5 + next()), l, l * (0.5 + next())])
-        })
-        .collect();
-    let file = std::fs::File::create(&path).unwrap();
-    image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
-        .encode(&pixels, w as usize, h as usize)
-        .unwrap();
-    path
+    common::write_hdr(name, w, h, |_, _| {
+        let l = 10f32.powf(-3.0 + 7.0 * next());
+        [l * (0.5 + next()), l, l * (0.5 + next())]
+    })
 }
 
 /// A scene that is only its environment (`env`: a TOML `[environment]` body).

@@ -10,6 +10,7 @@ pub mod output;
 pub mod passes;
 pub mod shading;
 pub mod skinning;
+pub mod srgb;
 pub mod supersample;
 pub mod targets;
 pub mod tone;

@@ -10,6 +10,7 @@ use anyhow::{Context as _, Result};
 use ash::vk;
 
 use super::shading::AaMode;
+use super::srgb::{linear_to_srgb, srgb_to_linear};
 use super::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::vk::Context;
@@ -165,23 +166,6 @@ fn separable(src: &[f32], width: usize, tx: &[Vec<(usize, f32)>], ty: &[Vec<(usi
         }
     }
     out
-}
-
-fn srgb_to_linear(c: f32) -> f32 {
-    if c > 0.04045 {
-        ((c + 0.055) / 1.055).powf(2.4)
-    } else {
-        c / 12.92
-    }
-}
-
-fn linear_to_srgb(c: f32) -> f32 {
-    let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
-    if c > 0.0031308 {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    } else {
-        c * 12.92
-    }
 }
 
 #[cfg(test)]

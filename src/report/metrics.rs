@@ -9,6 +9,8 @@
 
 use anyhow::{ensure, Result};
 
+use crate::render::srgb::linear_to_srgb;
+
 /// A linear RGB image (radiance), row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HdrImage {
@@ -89,15 +91,6 @@ impl HdrImage {
             })
             .collect();
         LdrImage { width: self.width, height: self.height, rgb }
-    }
-}
-
-fn linear_to_srgb(c: f32) -> f32 {
-    let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
-    if c > 0.0031308 {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    } else {
-        c * 12.92
     }
 }
 

@@ -157,6 +157,23 @@ pub fn check_golden(frame: &FrameOutput, name: &str) -> GoldenDiff {
     d
 }
 
+/// Writes a `w` x `h` Radiance .hdr named `name` (in the tests' temp
+/// directory) whose texel (x, y) is `f(x, y)`; returns its path.
+pub fn write_hdr(name: &str, w: u32, h: u32, mut f: impl FnMut(u32, u32) -> [f32; 3]) -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.hdr"));
+    let mut pixels = Vec::with_capacity((w * h) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            pixels.push(image::Rgb(f(x, y)));
+        }
+    }
+    let file = std::fs::File::create(&path).unwrap();
+    image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
+        .encode(&pixels, w as usize, h as usize)
+        .unwrap();
+    path
+}
+
 /// Writes `toml` to a fresh temp file and loads it as a scene.
 pub fn scene_from_toml(name: &str, toml: &str) -> hybrid_rt::scene::Scene {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
