@@ -12,6 +12,7 @@
 #extension GL_EXT_scalar_block_layout : require
 #include "common/scene.glsl"
 #include "common/exposure_state.glsl"
+#include "common/tonemap.glsl"
 
 layout(local_size_x = LUMINANCE_THREADS) in;
 layout(constant_id = SPEC_LUMINANCE_STAGE) const uint STAGE = 0;
@@ -52,7 +53,7 @@ void partials() {
     for (uint i = g * LUMINANCE_THREADS + t; i < n; i += LUMINANCE_GROUPS * LUMINANCE_THREADS) {
         vec3 c = imageLoad(hdr_in, ivec2(i % res.x, i / res.x)).rgb;
         if (any(isnan(c)) || any(isinf(c))) continue;
-        float l = max(dot(c, vec3(0.2126, 0.7152, 0.0722)), 0.0);
+        float l = max(tone_luminance(c), 0.0);
         sum += log(LOG_AVERAGE_DELTA + l);
         mx = max(mx, l);
         count += 1u;

@@ -139,17 +139,7 @@ fn frame_with_non_finite_pixels() -> FrameOutput {
     hdr[(width + 1) as usize * 4] = f32::INFINITY;
     // What a tone mapper may make of them: nothing that stands out.
     ldr[2 * 4..2 * 4 + 4].copy_from_slice(&[0, 0, 0, 255]);
-    FrameOutput {
-        width,
-        height,
-        ldr,
-        hdr,
-        timings: Vec::new(),
-        ray_counts: [0; 3],
-        truncated_pixels: 0,
-        bad_pixels: 0,
-        exposure: None,
-    }
+    FrameOutput::from_images(width, height, ldr, hdr)
 }
 
 /// Non-finite pixels are counted, written marked (magenta PNG, zero HDR)

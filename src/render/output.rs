@@ -7,6 +7,21 @@ use anyhow::{Context as _, Result};
 use super::FrameOutput;
 
 impl FrameOutput {
+    /// A frame of these pixels only: no timings, nothing counted or measured.
+    pub fn from_images(width: u32, height: u32, ldr: Vec<u8>, hdr: Vec<f32>) -> FrameOutput {
+        FrameOutput {
+            width,
+            height,
+            ldr,
+            hdr,
+            timings: Vec::new(),
+            ray_counts: [0; 3],
+            truncated_pixels: 0,
+            bad_pixels: 0,
+            exposure: None,
+        }
+    }
+
     /// What to tell the user when reflection/refraction trees were cut.
     pub fn truncation_warning(&self) -> Option<String> {
         use crate::gpu::shared::{BRANCH_STACK_SIZE, RAY_BUDGET_PER_PIXEL};

@@ -173,17 +173,7 @@ mod tests {
     use super::*;
 
     fn frame(w: u32, h: u32, ldr: Vec<u8>, hdr: Vec<f32>) -> FrameOutput {
-        FrameOutput {
-            width: w,
-            height: h,
-            ldr,
-            hdr,
-            timings: Vec::new(),
-            ray_counts: [0; 3],
-            truncated_pixels: 0,
-            bad_pixels: 0,
-            exposure: None,
-        }
+        FrameOutput::from_images(w, h, ldr, hdr)
     }
 
     #[test]

@@ -25,9 +25,14 @@ pub struct Timing {
 }
 
 impl Timing {
+    /// Median ms of pass `name`, if it ran.
+    pub fn pass(&self, name: &str) -> Option<f64> {
+        self.passes.iter().find(|(n, _)| *n == name).map(|(_, ms)| *ms)
+    }
+
     /// Median ms of the anti-aliasing pass, if one ran.
     pub fn aa_pass(&self) -> Option<f64> {
-        self.passes.iter().find(|(n, _)| AA_PASSES.contains(n)).map(|(_, ms)| *ms)
+        AA_PASSES.iter().find_map(|p| self.pass(p))
     }
 }
 
@@ -59,7 +64,7 @@ pub struct Measured {
 impl Measured {
     /// Median ms of pass `name` (NaN when it did not run).
     pub fn pass_ms(&self, name: &str) -> f64 {
-        self.timing.passes.iter().find(|(n, _)| *n == name).map(|(_, ms)| *ms).unwrap_or(f64::NAN)
+        self.timing.pass(name).unwrap_or(f64::NAN)
     }
 }
 

@@ -233,10 +233,7 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
     let per_pass = |m: &super::Measured| -> String {
         let cells: Vec<String> = passes
             .iter()
-            .map(|p| match m.timing.passes.iter().find(|(n, _)| n == p) {
-                Some((_, ms)) => format!("{ms:.3}"),
-                None => "-".into(),
-            })
+            .map(|p| m.timing.pass(p).map(|ms| format!("{ms:.3}")).unwrap_or_else(|| "-".into()))
             .collect();
         cells.join(" | ")
     };

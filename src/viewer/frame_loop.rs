@@ -69,17 +69,8 @@ impl Viewer {
     pub(super) fn finish_screenshot(&mut self) -> Result<()> {
         let Some(mut shot) = self.shot.take() else { return Ok(()) };
         let r = (|| {
-            let frame = FrameOutput {
-                width: shot.extent.width,
-                height: shot.extent.height,
-                ldr: shot.buffer.read()?.to_vec(),
-                hdr: Vec::new(),
-                timings: Vec::new(),
-                ray_counts: [0; 3],
-                truncated_pixels: 0,
-                bad_pixels: 0,
-                exposure: None,
-            };
+            let (w, h) = (shot.extent.width, shot.extent.height);
+            let frame = FrameOutput::from_images(w, h, shot.buffer.read()?.to_vec(), Vec::new());
             frame.save_png(&shot.path)
         })();
         shot.buffer.destroy(&self.ctx);
