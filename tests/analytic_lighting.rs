@@ -83,7 +83,7 @@ fn directional_light_matches_lambert_cosine_law() {
         kind: LightKind::Directional,
         color: Vec3::new(1.0, 0.5, 0.25),
         intensity: e,
-        position: Vec3::ZERO,
+        position: glam::DVec3::ZERO,
         direction: Vec3::new(theta.sin(), -theta.cos(), 0.0),
         range: None,
         casts_shadows: false,
@@ -109,7 +109,7 @@ fn point_light_falls_off_with_inverse_square() {
         kind: LightKind::Point,
         color: Vec3::ONE,
         intensity,
-        position: Vec3::new(1.0, h, -0.5),
+        position: Vec3::new(1.0, h, -0.5).as_dvec3(),
         direction: Vec3::NEG_Y,
         range: None,
         casts_shadows: false,
@@ -121,7 +121,7 @@ fn point_light_falls_off_with_inverse_square() {
     let mut values = Vec::new();
     for (x, y) in [(W / 2, H / 2), (20, 15), (W - 20, H - 10), (100, 30), (5, 80)] {
         let p = pixel_to_ground(cam, x, y);
-        let d = light.position - p;
+        let d = light.position.as_vec3() - p;
         let dist = d.length();
         let cos = d.y / dist;
         let expected = ALBEDO / std::f32::consts::PI * intensity * cos / (dist * dist);

@@ -103,7 +103,7 @@ fn ball_at(t: f32) -> Vec3 {
 /// Continuous pixel coordinates (pixel (x, y) covers [x, x + 1) x [y, y + 1))
 /// of a world point, with the renderer's view-projection.
 fn project(cam: &Camera, p: Vec3) -> Vec2 {
-    let clip = cam.projection(W as f32 / H as f32) * cam.view() * p.extend(1.0);
+    let clip = cam.projection(W as f32 / H as f32) * cam.view().as_mat4() * p.extend(1.0);
     let ndc = Vec2::new(clip.x, clip.y) / clip.w;
     (ndc + 1.0) * 0.5 * Vec2::new(W as f32, H as f32)
 }
@@ -270,7 +270,10 @@ fn orbiting_ball_reflection_and_shadow_follow_the_orbit() {
             }
             let ball = ball_at(t);
             let placed = scene.instances.iter().find(|inst| inst.object == 2).unwrap().world;
-            assert!(placed.w_axis.truncate().distance(ball) < 1e-4, "t = {t}: the ball is not on its orbit");
+            assert!(
+                placed.w_axis.truncate().as_vec3().distance(ball) < 1e-4,
+                "t = {t}: the ball is not on its orbit"
+            );
 
             let frame = renderer.render(&ctx, &scene, &cam, &settings).unwrap();
             assert!(frame.all_finite(), "{backend:?} t = {t}: NaN or Inf");

@@ -461,9 +461,10 @@ fn write_instances(
         .map(|inst| {
             let r = instance_range(ranges, skinned, inst);
             let props = &scene.objects.get(inst.object).map(|o| o.props.clone()).unwrap_or_default();
-            let normal = normal_matrix(&inst.world);
+            let world = origin.matrix(&inst.world);
+            let normal = normal_matrix(&world);
             GpuInstance {
-                world: origin.matrix(&inst.world).to_cols_array(),
+                world: world.to_cols_array(),
                 normal_matrix: normal.to_cols_array(),
                 material: scene.instance_material(inst) as u32,
                 first_index: r.first_index,

@@ -483,8 +483,8 @@ impl Renderer {
         let e = self.extent;
         let aspect = e.width as f32 / e.height.max(1) as f32;
         // The camera relative to the render origin, like every GPU transform.
-        let camera = &Camera { world: self.gpu.origin.matrix(&camera.world), ..camera.clone() };
-        let view = camera.view();
+        let camera = &Camera { world: self.gpu.origin.relative(&camera.world), ..camera.clone() };
+        let view = camera.view().as_mat4();
         let proj = camera.projection(aspect);
         let view_proj = proj * view;
         let env = &scene.environment;

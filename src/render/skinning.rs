@@ -166,10 +166,9 @@ impl Skinning {
     /// Writes this frame's joint matrices and resets the bounds accumulators.
     /// The GPU must not be using them (the caller waited).
     pub fn write(&mut self, scene: &Scene, origin: RenderOrigin) -> Result<()> {
-        // Node matrices relative to the render origin before they are
-        // combined: inverse(mesh node) x joint far from the world origin
-        // would cancel in f32.
-        let world: Vec<Mat4> = scene.world_matrices().iter().map(|m| origin.matrix(m)).collect();
+        // Node matrices relative to the render origin (joint matrices are
+        // relative products, combined in f64 either way).
+        let world: Vec<_> = scene.world_matrices().iter().map(|m| origin.relative(m)).collect();
         let mut m: Vec<Mat4> = Vec::new();
         for &(node, skin) in &self.sources {
             m.extend(scene.joint_matrices(skin, node, &world));

@@ -227,7 +227,7 @@ impl Scene {
             match &c.values {
                 Channel::Translation(_) => {
                     if let Some(v) = c.sample_translation(t) {
-                        node.local.translation = v;
+                        node.local.translation = v.as_dvec3();
                     }
                 }
                 Channel::Rotation(_) => {
@@ -285,8 +285,8 @@ mod tests {
         channel(interpolation, times, Channel::Translation(values.iter().map(|&v| Vec3::from(v)).collect()))
     }
 
-    fn close(a: Vec3, b: Vec3) -> bool {
-        (a - b).length() < 1e-4
+    fn close(a: impl Into<glam::DVec3>, b: impl Into<glam::DVec3>) -> bool {
+        (a.into() - b.into()).length() < 1e-4
     }
 
     fn same_rotation(a: Quat, b: Quat) -> bool {
@@ -462,7 +462,7 @@ mod tests {
         let mut scene = one_node_scene(vec![c]);
         assert_eq!(scene.animations[0].duration, 0.0);
         scene.animate(0, 5.0);
-        assert_eq!(scene.nodes[0].local.translation, Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(scene.nodes[0].local.translation, glam::DVec3::new(1.0, 2.0, 3.0));
     }
 
     #[test]
@@ -474,13 +474,13 @@ mod tests {
             Channel::Rotation(vec![Quat::IDENTITY, down, down]),
         );
         let mut scene = one_node_scene(vec![c]);
-        scene.nodes[0].local.translation = Vec3::new(0.0, 3.0, 0.0);
+        scene.nodes[0].local.translation = glam::DVec3::new(0.0, 3.0, 0.0);
         scene.lights.push(crate::scene::Light {
             name: "spot".into(),
             kind: crate::scene::LightKind::Spot { inner_cone: 0.1, outer_cone: 0.2 },
             color: Vec3::ONE,
             intensity: 1.0,
-            position: Vec3::ZERO,
+            position: glam::DVec3::ZERO,
             direction: Vec3::NEG_Z,
             range: None,
             casts_shadows: true,
@@ -498,7 +498,7 @@ mod tests {
         path
     }
 
-    fn worlds(scene: &Scene) -> Vec<glam::Mat4> {
+    fn worlds(scene: &Scene) -> Vec<glam::DMat4> {
         scene.instances.iter().map(|i| i.world).collect()
     }
 

@@ -1,15 +1,16 @@
 //! Cameras: a camera-to-world matrix plus a perspective lens, and the
 //! reversed-Z infinite projection the renderer uses.
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{DMat4, DVec3, Mat4, Vec3, Vec4};
 
 use super::{CameraKey, Light, LightKind, Scene};
 
 #[derive(Clone, Debug)]
 pub struct Camera {
     pub name: String,
-    /// Camera-to-world; the camera looks down its local -Z with +Y up (glTF).
-    pub world: Mat4,
+    /// Camera-to-world, f64 like every placement (see `Transform`); the
+    /// camera looks down its local -Z with +Y up (glTF).
+    pub world: DMat4,
     /// Vertical field of view, radians.
     pub yfov: f32,
     pub znear: f32,
@@ -26,23 +27,42 @@ impl Camera {
     /// `look_at` with an explicit up vector (camera roll; scenes not aligned
     /// with +Y). `up` must not be parallel to the view direction.
     pub fn look_at_up(name: &str, position: Vec3, target: Vec3, up: Vec3, yfov: f32, znear: f32) -> Camera {
-        let forward = (target - position).try_normalize().unwrap_or(Vec3::NEG_Z);
-        let view = Mat4::look_at_rh(position, position + forward, up.normalize());
+        Camera::look_at_up_f64(name, position.as_dvec3(), target.as_dvec3(), up, yfov, znear)
+    }
+
+    /// `look_at_up` with an f64 eye and target (scenes far from the origin).
+    pub fn look_at_up_f64(
+        name: &str,
+        position: DVec3,
+        target: DVec3,
+        up: Vec3,
+        yfov: f32,
+        znear: f32,
+    ) -> Camera {
+        let forward = (target - position).try_normalize().unwrap_or(DVec3::NEG_Z);
+        let view = DMat4::look_at_rh(position, position + forward, up.as_dvec3().normalize());
         Camera { name: name.into(), world: view.inverse(), yfov, znear }
     }
 
+    /// The eye in f32: for framing, UI and navigation; rendering uses
+    /// [`Camera::world`] through the render origin.
     pub fn position(&self) -> Vec3 {
+        self.position_f64().as_vec3()
+    }
+
+    pub fn position_f64(&self) -> DVec3 {
         self.world.w_axis.truncate()
     }
 
     pub fn forward(&self) -> Vec3 {
-        (-self.world.z_axis.truncate()).normalize_or(Vec3::NEG_Z)
+        (-self.world.z_axis.truncate()).as_vec3().normalize_or(Vec3::NEG_Z)
     }
 
-    /// World-to-view, with any scale in the node chain removed.
-    pub fn view(&self) -> Mat4 {
+    /// World-to-view, with any scale in the node chain removed, in f64;
+    /// the renderer narrows it after moving the eye to the render origin.
+    pub fn view(&self) -> DMat4 {
         let (_, rot, pos) = self.world.to_scale_rotation_translation();
-        Mat4::from_rotation_translation(rot, pos).inverse()
+        DMat4::from_rotation_translation(rot, pos).inverse()
     }
 
     /// Reversed-Z projection with an infinite far plane, Vulkan clip space
@@ -89,7 +109,7 @@ pub fn add_defaults(scene: &mut Scene) {
             kind: LightKind::Directional,
             color: Vec3::ONE,
             intensity: 3.0,
-            position: Vec3::ZERO,
+            position: DVec3::ZERO,
             direction: Vec3::new(-0.35, -1.0, -0.45).normalize(),
             range: None,
             casts_shadows: true,
@@ -118,7 +138,7 @@ mod tests {
     #[test]
     fn reversed_z_maps_near_to_one_and_far_to_zero() {
         let cam = Camera::look_at("t", Vec3::ZERO, Vec3::NEG_Z, 1.0, 0.1);
-        let p = cam.projection(1.0) * cam.view();
+        let p = cam.projection(1.0) * cam.view().as_mat4();
         let near = p * Vec4::new(0.0, 0.0, -0.1, 1.0);
         assert!((near.z / near.w - 1.0).abs() < 1e-6);
         let far = p * Vec4::new(0.0, 0.0, -1e6, 1.0);

@@ -17,7 +17,7 @@ pub mod tangents;
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use glam::{Mat4, Quat, Vec3};
+use glam::{DMat4, DQuat, DVec3, Mat4, Quat, Vec3};
 
 pub use camera::Camera;
 
@@ -188,7 +188,8 @@ pub struct Light {
     /// Linear RGB colour (not multiplied by intensity).
     pub color: Vec3,
     pub intensity: f32,
-    pub position: Vec3,
+    /// World position, f64 like every placement (see [`Transform`]).
+    pub position: DVec3,
     /// Direction the light travels (unit length), for directional and spot.
     pub direction: Vec3,
     /// KHR_lights_punctual range; None = infinite.
@@ -198,23 +199,31 @@ pub struct Light {
     pub node: Option<usize>,
 }
 
-/// Local TRS of a node.
+/// Local TRS of a node. The translation is f64, and so is every world
+/// placement derived from it (node and instance world matrices, cameras,
+/// light positions): an f32 world puts a scene 1e6 from the origin on a
+/// 0.0625 grid before the render origin (gpu/origin.rs) can subtract
+/// anything. Rotation and scale need no more than f32.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transform {
-    pub translation: Vec3,
+    pub translation: DVec3,
     pub rotation: Quat,
     pub scale: Vec3,
 }
 
 impl Default for Transform {
     fn default() -> Self {
-        Self { translation: Vec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE }
+        Self { translation: DVec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE }
     }
 }
 
 impl Transform {
-    pub fn matrix(&self) -> Mat4 {
-        Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
+    pub fn matrix(&self) -> DMat4 {
+        DMat4::from_scale_rotation_translation(
+            self.scale.as_dvec3(),
+            DQuat::from_array(self.rotation.to_array().map(f64::from)),
+            self.translation,
+        )
     }
 }
 
@@ -265,7 +274,9 @@ pub struct Instance {
     pub mesh: usize,
     pub primitive: usize,
     pub object: usize,
-    pub world: Mat4,
+    /// Object-to-world, f64 (see [`Transform`]); the GPU gets it relative
+    /// to the render origin.
+    pub world: DMat4,
     /// For a skinned primitive: its slot among the scene's skinned instances
     /// (stable while the node hierarchy does not change), which owns a
     /// deformed vertex range and an updatable acceleration structure.
@@ -342,6 +353,16 @@ impl Aabb {
     }
     /// Bounds of the eight corners after an affine transform.
     pub fn transformed(&self, m: &Mat4) -> Aabb {
+        self.corners_mapped(|c| m.transform_point3(c))
+    }
+
+    /// [`Aabb::transformed`] by an f64 placement (corners transformed in
+    /// f64, bounds kept in f32).
+    pub fn transformed_f64(&self, m: &DMat4) -> Aabb {
+        self.corners_mapped(|c| m.transform_point3(c.as_dvec3()).as_vec3())
+    }
+
+    fn corners_mapped(&self, f: impl Fn(Vec3) -> Vec3) -> Aabb {
         let mut out = Aabb::EMPTY;
         if self.is_empty() {
             return out;
@@ -352,7 +373,7 @@ impl Aabb {
                 if i & 2 == 0 { self.min.y } else { self.max.y },
                 if i & 4 == 0 { self.min.z } else { self.max.z },
             );
-            out.grow(m.transform_point3(c));
+            out.grow(f(c));
         }
         out
     }
@@ -412,8 +433,8 @@ impl Scene {
     /// World matrices for every node (parents before children not assumed).
     /// Iterative, so a 100,000-level chain does not overflow the stack; a
     /// cycle (which the loaders reject) is cut where it closes.
-    pub fn world_matrices(&self) -> Vec<Mat4> {
-        let mut world: Vec<Option<Mat4>> = vec![None; self.nodes.len()];
+    pub fn world_matrices(&self) -> Vec<DMat4> {
+        let mut world: Vec<Option<DMat4>> = vec![None; self.nodes.len()];
         let mut path = Vec::new();
         for i in 0..self.nodes.len() {
             // Climb to the first resolved ancestor (or a root), then resolve
@@ -423,13 +444,13 @@ impl Scene {
                 path.push(n);
                 at = self.nodes[n].parent.filter(|&p| p < self.nodes.len());
             }
-            let mut parent = at.and_then(|p| world[p]).unwrap_or(Mat4::IDENTITY);
+            let mut parent = at.and_then(|p| world[p]).unwrap_or(DMat4::IDENTITY);
             while let Some(n) = path.pop() {
                 parent *= self.nodes[n].local.matrix();
                 world[n] = Some(parent);
             }
         }
-        world.into_iter().map(|m| m.unwrap_or(Mat4::IDENTITY)).collect()
+        world.into_iter().map(|m| m.unwrap_or(DMat4::IDENTITY)).collect()
     }
 
     /// Rebuilds `instances` and `bounds` from the node hierarchy, and places
@@ -440,8 +461,8 @@ impl Scene {
         let world = self.world_matrices();
         for light in &mut self.lights {
             let Some(m) = light.node.and_then(|n| world.get(n)) else { continue };
-            light.position = m.transform_point3(Vec3::ZERO);
-            light.direction = m.transform_vector3(Vec3::NEG_Z).normalize_or(light.direction);
+            light.position = m.transform_point3(DVec3::ZERO);
+            light.direction = m.transform_vector3(DVec3::NEG_Z).as_vec3().normalize_or(light.direction);
         }
         self.instances.clear();
         self.bounds = Aabb::EMPTY;
@@ -467,7 +488,7 @@ impl Scene {
                 });
                 // Skinned bounds are the bind pose's: good enough for framing
                 // a camera, never used for culling or tracing.
-                self.bounds = self.bounds.union(&prim.bounds.transformed(&world[n]));
+                self.bounds = self.bounds.union(&prim.bounds.transformed_f64(&world[n]));
             }
         }
     }

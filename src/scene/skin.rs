@@ -4,7 +4,7 @@
 //! bakes a pose as static geometry so tests can compare the two.
 
 use anyhow::{ensure, Result};
-use glam::{Mat3, Mat4, Vec3, Vec4};
+use glam::{DMat4, Mat3, Mat4, Vec3, Vec4};
 
 use super::{Mesh, Scene, Vertex};
 
@@ -74,16 +74,22 @@ impl Scene {
     /// node's space: `inverse(world(mesh_node)) * world(joint) * inverse_bind`.
     /// Skinned vertices therefore stay in mesh space and the instance keeps
     /// its world matrix (like a rigid one), which keeps positions near the
-    /// origin where floats are precise. `world` is [`Scene::world_matrices`].
-    pub fn joint_matrices(&self, skin: usize, mesh_node: usize, world: &[Mat4]) -> Vec<Mat4> {
+    /// origin where floats are precise. `world` is [`Scene::world_matrices`];
+    /// the product is taken in f64 (far from the origin the two world
+    /// matrices cancel) and narrowed to f32.
+    pub fn joint_matrices(&self, skin: usize, mesh_node: usize, world: &[DMat4]) -> Vec<Mat4> {
         let skin = &self.skins[skin];
         let to_mesh = safe_inverse(&world[mesh_node]);
-        skin.joints.iter().zip(&skin.inverse_bind).map(|(&j, ib)| to_mesh * world[j] * *ib).collect()
+        skin.joints
+            .iter()
+            .zip(&skin.inverse_bind)
+            .map(|(&j, ib)| (to_mesh * world[j] * ib.as_dmat4()).as_mat4())
+            .collect()
     }
 
     /// The current pose of a skinned instance (CPU skinning), or None for a
     /// rigid one.
-    pub fn skinned_pose(&self, inst: &super::Instance, world: &[Mat4]) -> Option<Vec<Vertex>> {
+    pub fn skinned_pose(&self, inst: &super::Instance, world: &[DMat4]) -> Option<Vec<Vertex>> {
         inst.skinned?;
         let p = &self.meshes[inst.mesh].primitives[inst.primitive];
         let joints = self.joint_matrices(self.nodes[inst.node].skin?, inst.node, world);
@@ -125,12 +131,13 @@ impl Scene {
 }
 
 /// Inverse of an affine matrix, or identity for a singular one.
-pub fn safe_inverse(m: &Mat4) -> Mat4 {
+pub fn safe_inverse(m: &DMat4) -> DMat4 {
     let det = m.determinant();
-    if det.is_finite() && det.abs() > f32::MIN_POSITIVE {
+    // The f32 threshold: a matrix singular in the f32 data stays singular.
+    if det.is_finite() && det.abs() > f64::from(f32::MIN_POSITIVE) {
         m.inverse()
     } else {
-        Mat4::IDENTITY
+        DMat4::IDENTITY
     }
 }
 

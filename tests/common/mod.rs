@@ -219,7 +219,7 @@ pub fn pixel_ray(cam: &hybrid_rt::scene::Camera, w: u32, h: u32, x: u32, y: u32)
     let ndc_x = (x as f32 + 0.5) / w as f32 * 2.0 - 1.0;
     let ndc_y = (y as f32 + 0.5) / h as f32 * 2.0 - 1.0;
     let dv = glam::Vec3::new(ndc_x / proj.x_axis.x, ndc_y / proj.y_axis.y, -1.0);
-    let rot = glam::Mat3::from_mat4(cam.view()).transpose();
+    let rot = glam::Mat3::from_mat4(cam.view().as_mat4()).transpose();
     (cam.position(), (rot * dv).normalize())
 }
 

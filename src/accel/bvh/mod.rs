@@ -100,6 +100,6 @@ pub fn instance_aabbs(scene: &Scene) -> Vec<Aabb> {
     scene
         .instances
         .iter()
-        .map(|i| scene.meshes[i.mesh].primitives[i.primitive].bounds.transformed(&i.world))
+        .map(|i| scene.meshes[i.mesh].primitives[i.primitive].bounds.transformed_f64(&i.world))
         .collect()
 }

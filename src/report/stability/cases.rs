@@ -10,7 +10,7 @@
 use std::path::Path;
 
 use anyhow::{Context as _, Result};
-use glam::{EulerRot, Quat, Vec3};
+use glam::{DVec3, EulerRot, Quat, Vec3};
 
 use crate::scene::{
     primitives, Camera, LightKind, Material, Mesh, Node, Object, Primitive, Scene, Transform,
@@ -103,19 +103,22 @@ pub const INVISIBLE_MAX_DIFF: u8 = 2;
 /// instance and node-attached light), the cameras, the free lights and the
 /// camera path. Point and spot intensities are multiplied by scale^2 and
 /// ranges by scale, so the irradiance and the image stay the same;
-/// directional lights are unchanged. `scale` must be > 0.
-pub fn transform_scene(scene: &mut Scene, scale: f32, offset: Vec3) {
+/// directional lights are unchanged. `scale` must be > 0. Placements move
+/// in f64 (the scene's own precision); the camera path's keys are f32.
+pub fn transform_scene(scene: &mut Scene, scale: f64, offset: DVec3) {
+    let k = scale as f32;
     for &r in &scene.roots {
         let local = &mut scene.nodes[r].local;
         local.translation = local.translation * scale + offset;
-        local.scale *= scale;
+        local.scale *= k;
     }
     for c in &mut scene.cameras {
         *c = transform_camera(c, scale, offset);
     }
-    for k in &mut scene.camera_path {
-        k.position = k.position * scale + offset;
-        k.target = k.target * scale + offset;
+    let moved = |p: Vec3| (p.as_dvec3() * scale + offset).as_vec3();
+    for key in &mut scene.camera_path {
+        key.position = moved(key.position);
+        key.target = moved(key.target);
     }
     for l in &mut scene.lights {
         if l.kind == LightKind::Directional {
@@ -124,19 +127,19 @@ pub fn transform_scene(scene: &mut Scene, scale: f32, offset: Vec3) {
         if l.node.is_none() {
             l.position = l.position * scale + offset;
         }
-        l.intensity *= scale * scale;
-        l.range = l.range.map(|r| r * scale);
+        l.intensity *= k * k;
+        l.range = l.range.map(|r| r * k);
     }
     scene.update_world();
 }
 
 /// The camera under x -> scale * x + offset: moved, orientation and field
 /// of view kept, near plane scaled.
-pub fn transform_camera(c: &Camera, scale: f32, offset: Vec3) -> Camera {
+pub fn transform_camera(c: &Camera, scale: f64, offset: DVec3) -> Camera {
     let mut out = c.clone();
     let p = c.world.w_axis.truncate() * scale + offset;
     out.world.w_axis = p.extend(1.0);
-    out.znear = c.znear * scale;
+    out.znear = c.znear * scale as f32;
     out
 }
 
@@ -203,7 +206,7 @@ struct View {
 
 impl View {
     fn of(scene: &Scene, cam: &Camera) -> View {
-        let (_, rot, pos) = cam.world.to_scale_rotation_translation();
+        let (_, rot, pos) = cam.world.as_mat4().to_scale_rotation_translation();
         let d = if scene.bounds.is_empty() { 1.0 } else { scene.bounds.center().distance(pos).max(1e-3) };
         let f = cam.forward();
         let u = (rot * Vec3::Y).normalize();
@@ -217,14 +220,14 @@ impl View {
 /// A plane (faces +Y) turned to face `normal`, centred at `at`.
 fn facing(at: Vec3, normal: Vec3) -> Transform {
     Transform {
-        translation: at,
+        translation: at.as_dvec3(),
         rotation: Quat::from_rotation_arc(Vec3::Y, normal.normalize()),
         ..Default::default()
     }
 }
 
 fn at(p: Vec3) -> Transform {
-    Transform { translation: p, ..Default::default() }
+    Transform { translation: p.as_dvec3(), ..Default::default() }
 }
 
 fn case(name: &'static str, about: String, scene: Scene, camera: Camera, against: Against) -> Case {
@@ -276,21 +279,20 @@ fn make(name: &'static str, base: &Scene, cam: &Camera, dir: &Path) -> Result<Ca
             psnr(c, MODE_PSNR)
         }
         n if n.starts_with("translate-") => {
-            let dist: f32 = n["translate-".len()..].parse().context("translation")?;
-            let offset = Vec3::splat(dist);
+            let dist: f64 = n["translate-".len()..].parse().context("translation")?;
+            let offset = DVec3::splat(dist);
             transform_scene(&mut s, 1.0, offset);
             let about = format!("moved by ({dist:e}, {dist:e}, {dist:e}): camera and lights with it");
             psnr(case(name, about, s, transform_camera(cam, 1.0, offset), origin), INVARIANT_PSNR)
         }
         n if n.starts_with("scale-") => {
             let k64: f64 = n["scale-".len()..].parse().context("scale")?;
-            let k = k64 as f32;
-            transform_scene(&mut s, k, Vec3::ZERO);
+            transform_scene(&mut s, k64, DVec3::ZERO);
             let about = format!(
                 "scaled x{k64:e} about the origin: camera, lights, near plane with it, point/spot intensity x{:.0e}",
                 k64 * k64
             );
-            psnr(case(name, about, s, transform_camera(cam, k, Vec3::ZERO), origin), INVARIANT_PSNR)
+            psnr(case(name, about, s, transform_camera(cam, k64, DVec3::ZERO), origin), INVARIANT_PSNR)
         }
         "grazing-mirror" => {
             // The central ray meets the plane at 0.5 degrees, at the
@@ -328,7 +330,7 @@ fn make(name: &'static str, base: &Scene, cam: &Camera, dir: &Path) -> Result<Ca
             // A box's faces meet at right angles: a ray entering one face
             // meets an adjacent one beyond the critical angle (41.8° at 1.5).
             let local = Transform {
-                translation: v.spot,
+                translation: v.spot.as_dvec3(),
                 rotation: v.rot
                     * Quat::from_euler(EulerRot::XYZ, 35f32.to_radians(), 40f32.to_radians(), 0.0),
                 scale: Vec3::new(2.4, 0.8, 2.4) * v.radius,
@@ -417,7 +419,7 @@ fn make(name: &'static str, base: &Scene, cam: &Camera, dir: &Path) -> Result<Ca
                 .with_context(|| format!("writing {}", path.display()))?;
             let mesh = crate::scene::obj::load_mesh(&path)?;
             let m = Material { double_sided: true, ..material("panel", [0.8, 0.4, 0.1], 0.0, 0.6) };
-            let local = Transform { translation: v.spot, rotation: v.rot, ..Default::default() };
+            let local = Transform { translation: v.spot.as_dvec3(), rotation: v.rot, ..Default::default() };
             add_object(&mut s, "panel", mesh, m, local);
             let about = match name {
                 "obj-panel" => format!("{}: a square panel facing the camera (canonical)", path.display()),
@@ -527,7 +529,7 @@ mod tests {
             kind,
             color: Vec3::ONE,
             intensity: 8.0,
-            position,
+            position: position.as_dvec3(),
             direction: Vec3::new(0.0, -1.0, 0.0),
             range: Some(10.0),
             casts_shadows: true,
@@ -555,40 +557,41 @@ mod tests {
     fn translation_moves_instances_cameras_and_lights_only() {
         let mut s = scene();
         let before = s.clone();
-        let t = Vec3::new(1e3, -2e3, 5e2);
+        // Offsets an f32 placement would round (spacing 0.0625 at 1e6).
+        let t = DVec3::new(1e6 + 0.001, -2e3, 5e2 + 1e-4);
         transform_scene(&mut s, 1.0, t);
         let moved = s.instances[0].world.w_axis.truncate();
         assert_eq!(moved, before.instances[0].world.w_axis.truncate() + t);
-        assert_eq!(s.cameras[0].position(), before.cameras[0].position() + t);
+        assert_eq!(s.cameras[0].position_f64(), before.cameras[0].position_f64() + t);
         assert_eq!(s.cameras[0].forward(), before.cameras[0].forward());
         assert_eq!(s.cameras[0].znear, 0.05);
-        assert_eq!(s.lights[0].position, Vec3::new(0.0, 4.0, 0.0) + t);
+        assert_eq!(s.lights[0].position, DVec3::new(0.0, 4.0, 0.0) + t);
         assert_eq!(s.lights[0].intensity, 8.0);
         assert_eq!(s.lights[2].direction, before.lights[2].direction);
-        assert_eq!(s.lights[2].position, Vec3::ZERO, "directional lights have no position");
-        assert!((s.bounds.center() - (before.bounds.center() + t)).length() < 1e-3);
+        assert_eq!(s.lights[2].position, DVec3::ZERO, "directional lights have no position");
+        assert!((s.bounds.center().as_dvec3() - (before.bounds.center().as_dvec3() + t)).length() < 0.1);
     }
 
     #[test]
     fn scaling_scales_positions_near_plane_and_intensities() {
         let mut s = scene();
         let before = s.clone();
-        transform_scene(&mut s, 1e-3, Vec3::ZERO);
+        transform_scene(&mut s, 1e-3, DVec3::ZERO);
         let w = s.instances[0].world;
-        assert!((w.w_axis.truncate() - Vec3::new(1e-3, 2e-3, 3e-3)).length() < 1e-9);
+        assert!((w.w_axis.truncate() - DVec3::new(1e-3, 2e-3, 3e-3)).length() < 1e-9);
         assert!((w.x_axis.length() - 1e-3).abs() < 1e-9, "the instance is scaled too");
         let cam = &s.cameras[0];
-        assert!((cam.position() - before.cameras[0].position() * 1e-3).length() < 1e-9);
+        assert!((cam.position_f64() - before.cameras[0].position_f64() * 1e-3).length() < 1e-9);
         assert!((cam.znear / 5e-5 - 1.0).abs() < 1e-6, "{}", cam.znear);
         assert!((cam.forward() - before.cameras[0].forward()).length() < 1e-6);
         for l in &s.lights[..2] {
             assert!((l.intensity - 8e-6).abs() < 1e-12, "{}", l.intensity);
             assert!((l.range.unwrap() - 1e-2).abs() < 1e-9);
         }
-        assert!((s.lights[1].position - Vec3::splat(1e-3)).length() < 1e-9);
+        assert!((s.lights[1].position - DVec3::splat(1e-3)).length() < 1e-9);
         assert_eq!((s.lights[2].intensity, s.lights[2].direction), (8.0, before.lights[2].direction));
         // Irradiance from a point light at a scaled distance is unchanged.
-        let e = |l: &Light, p: Vec3| l.intensity / l.position.distance_squared(p);
+        let e = |l: &Light, p: Vec3| l.intensity / l.position.as_vec3().distance_squared(p);
         let p = Vec3::new(0.5, 0.0, 0.5);
         assert!((e(&s.lights[0], p * 1e-3) / e(&before.lights[0], p) - 1.0).abs() < 1e-4);
     }

@@ -63,18 +63,16 @@ fn db(v: f64) -> String {
 fn why(case: &str, textured: bool) -> &'static str {
     match case {
         c if c.starts_with("translate-") => {
-            "the world is f32: vertices, instance matrices and the camera position keep ~7 significant \
-             digits, so far from the origin the geometry itself moves (the float spacing is 6e-5 at 1e3, \
-             0.0078 at 1e5, 0.0625 at 1e6) and the raster's view-projection subtracts large numbers; the \
-             ray-origin offset (16 ULPs of the hit's largest coordinate) grows with the distance, to 1.0 at \
-             1e6, so shadow rays most likely start above small occluders and contact shadows vanish. Camera-relative \
-             rendering (instance transforms relative to the camera, computed in f64 on the host) is the \
-             fix; it is a separate change"
+            "placements are f64 (node translations, world matrices, cameras, lights) and the GPU gets \
+             f32 coordinates relative to a render origin near the scene, subtracted in f64 on the host \
+             (gpu/origin.rs): the moved scene should render like the origin's. What stays f32 is \
+             object-space vertices (~7 significant digits of each mesh's own extent)"
         }
         "origin" | "ior-1.0" | "env-map" | "obj-panel" if textured => {
             "likely texture filtering: the raster G-buffer shades primary hits with screen-space mip \
-             selection and a filtered alpha test, while ray hits (rt mode, and whatever is seen through a \
-             sphere) pick the mip by ray cone and alpha-test mip 0 (README: pure RT vs hybrid); on the \
+             selection and a filtered alpha test, while reflection and refraction hits (whatever is seen \
+             through a sphere) pick the mip, alpha tests included, by an isotropic ray cone (README: pure \
+             RT vs hybrid); on the \
              untextured default scene these cases stay within 1/255"
         }
         _ => "not analysed: see the case's images",
@@ -308,7 +306,7 @@ mod tests {
         assert!(md.contains("- translate-1e5 on compute: PSNR 40.00 dB"), "{md}");
         assert!(md.contains("2 pixel(s) (1.50 %)"), "{md}");
         assert!(!md.contains("- ior-1.5 on compute"), "{md}");
-        assert!(md.contains("- translate-1e6, translate-1e5: the world is f32"), "{md}");
+        assert!(md.contains("- translate-1e6, translate-1e5: placements are f64"), "{md}");
         assert!(md.contains("| ior-1.5 | origin | finite only"), "{md}");
         assert!(md.contains("- query: not here"), "{md}");
     }

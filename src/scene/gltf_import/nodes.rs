@@ -3,7 +3,7 @@
 //! its nodes carry.
 
 use anyhow::{bail, ensure, Context, Result};
-use glam::{Mat4, Quat, Vec3};
+use glam::{DMat4, DVec3, Mat4, Quat, Vec3};
 
 use super::values::HUGE;
 use crate::scene::{Camera, Light, LightKind, Node, Object, Scene, Transform};
@@ -57,7 +57,7 @@ fn local_transform(t: gltf::scene::Transform) -> Result<Transform> {
         translation.abs().max_element() < HUGE && scale.abs().max_element() < HUGE,
         "has a transform component of 1e30 or more (translation {translation}, scale {scale})"
     );
-    Ok(Transform { translation, rotation, scale })
+    Ok(Transform { translation: translation.as_dvec3(), rotation, scale })
 }
 
 /// Sets `parent` from the children lists, rejecting the malformed
@@ -107,7 +107,7 @@ fn reachable_nodes(scene: &Scene) -> Vec<bool> {
 }
 
 /// Mesh (as its own object), camera and light of one node of the drawn scene.
-fn attach_node_content(node: &gltf::Node, world: &Mat4, scene: &mut Scene) {
+fn attach_node_content(node: &gltf::Node, world: &DMat4, scene: &mut Scene) {
     let i = node.index();
     if let Some(mesh) = node.mesh() {
         let name = node.name().or(mesh.name()).map_or_else(|| format!("node {i}"), str::to_string);
@@ -124,7 +124,7 @@ fn attach_node_content(node: &gltf::Node, world: &Mat4, scene: &mut Scene) {
     }
 }
 
-fn convert_camera(cam: &gltf::Camera, node_name: &str, world: &Mat4) -> Camera {
+fn convert_camera(cam: &gltf::Camera, node_name: &str, world: &DMat4) -> Camera {
     let name = cam.name().unwrap_or(node_name).to_string();
     let (yfov, znear) = match cam.projection() {
         gltf::camera::Projection::Perspective(p) => (p.yfov(), p.znear()),
@@ -150,7 +150,7 @@ fn convert_camera(cam: &gltf::Camera, node_name: &str, world: &Mat4) -> Camera {
 fn convert_light(
     light: &gltf::khr_lights_punctual::Light,
     node_name: &str,
-    world: &Mat4,
+    world: &DMat4,
     node: usize,
 ) -> Light {
     use gltf::khr_lights_punctual::Kind;
@@ -166,9 +166,9 @@ fn convert_light(
         kind,
         color: Vec3::from(light.color()),
         intensity: light.intensity(),
-        position: world.transform_point3(Vec3::ZERO),
+        position: world.transform_point3(DVec3::ZERO),
         // Lights shine down their node's -Z.
-        direction: world.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Z),
+        direction: world.transform_vector3(DVec3::NEG_Z).as_vec3().normalize_or(Vec3::NEG_Z),
         range: light.range(),
         casts_shadows: true,
         node: Some(node),

@@ -225,11 +225,11 @@ fn lights_and_cameras_are_placed_in_world_space() {
     std::fs::write(&path, json).unwrap();
     let mut scene = load(&path).unwrap();
     // Moving the root must move its children's world transforms.
-    scene.nodes[0].local.translation = Vec3::new(10.0, 0.0, 0.0);
+    scene.nodes[0].local.translation = glam::DVec3::new(10.0, 0.0, 0.0);
     assert_eq!(scene.lights.len(), 2);
     let point = &scene.lights[0];
     assert_eq!(point.kind, LightKind::Point);
-    assert_eq!(point.position, Vec3::new(0.0, 2.0, 0.0));
+    assert_eq!(point.position, glam::DVec3::new(0.0, 2.0, 0.0));
     assert_eq!(point.color, Vec3::new(1.0, 0.5, 0.25));
     assert_eq!((point.intensity, point.range, point.node), (20.0, Some(8.0), Some(1)));
     let spot = &scene.lights[1];
@@ -237,14 +237,14 @@ fn lights_and_cameras_are_placed_in_world_space() {
     assert_eq!(spot.kind, LightKind::Spot { inner_cone: 0.2, outer_cone: 0.5 });
     // -90 degrees about X turns the spot's -Z into -Y.
     assert!((spot.direction - Vec3::NEG_Y).length() < 1e-5, "{}", spot.direction);
-    assert_eq!(spot.position, Vec3::new(1.0, 0.0, 0.0));
+    assert_eq!(spot.position, glam::DVec3::new(1.0, 0.0, 0.0));
     assert_eq!(scene.cameras.len(), 1);
     let cam = &scene.cameras[0];
     assert_eq!((cam.yfov, cam.znear), (0.8, 0.1));
     assert_eq!(cam.position(), Vec3::new(0.0, 0.0, 5.0));
     assert_eq!(scene.nodes[3].camera, Some(0));
     assert_eq!(scene.nodes[3].parent, Some(0));
-    assert_eq!(scene.world_matrices()[3].w_axis.truncate(), Vec3::new(10.0, 0.0, 5.0));
+    assert_eq!(scene.world_matrices()[3].w_axis.truncate(), glam::DVec3::new(10.0, 0.0, 5.0));
 }
 
 #[test]
@@ -507,7 +507,7 @@ fn animations_are_imported_and_morph_channels_skipped() {
     assert_eq!((c.node, c.interpolation, &c.times), (0, Interpolation::Step, &vec![0.0, 0.0, 1.0]));
     assert_eq!(c.values, Channel::Translation(TRIANGLE.iter().map(|&p| Vec3::from(p)).collect()));
     scene.animate(0, 0.5);
-    assert_eq!(scene.nodes[0].local.translation, Vec3::new(1.0, 0.0, 0.0));
+    assert_eq!(scene.nodes[0].local.translation, glam::DVec3::new(1.0, 0.0, 0.0));
 }
 
 #[test]

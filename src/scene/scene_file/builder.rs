@@ -6,9 +6,10 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail, ensure, Context, Result};
+use glam::Vec3;
 use toml::Spanned;
 
-use super::checks::{finite, finite3, non_negative, non_negative3};
+use super::checks::{finite, finite3, finite3_f64, non_negative, non_negative3};
 use super::elements::{
     check_no_shape_parameters, light_from_def, load_hdr, material_from_def, object_transform, procedural,
 };
@@ -91,24 +92,27 @@ impl Builder<'_> {
     fn camera(&self, c: CameraDef, index: usize) -> Result<Camera> {
         let name = c.name.unwrap_or_else(|| format!("camera {index}"));
         let context = || format!("{}: camera '{name}'", self.at(c.position.span().start));
-        let position = finite3(*c.position.get_ref(), "position").with_context(context)?;
-        let target = finite3(c.target, "target").with_context(context)?;
+        let position = finite3_f64(*c.position.get_ref(), "position").with_context(context)?;
+        let target = finite3_f64(c.target, "target").with_context(context)?;
         ensure!(position != target, "{}: position and target coincide", context());
         let yfov = c.yfov_deg.unwrap_or(60.0);
         ensure!(yfov > 0.0 && yfov < 180.0, "{}: yfov_deg {yfov} is outside (0, 180)", context());
         let znear = c.znear.unwrap_or(0.05);
         ensure!(znear > 0.0 && znear.is_finite(), "{}: znear must be positive", context());
         let Some(up) = c.up else {
-            return Ok(Camera::look_at(&name, position, target, yfov.to_radians(), znear));
+            let forward = (target - position).normalize().as_vec3();
+            // Not parallel to the view direction (as `Camera::look_at`).
+            let up = if forward.y.abs() > 0.999 { Vec3::Z } else { Vec3::Y };
+            return Ok(Camera::look_at_up_f64(&name, position, target, up, yfov.to_radians(), znear));
         };
         let up = finite3(up, "up").with_context(context)?;
-        let forward = (target - position).normalize();
+        let forward = (target - position).normalize().as_vec3();
         ensure!(
             up.length() > 0.0 && up.normalize().cross(forward).length() > 1e-3,
             "{}: up {up} is zero or parallel to the view direction",
             context()
         );
-        Ok(Camera::look_at_up(&name, position, target, up, yfov.to_radians(), znear))
+        Ok(Camera::look_at_up_f64(&name, position, target, up, yfov.to_radians(), znear))
     }
 
     fn camera_path(&self, keys: Vec<CameraKeyDef>) -> Result<Vec<CameraKey>> {

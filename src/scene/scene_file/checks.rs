@@ -2,7 +2,7 @@
 //! [0, 1], unit vectors; each error names the key.
 
 use anyhow::{ensure, Context, Result};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 pub(super) fn finite(v: f32, what: &str) -> Result<f32> {
     ensure!(v.is_finite(), "{what} must be finite");
@@ -12,6 +12,12 @@ pub(super) fn finite(v: f32, what: &str) -> Result<f32> {
 pub(super) fn finite3(v: [f32; 3], what: &str) -> Result<Vec3> {
     ensure!(v.iter().all(|c| c.is_finite()), "{what} must be finite");
     Ok(Vec3::from(v))
+}
+
+/// A placement (position, translation): kept in f64, like the scene's.
+pub(super) fn finite3_f64(v: [f64; 3], what: &str) -> Result<DVec3> {
+    ensure!(v.iter().all(|c| c.is_finite()), "{what} must be finite");
+    Ok(DVec3::from(v))
 }
 
 pub(super) fn non_negative(v: f32, what: &str) -> Result<f32> {

@@ -4,22 +4,22 @@
 use std::path::Path;
 
 use anyhow::{bail, ensure, Context, Result};
-use glam::{EulerRot, Quat, Vec3};
+use glam::{DVec3, EulerRot, Quat, Vec3};
 
-use super::checks::{finite3, non_negative, non_negative3, unit, unit_interval};
+use super::checks::{finite3, finite3_f64, non_negative, non_negative3, unit, unit_interval};
 use super::schema::{LightDef, LightType, MaterialDef, ObjectDef, PrimitiveKind, Scalar3, Size};
 use crate::scene::{primitives, AlphaMode, HdrImage, Light, LightKind, Material, Primitive, Transform};
 
 pub(super) fn light_from_def(l: LightDef, kind: LightType, name: String) -> Result<Light> {
     let color = non_negative3(l.color.unwrap_or([1.0; 3]), "color")?;
     let intensity = non_negative(l.intensity.unwrap_or(1.0), "intensity")?;
-    let position = l.position.map(|p| finite3(p, "position")).transpose()?;
+    let position = l.position.map(|p| finite3_f64(p, "position")).transpose()?;
     let aim = match (l.direction, l.target) {
         (Some(_), Some(_)) => bail!("set either `direction` or `target`, not both"),
         (Some(d), None) => Some(unit(d, "direction")?),
         (None, Some(t)) => {
             let from = position.context("`target` needs a `position`")?;
-            Some(unit((finite3(t, "target")? - from).to_array(), "target - position")?)
+            Some(unit((finite3_f64(t, "target")? - from).as_vec3().to_array(), "target - position")?)
         }
         (None, None) => None,
     };
@@ -31,7 +31,7 @@ pub(super) fn light_from_def(l: LightDef, kind: LightType, name: String) -> Resu
     let (kind, position, direction) = match kind {
         LightType::Directional => {
             ensure!(position.is_none(), "a directional light has no position");
-            (LightKind::Directional, Vec3::ZERO, aim.context("a directional light needs `direction`")?)
+            (LightKind::Directional, DVec3::ZERO, aim.context("a directional light needs `direction`")?)
         }
         LightType::Point => {
             ensure!(aim.is_none(), "a point light has no direction");
@@ -98,7 +98,7 @@ pub(super) fn material_from_def(m: MaterialDef) -> Result<Material> {
 /// Translation, then rotation (X, then Y, then Z about the world axes, as
 /// Blender's "XYZ Euler"), then scale: the usual TRS.
 pub(super) fn object_transform(o: &ObjectDef) -> Result<Transform> {
-    let translation = finite3(o.translation.unwrap_or([0.0; 3]), "translation")?;
+    let translation = finite3_f64(o.translation.unwrap_or([0.0; 3]), "translation")?;
     let [x, y, z] =
         finite3(o.rotation_deg.unwrap_or([0.0; 3]), "rotation_deg")?.to_array().map(f32::to_radians);
     let scale = match o.scale.unwrap_or(Scalar3::Uniform(1.0)) {

@@ -2,7 +2,7 @@
 //! (meshes, materials, textures, nodes, cameras, skins, lights, animation
 //! targets) offset past what is already there.
 
-use glam::Mat4;
+use glam::DMat4;
 
 use crate::scene::{Light, Node, Scene, Transform};
 
@@ -69,9 +69,9 @@ pub(super) fn merge(scene: &mut Scene, sub: Scene, name: &str, local: Transform,
     root
 }
 
-fn place_light(mut l: Light, placement: &Mat4, node_base: usize) -> Light {
+fn place_light(mut l: Light, placement: &DMat4, node_base: usize) -> Light {
     l.position = placement.transform_point3(l.position);
-    l.direction = placement.transform_vector3(l.direction).normalize_or(l.direction);
+    l.direction = placement.transform_vector3(l.direction.as_dvec3()).as_vec3().normalize_or(l.direction);
     l.node = l.node.map(|n| n + node_base);
     l
 }

@@ -2,10 +2,10 @@
 //! scene animation, [`SCENE_ANIMATION`], turns at constant angular speed.
 
 use anyhow::{ensure, Context, Result};
-use glam::{Quat, Vec3};
+use glam::{DVec3, Quat, Vec3};
 
 use super::builder::Builder;
-use super::checks::{finite3, unit};
+use super::checks::{finite3_f64, unit};
 use super::schema::OrbitDef;
 use crate::scene::animation::{Animation, AnimationChannel, Channel, Interpolation};
 use crate::scene::{Node, Transform};
@@ -24,7 +24,7 @@ const MAX_ORBIT_TURNS: f32 = 1000.0;
 
 /// A validated `orbit`, before its pivot exists.
 pub(super) struct OrbitSpec {
-    pub(super) center: Vec3,
+    pub(super) center: DVec3,
     pub(super) axis: Vec3,
     pub(super) period: f32,
 }
@@ -76,7 +76,7 @@ impl Builder<'_> {
     /// orbit animation turns. The node's transform becomes relative to the
     /// pivot, so with the pivot unrotated (t = 0) the object stays exactly
     /// where its `translation` put it.
-    pub(super) fn add_pivot(&mut self, node: usize, center: Vec3, name: &str) -> usize {
+    pub(super) fn add_pivot(&mut self, node: usize, center: DVec3, name: &str) -> usize {
         let pivot = self.scene.nodes.len();
         self.scene.nodes.push(Node {
             name: format!("{name} (orbit pivot)"),
@@ -96,7 +96,7 @@ impl Builder<'_> {
 }
 
 pub(super) fn orbit_from_def(o: &OrbitDef) -> Result<OrbitSpec> {
-    let center = finite3(o.center.context("orbit needs `center`")?, "orbit.center")?;
+    let center = finite3_f64(o.center.context("orbit needs `center`")?, "orbit.center")?;
     let axis = unit(o.axis.unwrap_or([0.0, 1.0, 0.0]), "orbit.axis")?;
     let period = o.period.context("orbit needs `period` (seconds per turn)")?;
     ensure!(period > 0.0 && period.is_finite(), "orbit.period must be positive and finite (got {period})");

@@ -33,8 +33,9 @@ pub(super) struct EnvironmentDef {
 #[serde(deny_unknown_fields)]
 pub(super) struct CameraDef {
     pub(super) name: Option<String>,
-    pub(super) position: Spanned<[f32; 3]>,
-    pub(super) target: [f32; 3],
+    /// Placements are f64, like the scene's (see `Transform`).
+    pub(super) position: Spanned<[f64; 3]>,
+    pub(super) target: [f64; 3],
     pub(super) up: Option<[f32; 3]>,
     pub(super) yfov_deg: Option<f32>,
     pub(super) znear: Option<f32>,
@@ -64,10 +65,10 @@ pub(super) struct LightDef {
     pub(super) name: Option<String>,
     pub(super) color: Option<[f32; 3]>,
     pub(super) intensity: Option<f32>,
-    pub(super) position: Option<[f32; 3]>,
+    pub(super) position: Option<[f64; 3]>,
     pub(super) direction: Option<[f32; 3]>,
     /// Alternative to `direction` for spot lights: the point they aim at.
-    pub(super) target: Option<[f32; 3]>,
+    pub(super) target: Option<[f64; 3]>,
     pub(super) range: Option<f32>,
     pub(super) inner_cone_deg: Option<f32>,
     pub(super) outer_cone_deg: Option<f32>,
@@ -124,7 +125,7 @@ pub(super) struct ObjectDef {
     pub(super) radius: Option<f32>,
     pub(super) slices: Option<u32>,
     pub(super) stacks: Option<u32>,
-    pub(super) translation: Option<[f32; 3]>,
+    pub(super) translation: Option<[f64; 3]>,
     pub(super) rotation_deg: Option<[f32; 3]>,
     pub(super) scale: Option<Scalar3>,
     pub(super) material: Option<Spanned<String>>,
@@ -140,7 +141,7 @@ pub(super) struct ObjectDef {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct OrbitDef {
-    pub(super) center: Option<[f32; 3]>,
+    pub(super) center: Option<[f64; 3]>,
     pub(super) axis: Option<[f32; 3]>,
     pub(super) period: Option<f32>,
 }

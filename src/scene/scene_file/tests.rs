@@ -155,7 +155,7 @@ fn small_scene_parses() {
 #[test]
 fn rotation_is_x_then_y_about_world_axes() {
     let scene = Scene::load(&write("rotation", "scene.toml", SMALL)).unwrap();
-    let world = scene.world_matrices()[2];
+    let world = scene.world_matrices()[2].as_mat4();
     // Box: scale Y by 2, rotate 90 about X (+Y -> +Z) then 90 about Y (+Z -> +X).
     let y = world.transform_vector3(Vec3::Y);
     assert!((y - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-5, "{y}");
@@ -191,7 +191,7 @@ relevance = 3
     assert_eq!(scene.roots.len(), 2);
     let root = scene.roots[1];
     assert_eq!(scene.nodes[root].name, "helmet");
-    assert_eq!(scene.nodes[root].local.translation, Vec3::new(0.0, 2.0, 0.0));
+    assert_eq!(scene.nodes[root].local.translation, glam::DVec3::new(0.0, 2.0, 0.0));
     let helmet: Vec<_> = scene.instances.iter().filter(|i| i.object == 1).collect();
     assert!(!helmet.is_empty());
     for inst in &helmet {
@@ -241,7 +241,7 @@ translation = [5, 0, 0]
     scene.animate(0, 1.3);
     assert_ne!(before, boxed(&scene));
     let plain: Vec<_> = scene.instances.iter().filter(|i| i.object == 0).map(|i| i.world).collect();
-    assert_eq!(plain, vec![glam::Mat4::IDENTITY], "the animation moves only the merged glTF");
+    assert_eq!(plain, vec![glam::DMat4::IDENTITY], "the animation moves only the merged glTF");
 }
 
 /// Two orbits: a rotated, scaled cube about +Y (8 s) and a sphere about
@@ -269,7 +269,7 @@ orbit = { center = [0.5, 0, -1], axis = [1, 1, 0], period = 4.0 }
 /// World transform of the node holding `object`'s mesh.
 fn object_world(scene: &Scene, object: usize) -> Mat4 {
     let node = scene.nodes.iter().position(|n| n.object == Some(object)).expect("object has no node");
-    scene.world_matrices()[node]
+    scene.world_matrices()[node].as_mat4()
 }
 
 fn assert_close(got: Vec3, expected: Vec3, what: &str) {
@@ -412,7 +412,11 @@ orbit = {{ center = [0, 0, 0], axis = [1, 0, 0], period = 3 }}
     // merged root at -5), and the ball has made one full turn (period 3).
     scene.animate(1, 3.0);
     let box_root = scene.nodes.iter().position(|n| n.name == "box").unwrap();
-    assert_close(scene.world_matrices()[box_root].w_axis.truncate(), Vec3::new(-5.0, 0.0, 0.0), "box root");
+    assert_close(
+        scene.world_matrices()[box_root].w_axis.truncate().as_vec3(),
+        Vec3::new(-5.0, 0.0, 0.0),
+        "box root",
+    );
     assert_close(object_world(&scene, 1).w_axis.truncate(), Vec3::new(0.0, 0.0, 2.0), "ball");
     // A quarter of the ball's period about +X: +Z turns to -Y.
     scene.animate(1, 0.75);
@@ -564,7 +568,8 @@ fn sponza_animated_spheres_roll_round_clear_of_the_model() {
     for inst in scene.instances.iter().filter(|i| i.object == 0) {
         let p = &scene.meshes[inst.mesh].primitives[inst.primitive];
         for t in p.indices.chunks_exact(3) {
-            let v = [0, 1, 2].map(|k| inst.world.transform_point3(p.vertices[t[k] as usize].position.into()));
+            let world = inst.world.as_mat4();
+            let v = [0, 1, 2].map(|k| world.transform_point3(p.vertices[t[k] as usize].position.into()));
             let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
             let near = lo.cmplt(Vec3::new(3.5, 5.5, 2.0)).all() && hi.cmpgt(Vec3::new(-3.5, 3.9, -3.5)).all();
             if near && hi.y > FLOOR + 0.005 {
@@ -608,7 +613,7 @@ fn camera_up_rolls_the_view_and_is_validated() {
     };
     let rolled = Scene::load(&write("camera_up", "scene.toml", &scene("up = [1, 0, 0]"))).unwrap();
     // Camera +Y (its up) is world +X; it still looks down world -Z.
-    let world = rolled.cameras[0].world;
+    let world = rolled.cameras[0].world.as_mat4();
     assert!((world.y_axis.truncate() - Vec3::X).length() < 1e-6, "{world}");
     assert!((world.z_axis.truncate() - Vec3::Z).length() < 1e-6, "{world}");
     let e = error_of("camera_up_parallel", &scene("up = [0, 0, -2]"));
