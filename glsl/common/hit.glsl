@@ -57,29 +57,61 @@ void camera_uv_gradients(uint instance, uint primitive, ivec2 px, out vec2 dx, o
 }
 
 // Set while a pure-RT camera ray of pixel g_camera_pixel is traced: its
-// alpha tests read filtered alpha like the raster's; every other ray tests
-// the finest level.
+// alpha tests read filtered alpha like the raster's.
 bool g_camera_ray = false;
 ivec2 g_camera_pixel = ivec2(0);
+// Set while a reflection/refraction ray is traced: its cone (width at the
+// origin, spread per unit distance) and direction, so its alpha tests pick
+// the mip its shading picks (a cut-out seen in a mirror does not sparkle).
+// Zero (shadow rays): the finest level.
+vec2 g_alpha_cone = vec2(0.0);
+vec3 g_alpha_dir = vec3(0.0, 0.0, 1.0);
 
-// Base-colour alpha at a hit (for alpha-masked any-hit decisions).
-float hit_alpha(uint instance, uint primitive, vec2 b) {
+// Mip-level base of a hit (see g_hit_lod): half the log2 ratio of the
+// triangle's uv area to its world area, plus log2 of the cone's width over
+// the cosine to the ray. 0 width (no cone): the finest level.
+float cone_lod(HitVertices hv, vec3 e1, vec3 e2, vec3 gn, vec3 ray_d, float cone_width) {
+    vec2 t1 = hv.v1.uv - hv.v0.uv;
+    vec2 t2 = hv.v2.uv - hv.v0.uv;
+    float uv_area = abs(t1.x * t2.y - t2.x * t1.y);
+    float world_area = length(cross(e1, e2));
+    if (!(uv_area > 0.0 && world_area > 0.0 && cone_width > 0.0)) return -64.0;
+    float cosine = max(abs(dot(gn, ray_d)), 1e-3);
+    return 0.5 * log2(uv_area / world_area) + log2(cone_width / cosine);
+}
+
+// Base-colour alpha at a candidate hit at distance t (for alpha-masked
+// any-hit decisions).
+float hit_alpha(uint instance, uint primitive, vec2 b, float t) {
     Instance inst = instances[instance];
     Material m = materials[inst.material];
-    vec2 uv = hit_uv(hit_vertices(inst, primitive), b);
-    if (g_camera_ray && m.tex_base_color >= 0) {
+    HitVertices hv = hit_vertices(inst, primitive);
+    vec2 uv = hit_uv(hv, b);
+    if (m.tex_base_color < 0) return m.base_color.a;
+    if (g_camera_ray) {
         vec2 dx, dy;
         camera_uv_gradients(instance, primitive, g_camera_pixel, dx, dy);
         return m.base_color.a * textureGrad(textures[nonuniformEXT(m.tex_base_color)], uv, dx, dy).a;
     }
-    return m.base_color.a * sample_tex_lod(m.tex_base_color, uv, 0.0, vec4(1.0)).a;
+    float lod = 0.0;
+    if (g_alpha_cone != vec2(0.0)) {
+        vec3 p0 = (inst.world * vec4(hv.v0.position, 1.0)).xyz;
+        vec3 e1 = mat3(inst.world) * (hv.v1.position - hv.v0.position);
+        vec3 e2 = mat3(inst.world) * (hv.v2.position - hv.v0.position);
+        vec3 gn = cross(e1, e2);
+        gn = dot(gn, gn) > 0.0 ? normalize(gn) : vec3(0.0, 1.0, 0.0);
+        vec2 size = vec2(textureSize(textures[nonuniformEXT(m.tex_base_color)], 0));
+        float width = g_alpha_cone.x + g_alpha_cone.y * t;
+        lod = max(cone_lod(hv, e1, e2, gn, g_alpha_dir, width) + 0.5 * log2(size.x * size.y), 0.0);
+    }
+    return m.base_color.a * sample_tex_lod(m.tex_base_color, uv, lod, vec4(1.0)).a;
 }
 
 // Whether a candidate hit counts for visibility (alpha MASK / BLEND cut-outs).
-bool hit_alpha_passes(uint instance, uint primitive, vec2 b) {
+bool hit_alpha_passes(uint instance, uint primitive, vec2 b, float t) {
     Material m = materials[instances[instance].material];
     if (m.alpha_mode == ALPHA_OPAQUE) return true;
-    return hit_alpha(instance, primitive, b) >= m.alpha_cutoff;
+    return hit_alpha(instance, primitive, b, t) >= m.alpha_cutoff;
 }
 
 // Light transmitted through one occluder crossing: 0 for opaque, the
@@ -93,19 +125,6 @@ vec3 occluder_transmittance(uint instance, uint primitive, vec2 b) {
     if (m.alpha_mode != ALPHA_OPAQUE && base.a < m.alpha_cutoff) return vec3(1.0);
     float tr = clamp(m.transmission * sample_tex_lod(m.tex_transmission, uv, 0.0, vec4(1.0)).r, 0.0, 1.0);
     return base.rgb * tr;
-}
-
-// Mip-level base of a hit (see g_hit_lod): half the log2 ratio of the
-// triangle's uv area to its world area, plus log2 of the cone's width over
-// the cosine to the ray. 0 width (no cone): the finest level.
-float cone_lod(HitVertices hv, vec3 e1, vec3 e2, vec3 gn, vec3 ray_d, float cone_width) {
-    vec2 t1 = hv.v1.uv - hv.v0.uv;
-    vec2 t2 = hv.v2.uv - hv.v0.uv;
-    float uv_area = abs(t1.x * t2.y - t2.x * t1.y);
-    float world_area = length(cross(e1, e2));
-    if (!(uv_area > 0.0 && world_area > 0.0 && cone_width > 0.0)) return -64.0;
-    float cosine = max(abs(dot(gn, ray_d)), 1e-3);
-    return 0.5 * log2(uv_area / world_area) + log2(cone_width / cosine);
 }
 
 // Full surface at a hit. `geo_normal` is the world-space geometric normal

@@ -174,7 +174,11 @@ vec3 trace_branches() {
         Branch b = g_stack[g_sp];
         RayHit h;
         count_ray(RAY_KIND_SECONDARY);
-        if (trace_closest(b.origin, b.dir, RAY_TMAX, h)) {
+        g_alpha_cone = vec2(b.cone.width, b.cone.spread);
+        g_alpha_dir = b.dir;
+        bool hit = trace_closest(b.origin, b.dir, RAY_TMAX, h);
+        g_alpha_cone = vec2(0.0);
+        if (hit) {
             vec3 gn;
             bool back_face;
             Cone at_hit = Cone(b.cone.width + b.cone.spread * h.t, b.cone.spread);

@@ -13,6 +13,8 @@ struct TracePayload {
     // A pure-RT camera ray's pixel (x | y << 16), for its alpha tests' LOD;
     // NOT_A_CAMERA_RAY otherwise.
     uint camera_pixel;
+    // A reflection/refraction ray's cone (g_alpha_cone): its alpha tests' LOD.
+    vec2 alpha_cone;
 };
 const uint NOT_A_CAMERA_RAY = 0xffffffffu;
 // Hit groups: HIT_GROUP_* in generated/shared.glsl.

@@ -124,9 +124,9 @@ void object_triangle(Instance inst, uint prim, out vec3 p0, out vec3 p1, out vec
 
 // Any-hit decision shared by both queries: 0 = ignore this candidate,
 // 1 = accept it as a hit. Shadow rays also fold transmittance into `tr`.
-uint candidate(bool shadow, uint inst, uint prim, vec2 b, inout vec3 tr) {
+uint candidate(bool shadow, uint inst, uint prim, vec2 b, float hit_t, inout vec3 tr) {
     if (bvh_instances[inst].opaque != 0u) return 1u;
-    if (!shadow) return hit_alpha_passes(inst, prim, b) ? 1u : 0u;
+    if (!shadow) return hit_alpha_passes(inst, prim, b, hit_t) ? 1u : 0u;
     vec3 t = occluder_transmittance(inst, prim, b);
     if (all(equal(t, vec3(0.0)))) return 1u;
     tr *= t;
@@ -154,7 +154,7 @@ bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, 
                 object_triangle(inst, prim, p0, p1, p2);
                 vec2 b;
                 float t = watertight_hit(wr, p0, p1, p2, tmax, b);
-                if (t > 0.0 && candidate(shadow, inst_index, prim, b, tr) == 1u) {
+                if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
                     tmax = t;
                     hit = RayHit(inst_index, prim, b, t);
                     found = true;

@@ -14,6 +14,7 @@ bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
     payload.hit = 0u;
     payload.camera_pixel =
         g_camera_ray ? uint(g_camera_pixel.x) | (uint(g_camera_pixel.y) << 16) : NOT_A_CAMERA_RAY;
+    payload.alpha_cone = g_alpha_cone;
     traceRayEXT(tlas, gl_RayFlagsNoneEXT, MASK_VISIBLE, HIT_GROUP_VISIBLE, HIT_GROUP_STRIDE, 0u, o, 0.0, d, tmax, 0);
     hit = RayHit(payload.instance, payload.primitive, payload.bary, payload.t);
     return payload.hit != 0u;
@@ -25,6 +26,7 @@ vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
     payload.hit = 1u;
     payload.transmittance = vec3(1.0);
     payload.camera_pixel = NOT_A_CAMERA_RAY;
+    payload.alpha_cone = vec2(0.0);
     uint flags = gl_RayFlagsTerminateOnFirstHitEXT | gl_RayFlagsSkipClosestHitShaderEXT;
     traceRayEXT(tlas, flags, MASK_SHADOW, HIT_GROUP_SHADOW, HIT_GROUP_STRIDE, 0u, o, 0.0, d, tmax, 0);
     return payload.hit != 0u ? vec3(0.0) : payload.transmittance;

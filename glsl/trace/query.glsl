@@ -17,7 +17,8 @@ bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
         uint inst = rayQueryGetIntersectionInstanceCustomIndexEXT(q, false);
         uint prim = rayQueryGetIntersectionPrimitiveIndexEXT(q, false);
         vec2 b = rayQueryGetIntersectionBarycentricsEXT(q, false);
-        if (hit_alpha_passes(inst, prim, b)) rayQueryConfirmIntersectionEXT(q);
+        float t = rayQueryGetIntersectionTEXT(q, false);
+        if (hit_alpha_passes(inst, prim, b, t)) rayQueryConfirmIntersectionEXT(q);
     }
     // Query the committed type before reading any committed data: reading
     // it after a miss has crashed llvmpipe (wgpu issue #6731).
