@@ -130,7 +130,9 @@ enum Command {
         warmup: usize,
         /// Knobs to sweep, comma-separated, each optionally with its values
         /// after '=' separated by ':' (e.g. "max-depth=0:2:8,mode"); knobs:
-        /// max-depth, min-weight, effects, mode, backend, aa, resolution-scale.
+        /// max-depth, min-weight, effects, mode, backend, aa, accel-update
+        /// (animated scenes: with --animation, frames --fps apart),
+        /// resolution-scale.
         /// Default: all, with their full value lists.
         #[arg(long)]
         knobs: Option<String>,
@@ -463,9 +465,6 @@ impl ViewArgs {
         if self.fps.is_some() && self.animation.is_none() {
             return Some("--fps has no effect without --animation".into());
         }
-        if self.fps.is_some() && command == "report" {
-            return Some("--fps has no effect on report (still frames at --time)".into());
-        }
         if self.fps.is_some() && command == "render" {
             return Some(
                 "--fps has no effect on render (one frame at --time; it steps bench and view)".into(),
@@ -527,6 +526,18 @@ impl Cli {
             Some(Command::Info) | Some(Command::Compare { .. }) | None => return,
         };
         let problem = match &self.command {
+            Some(Command::Report { knobs, stability, tone_sheet, .. })
+                if view.fps.is_some()
+                    && (*stability
+                        || !tone_sheet.is_empty()
+                        || knobs.as_deref().is_some_and(|k| !k.contains("accel-update"))) =>
+            {
+                Some(
+                    "--fps has no effect here: report renders still frames at --time; it steps only the \
+                     accel-update knob's frames"
+                        .into(),
+                )
+            }
             Some(Command::Render { supersample: Some(k), .. })
                 if view.aa.is_some_and(|a| a != AaMode::None) =>
             {

@@ -117,6 +117,28 @@ pub enum AccelUpdate {
     Full,
 }
 
+impl AccelUpdate {
+    /// The refit / rebuild policy of the dynamic structures.
+    pub fn rebuild_policy(self) -> RebuildPolicy {
+        match self {
+            AccelUpdate::Policy => RebuildPolicy::default(),
+            AccelUpdate::Refit => RebuildPolicy::NEVER,
+            AccelUpdate::Rebuild | AccelUpdate::Full => RebuildPolicy::ALWAYS,
+        }
+    }
+
+    /// Brings `renderer`'s acceleration structures to `scene`'s current
+    /// pose this way (its `update_timings` say what it cost).
+    pub fn update(self, ctx: &Context, renderer: &mut Renderer, scene: &Scene) -> Result<()> {
+        renderer.rebuild_policy = self.rebuild_policy();
+        if self == AccelUpdate::Full {
+            renderer.rebuild_all_structures(ctx, scene)
+        } else {
+            renderer.update_scene(ctx, scene)
+        }
+    }
+}
+
 /// One measured configuration of a benchmark run.
 #[derive(Clone, Copy, Debug)]
 pub struct BenchVariant {
@@ -175,11 +197,7 @@ fn bench_frame_inner(
     (warmup, frames): (usize, usize),
 ) -> Result<BenchFrame> {
     let settings = RenderSettings { mode: variant.mode, backend: variant.backend, ..job.settings };
-    renderer.rebuild_policy = match variant.accel {
-        AccelUpdate::Policy => RebuildPolicy::default(),
-        AccelUpdate::Refit => RebuildPolicy::NEVER,
-        AccelUpdate::Rebuild | AccelUpdate::Full => RebuildPolicy::ALWAYS,
-    };
+    renderer.rebuild_policy = variant.accel.rebuild_policy();
     let t = if frames > 1 { (i.saturating_sub(warmup)) as f32 / (frames - 1) as f32 } else { 0.0 };
     let camera = crate::scene::camera::on_path(&scene.camera_path, t, base_camera);
     let mut update = Vec::new();
@@ -187,11 +205,7 @@ fn bench_frame_inner(
     if let Some(a) = anim {
         // Fixed-step clock: deterministic frames.
         scene.animate(a, job.time + i as f32 / job.fps.max(1e-3));
-        if variant.accel == AccelUpdate::Full {
-            renderer.rebuild_all_structures(ctx, scene)?;
-        } else {
-            renderer.update_scene(ctx, scene)?;
-        }
+        variant.accel.update(ctx, renderer, scene)?;
         update = renderer.update_timings.clone();
         counts = renderer.update_counts;
     }

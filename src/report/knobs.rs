@@ -4,6 +4,7 @@
 
 use anyhow::{bail, Context as _, Result};
 
+use crate::app::AccelUpdate;
 use crate::render::shading::{AaMode, Backend, Mode};
 use crate::render::RenderSettings;
 
@@ -14,6 +15,17 @@ use crate::render::RenderSettings;
 pub struct Variant {
     pub settings: RenderSettings,
     pub scale: f32,
+    /// Some: the scene is played through the animation's last frames up to
+    /// the report's time, keeping the acceleration structures current this
+    /// way (measure::measure_animated); None: one still pose.
+    pub accel: Option<AccelUpdate>,
+}
+
+impl Variant {
+    /// A still frame at full size.
+    pub fn new(settings: RenderSettings) -> Variant {
+        Variant { settings, scale: 1.0, accel: None }
+    }
 }
 
 /// One knob: its name on the command line and in the tables, what it is,
@@ -123,6 +135,26 @@ pub const KNOBS: &[Knob] = &[
         skip_unavailable: false,
     },
     Knob {
+        name: "accel-update",
+        about: "acceleration-structure update on an animated scene (--animation): the structures are built \
+                at the first of the warm-up + timed frames before --time and kept current every frame by \
+                refitting (refit), rebuilding the animated ones (rebuild), rebuilding every structure (full) \
+                or the default policy (policy, refit until the bounds grow 1.5x); time includes the update, \
+                the error is the frame at --time",
+        values: &["refit", "rebuild", "full"],
+        apply: |v, s| {
+            v.accel = Some(match s {
+                "policy" => AccelUpdate::Policy,
+                "refit" => AccelUpdate::Refit,
+                "rebuild" => AccelUpdate::Rebuild,
+                "full" => AccelUpdate::Full,
+                _ => bail!("accel-update '{s}': expected refit, rebuild, full or policy"),
+            });
+            Ok(())
+        },
+        skip_unavailable: true,
+    },
+    Knob {
         name: "resolution-scale",
         about: "render at this fraction of the width and height; error after bilinear upscaling to the reference size",
         values: &["0.5", "0.75", "1"],
@@ -175,7 +207,7 @@ pub fn parse_selection(s: &str) -> Result<Vec<KnobSelection>> {
         }
         // Check the values now, not after minutes of rendering.
         for v in values.iter().flatten() {
-            (knob.apply)(&mut Variant { settings: RenderSettings::default(), scale: 1.0 }, v)?;
+            (knob.apply)(&mut Variant::new(RenderSettings::default()), v)?;
         }
         out.push(KnobSelection { knob: knob.name, values });
     }
@@ -193,7 +225,7 @@ mod tests {
     fn every_default_value_applies() {
         for k in KNOBS {
             for v in k.values {
-                let mut var = Variant { settings: RenderSettings::default(), scale: 1.0 };
+                let mut var = Variant::new(RenderSettings::default());
                 (k.apply)(&mut var, v).unwrap_or_else(|e| panic!("{} {v}: {e}", k.name));
             }
         }
@@ -208,7 +240,7 @@ mod tests {
         assert!(parse_selection("depth").unwrap_err().to_string().contains("max-depth"));
         assert!(parse_selection("max-depth=99").is_err());
         assert!(parse_selection("mode,mode").is_err());
-        let mut v = Variant { settings: RenderSettings::default(), scale: 1.0 };
+        let mut v = Variant::new(RenderSettings::default());
         (find("effects").unwrap().apply)(&mut v, "shadows").unwrap();
         assert!(v.settings.effects.shadows && !v.settings.effects.reflections);
     }

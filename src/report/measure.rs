@@ -101,45 +101,130 @@ pub fn measure(
     count_rays: bool,
 ) -> Result<Measured> {
     let settings = variant.settings;
-    let rays = if count_rays {
-        let counting = crate::render::RenderSettings {
-            effects: Effects { count_rays: true, ..settings.effects },
-            ..settings
-        };
-        Some(renderer.render(ctx, scene, camera, &counting)?.ray_counts)
-    } else {
-        None
-    };
+    let rays = if count_rays { Some(count_frame(ctx, renderer, scene, camera, &settings)?) } else { None };
     for _ in 0..warmup.max(1) {
         renderer.render(ctx, scene, camera, &settings)?;
     }
-    let mut totals = Vec::with_capacity(frames);
-    let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
+    let mut times = Times::default();
     let mut last = None;
     for _ in 0..frames.max(1) {
         let out = renderer.render(ctx, scene, camera, &settings)?;
-        let mut total = 0.0;
-        for &(name, ms) in out.timings.iter().filter(|(n, _)| *n != "readback") {
-            total += ms;
-            match per_pass.iter_mut().find(|(n, _)| *n == name) {
-                Some((_, v)) => v.push(ms),
-                None => per_pass.push((name, vec![ms])),
-            }
-        }
-        totals.push(total);
+        times.add(&out.timings, &[]);
         last = Some(out);
     }
-    let out = last.expect("at least one timed frame");
+    Ok(finish(renderer, variant, times, rays, last.expect("at least one timed frame")))
+}
+
+/// The animation a variant with an acceleration-structure update plays.
+#[derive(Clone, Copy, Debug)]
+pub struct Playback {
+    pub animation: usize,
+    /// The last frame's time (the report's --time), seconds.
+    pub end: f32,
+    pub fps: f32,
+}
+
+/// Measures a variant whose acceleration structures follow an animation
+/// (`variant.accel`): a renderer of its own is built on the pose of the
+/// first of `warmup + frames` frames that end at `playback.end`, one frame
+/// apart; every frame poses the scene, updates the structures the
+/// variant's way and renders. The timed frames include the update's passes
+/// (and a full rebuild's wall time); the image is the last frame's, so its
+/// error is that of the structures after `warmup + frames - 1` updates.
+#[allow(clippy::too_many_arguments)]
+pub fn measure_animated(
+    ctx: &Context,
+    scene: &Scene,
+    playback: Playback,
+    camera: &Camera,
+    variant: &Variant,
+    extent: avk::Extent2D,
+    (warmup, frames): (usize, usize),
+    count_rays: bool,
+) -> Result<Measured> {
+    let accel = variant.accel.expect("an animated variant");
+    let n = warmup.max(1) + frames.max(1);
+    let step = 1.0 / playback.fps.max(1e-3);
+    let time = |i: usize| playback.end - (n - 1 - i) as f32 * step;
+    let mut scene = scene.clone();
+    scene.animate(playback.animation, time(0));
+    let mut renderer = Renderer::new(ctx, &scene, extent)?;
+    let result = (|| {
+        let settings = variant.settings;
+        let rays =
+            if count_rays { Some(count_frame(ctx, &mut renderer, &scene, camera, &settings)?) } else { None };
+        let mut times = Times::default();
+        let mut last = None;
+        for i in 0..n {
+            scene.animate(playback.animation, time(i));
+            accel.update(ctx, &mut renderer, &scene)?;
+            let out = renderer.render(ctx, &scene, camera, &settings)?;
+            if i >= n - frames.max(1) {
+                times.add(&out.timings, &renderer.update_timings);
+                last = Some(out);
+            }
+        }
+        Ok(finish(&renderer, variant, times, rays, last.expect("at least one timed frame")))
+    })();
+    renderer.destroy(ctx);
+    result
+}
+
+/// One frame that counts rays by kind (camera, shadow, secondary).
+fn count_frame(
+    ctx: &Context,
+    renderer: &mut Renderer,
+    scene: &Scene,
+    camera: &Camera,
+    settings: &crate::render::RenderSettings,
+) -> Result<[u32; 3]> {
+    let counting = crate::render::RenderSettings {
+        effects: Effects { count_rays: true, ..settings.effects },
+        ..*settings
+    };
+    Ok(renderer.render(ctx, scene, camera, &counting)?.ray_counts)
+}
+
+/// Per-frame totals and per-pass times of the timed frames.
+#[derive(Default)]
+struct Times {
+    totals: Vec<f64>,
+    per_pass: Vec<(&'static str, Vec<f64>)>,
+}
+
+impl Times {
+    /// One frame: its update passes (if any) and its frame passes; the
+    /// readback is not part of the frame.
+    fn add(&mut self, frame: &[(&'static str, f64)], update: &[(&'static str, f64)]) {
+        let mut total = 0.0;
+        for &(name, ms) in update.iter().chain(frame).filter(|(n, _)| *n != "readback") {
+            total += ms;
+            match self.per_pass.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, v)) => v.push(ms),
+                None => self.per_pass.push((name, vec![ms])),
+            }
+        }
+        self.totals.push(total);
+    }
+}
+
+fn finish(
+    renderer: &Renderer,
+    variant: &Variant,
+    times: Times,
+    rays: Option<[u32; 3]>,
+    out: crate::render::FrameOutput,
+) -> Measured {
     if let Some(w) = out.truncation_warning() {
         log::warn!("{w}");
     }
-    let (median, p95) = median_p95(&totals);
+    let (median, p95) = median_p95(&times.totals);
     let config = renderer.shading_config();
     let (image, non_finite) = HdrImage::from_rgba(out.width, out.height, &out.hdr);
     if non_finite > 0 {
         log::warn!("{non_finite} pixel(s) with NaN or Inf radiance; compared as 0");
     }
-    Ok(Measured {
+    Measured {
         variant: *variant,
         config: config.map(|c| c.describe()).unwrap_or_default(),
         backend: config
@@ -151,15 +236,15 @@ pub fn measure(
         timing: Timing {
             median,
             p95,
-            passes: per_pass.into_iter().map(|(n, v)| (n, median_p95(&v).0)).collect(),
-            frames: totals.len(),
+            passes: times.per_pass.into_iter().map(|(n, v)| (n, median_p95(&v).0)).collect(),
+            frames: times.totals.len(),
         },
         rays,
         image,
         ldr: LdrImage { width: out.width, height: out.height, rgb: out.rgb8().into_raw() },
         non_finite,
         exposure: out.exposure,
-    })
+    }
 }
 
 #[cfg(test)]

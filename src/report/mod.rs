@@ -98,7 +98,7 @@ impl ReportOptions {
             backend: self.reference.backend.unwrap_or(base.backend),
             ..base
         };
-        Variant { settings, scale: 1.0 }
+        Variant::new(settings)
     }
 
     /// A cheaper reference (half the depth, ten times the weight cutoff):
@@ -218,9 +218,9 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
     }
     let (width, height) = (opts.job.width, opts.job.height);
     let _ = opts.job.extent()?;
-    let (scene, _) = load_posed(&opts.job)?;
+    let (scene, animation) = load_posed(&opts.job)?;
     let camera = opts.job.camera.resolve(&scene)?;
-    let base = Variant { settings: opts.job.settings, scale: 1.0 };
+    let base = Variant::new(opts.job.settings);
     // `auto` resolved to the backend it picks, so equal frames dedupe.
     let concrete = |mut v: Variant| -> Result<Variant> {
         if let Some(b) = resolve_shading(ctx, &scene, &v.settings)?.backend {
@@ -262,6 +262,15 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         for value in values {
             let mut v = base;
             (knob.apply)(&mut v, &value)?;
+            if v.accel.is_some() && animation.is_none() {
+                let why = "the scene is not animated (give --animation NAME)";
+                if sel.values.is_some() {
+                    bail!("report: {} {value}: {why}", knob.name);
+                }
+                log::info!("report: {} {value} skipped: {why}", knob.name);
+                skipped.push(format!("{} {value}: {why}", knob.name));
+                continue;
+            }
             let v = match concrete(v) {
                 Ok(v) => v,
                 Err(e) if knob.skip_unavailable && sel.values.is_none() => {
@@ -302,17 +311,18 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
                 e.height,
                 started.elapsed().as_secs_f64()
             );
-            let renderer = renderers.get(ctx, &scene, e.width, e.height)?;
-            let m = measure::measure(
-                ctx,
-                renderer,
-                &scene,
-                &camera,
-                v,
-                opts.warmup,
-                opts.frames,
-                opts.count_rays,
-            )
+            let m = match (v.accel, animation) {
+                (Some(_), Some(animation)) => {
+                    let playback = measure::Playback { animation, end: opts.job.time, fps: opts.job.fps };
+                    let counts = (opts.warmup, opts.frames);
+                    measure::measure_animated(ctx, &scene, playback, &camera, v, e, counts, opts.count_rays)
+                }
+                _ => {
+                    let renderer = renderers.get(ctx, &scene, e.width, e.height)?;
+                    let (w, f) = (opts.warmup, opts.frames);
+                    measure::measure(ctx, renderer, &scene, &camera, v, w, f, opts.count_rays)
+                }
+            }
             .with_context(|| format!("report: measuring {label}"))?;
             eprintln!(
                 "report [{}/{n}] {label}: {:.3} ms median, {:.3} ms p95 ({})",

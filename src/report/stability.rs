@@ -172,7 +172,7 @@ pub fn run(ctx: &Context, opts: &StabilityOptions) -> Result<Stability> {
                 (settings.effects.max_depth, settings.effects.min_weight) = (depth, weight);
             }
             let backend = format!("{b:?}").to_lowercase();
-            let variant = Variant { settings, scale: 1.0 };
+            let variant = Variant::new(settings);
             let hybrid = measure::measure(
                 ctx,
                 &mut renderer,
@@ -185,7 +185,7 @@ pub fn run(ctx: &Context, opts: &StabilityOptions) -> Result<Stability> {
             )
             .with_context(|| format!("{} on {backend}", case.name));
             let rt = (case.against == Against::Rt).then(|| {
-                let v = Variant { settings: RenderSettings { mode: Mode::Rt, ..settings }, scale: 1.0 };
+                let v = Variant::new(RenderSettings { mode: Mode::Rt, ..settings });
                 measure::measure(ctx, &mut renderer, &case.scene, &case.camera, &v, 0, 1, false)
                     .with_context(|| format!("{} in rt mode on {backend}", case.name))
             });

@@ -89,7 +89,7 @@ pub fn tone_sheets(
                         key: key.unwrap_or(0.18),
                         ..job.settings.tone
                     };
-                    let variant = Variant { settings: RenderSettings { tone, ..job.settings }, scale: 1.0 };
+                    let variant = Variant::new(RenderSettings { tone, ..job.settings });
                     let m =
                         measure::measure(ctx, &mut renderer, &scene, &camera, &variant, warmup, 5, false)?;
                     let state = m.exposure;
