@@ -3,6 +3,7 @@
 //! `passes::FRAME`, recorded through the pass layer (`frame.rs`), which
 //! derives barriers, labels and timestamps from what each pass declares.
 
+pub mod budget;
 pub mod frame;
 pub mod inject;
 pub mod kernel;
