@@ -143,12 +143,18 @@ impl SceneNeeds {
 /// backends must hold the scene within the driver's acceleration-structure
 /// limits (lavapipe before Mesa 25.2.7: 2^24 - 1 triangles per BLAS): `auto`
 /// falls back to the compute BVH with a warning, an explicit request fails
-/// with the numbers, before any driver call could crash on them.
+/// with the numbers, before any driver call could crash on them. On a
+/// `software` (CPU) device `auto` takes the compute BVH: there the driver's
+/// ray queries and pipelines are traversal loops on the CPU too, and
+/// measured slower than ours on every shipped scene (lavapipe, 2 threads:
+/// even on the default scene, 2x on Sponza, ~50x / ~100x on the armadillo;
+/// bench/results/report/*/report.md, knob backend).
 pub fn pick_backend(
     requested: Backend,
     rt: &RtEnables,
     limits: &Limits,
     needs: &SceneNeeds,
+    software: bool,
 ) -> Result<Backend> {
     let too_big = if needs.largest_primitive_triangles > limits.max_primitive_count {
         Some(format!(
@@ -178,6 +184,7 @@ pub fn pick_backend(
         Backend::Pipeline => {
             hardware("pipeline", "VK_KHR_ray_tracing_pipeline", rt.ray_tracing_pipeline, Backend::Pipeline)?
         }
+        Backend::Auto if software => Backend::Compute,
         Backend::Auto if (rt.ray_query || rt.ray_tracing_pipeline) && too_big.is_some() => {
             log::warn!("{}: using the compute BVH backend", too_big.unwrap_or_default());
             Backend::Compute
@@ -187,6 +194,11 @@ pub fn pick_backend(
         Backend::Auto => Backend::Compute,
         b => b,
     })
+}
+
+/// A CPU implementation of Vulkan (lavapipe, SwiftShader).
+fn software(ctx: &Context) -> bool {
+    ctx.caps.device_type == ash::vk::PhysicalDeviceType::CPU
 }
 
 fn light_is_on(l: &crate::scene::Light) -> bool {
@@ -237,8 +249,11 @@ impl ShadingConfig {
             ..wanted
         };
         let traces = mode == Mode::Rt || effects.shadows || effects.reflections || effects.refractions;
-        let backend =
-            if !traces { None } else { Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs)?) };
+        let backend = if !traces {
+            None
+        } else {
+            Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs, software(ctx))?)
+        };
         let luminance = settings.tone.measures_luminance() && !debug_view;
         Ok(ShadingConfig { mode, effects, backend, debug_view, needs, luminance, aa: settings.aa })
     }
@@ -248,6 +263,11 @@ impl ShadingConfig {
         match (self.backend, requested) {
             (None, _) if self.debug_view => "a debug view traces no rays",
             (None, _) => "no secondary effect needs rays",
+            (Some(_), Backend::Auto)
+                if software(ctx) && (ctx.rt.ray_query || ctx.rt.ray_tracing_pipeline) =>
+            {
+                "auto: a CPU (software) device, where the compute BVH tracer outruns the driver's ray tracing"
+            }
             (Some(_), Backend::Auto) if ctx.rt.ray_query => "auto: the device supports ray queries",
             (Some(_), Backend::Auto) if ctx.rt.ray_tracing_pipeline => {
                 "auto: no ray queries, the device offers ray-tracing pipelines"
@@ -313,22 +333,24 @@ mod tests {
             max_instance_count: 1 << 24,
         };
         let fits = needs(1000, 10);
-        assert_eq!(pick_backend(Backend::Auto, &rt, &limits, &fits).unwrap(), Backend::Query);
-        assert_eq!(pick_backend(Backend::Pipeline, &rt, &limits, &fits).unwrap(), Backend::Pipeline);
+        assert_eq!(pick_backend(Backend::Auto, &rt, &limits, &fits, false).unwrap(), Backend::Query);
+        assert_eq!(pick_backend(Backend::Auto, &rt, &limits, &fits, true).unwrap(), Backend::Compute);
+        assert_eq!(pick_backend(Backend::Query, &rt, &limits, &fits, true).unwrap(), Backend::Query);
+        assert_eq!(pick_backend(Backend::Pipeline, &rt, &limits, &fits, false).unwrap(), Backend::Pipeline);
         // One triangle over lavapipe's old 2^24 - 1 limit.
         let huge = needs(1 << 24, 10);
-        assert_eq!(pick_backend(Backend::Auto, &rt, &limits, &huge).unwrap(), Backend::Compute);
-        assert_eq!(pick_backend(Backend::Compute, &rt, &limits, &huge).unwrap(), Backend::Compute);
+        assert_eq!(pick_backend(Backend::Auto, &rt, &limits, &huge, false).unwrap(), Backend::Compute);
+        assert_eq!(pick_backend(Backend::Compute, &rt, &limits, &huge, false).unwrap(), Backend::Compute);
         for b in [Backend::Query, Backend::Pipeline] {
-            let e = pick_backend(b, &rt, &limits, &huge).unwrap_err().to_string();
+            let e = pick_backend(b, &rt, &limits, &huge, false).unwrap_err().to_string();
             assert!(e.contains("16777216 triangles") && e.contains("maxPrimitiveCount 16777215"), "{e}");
         }
         let many = needs(10, (1 << 24) + 1);
-        let e = pick_backend(Backend::Query, &rt, &limits, &many).unwrap_err().to_string();
+        let e = pick_backend(Backend::Query, &rt, &limits, &many, false).unwrap_err().to_string();
         assert!(e.contains("maxInstanceCount"), "{e}");
         let none = RtEnables { acceleration_structure: false, ray_query: false, ray_tracing_pipeline: false };
-        assert_eq!(pick_backend(Backend::Auto, &none, &limits, &huge).unwrap(), Backend::Compute);
-        assert!(pick_backend(Backend::Query, &none, &limits, &fits)
+        assert_eq!(pick_backend(Backend::Auto, &none, &limits, &huge, false).unwrap(), Backend::Compute);
+        assert!(pick_backend(Backend::Query, &none, &limits, &fits, false)
             .unwrap_err()
             .to_string()
             .contains("VK_KHR_ray_query"));
