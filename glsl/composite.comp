@@ -49,8 +49,14 @@ void main() {
     }
     case DEBUG_MATERIAL: color = vec3(s.metallic, s.roughness, s.transmission); break;
     case DEBUG_OBJECT: color = hash_color(instances[p.instance].object_id + 1u); break;
+    case DEBUG_SELECTION: {
+        float grey = dot(s.base_color, vec3(0.2126, 0.7152, 0.0722));
+        color = budget_traced(p.instance) ? vec3(0.25 + 0.75 * grey, 0.1, 0.1) : vec3(0.5 * grey + 0.1);
+        break;
+    }
     }
 #else
+    g_rt = budget_traced(p.instance);
     color = s.emissive + imageLoad(direct_in, px).rgb + ambient_light(s, is_mirror(s, 0u));
 #ifdef HAS_SPECULAR
     color += imageLoad(specular_in, px).rgb;

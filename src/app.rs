@@ -14,7 +14,9 @@ use crate::scene::{Camera, Scene};
 use crate::vk::{Context, ContextOptions, DeviceSelector, RenderDocUse};
 
 mod benchmark;
+mod budget_args;
 pub use benchmark::*;
+pub use budget_args::BudgetArgs;
 
 /// The bundled default scene, looked for in the working directory, next to
 /// the executable (an installed copy, or `target/<profile>/` inside the
@@ -212,6 +214,9 @@ pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
         if out.is_err() {
             break;
         }
+    }
+    if let Some(b) = renderer.budget_report() {
+        log::info!("{}", b.summary());
     }
     renderer.destroy(ctx);
     if let Ok(frame) = &out {

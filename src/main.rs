@@ -131,8 +131,8 @@ enum Command {
         /// Knobs to sweep, comma-separated, each optionally with its values
         /// after '=' separated by ':' (e.g. "max-depth=0:2:8,mode"); knobs:
         /// max-depth, min-weight, effects, mode, backend, aa, accel-update
-        /// (animated scenes: with --animation, frames --fps apart),
-        /// resolution-scale.
+        /// (animated scenes: with --animation, frames --fps apart), budget
+        /// (share of the cost of tracing everything), resolution-scale.
         /// Default: all, with their full value lists.
         #[arg(long)]
         knobs: Option<String>,
@@ -290,6 +290,8 @@ struct ViewArgs {
     /// when not given).
     #[arg(long, value_parser = parse_fps, allow_hyphen_values = true)]
     fps: Option<f32>,
+    #[command(flatten)]
+    budget: app::BudgetArgs,
 }
 
 /// Tone mapping and auto exposure (render/tone.rs).
@@ -459,6 +461,11 @@ impl ViewArgs {
                 "--fov has no effect without --look-from/--look-at (scene cameras keep their own)".into(),
             );
         }
+        if self.budget.budget.is_none()
+            && (self.budget.budget_mode.is_some() || self.budget.stickiness.is_some())
+        {
+            return Some("--budget-mode and --stickiness have no effect without --budget".into());
+        }
         if self.time.is_some() && self.animation.is_none() {
             return Some("--time has no effect without --animation".into());
         }
@@ -505,6 +512,7 @@ impl ViewArgs {
                     min_weight: self.min_weight,
                     count_rays: false,
                 },
+                budget: self.budget.settings(),
             },
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),

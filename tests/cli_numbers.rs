@@ -74,6 +74,10 @@ fn out_of_range_numbers_are_usage_errors() {
         ("render", &["--min-weight", "nan"], "--min-weight"),
         ("render", &["--min-weight", "-0.5"], "--min-weight"),
         ("render", &["--min-weight", "2"], "--min-weight"),
+        ("render", &["--budget", "-1"], "--budget"),
+        ("render", &["--budget", "nan"], "--budget"),
+        ("render", &["--budget", "1000", "--stickiness", "-1"], "--stickiness"),
+        ("render", &["--budget", "1000", "--stickiness", "inf"], "--stickiness"),
         ("render", &["--animation", "0", "--time", "nan"], "--time"),
         ("render", &["--animation", "0", "--time", "inf"], "--time"),
         ("render", &["--width", "0"], "--width"),
@@ -99,6 +103,14 @@ fn options_without_effect_are_usage_errors() {
     assert_usage_error(&run("render", &["--fov", "30"], &png), "--fov", "--fov without --look-from");
     assert_usage_error(&run("render", &["--time", "1"], &png), "--time", "--time without --animation");
     assert_usage_error(&run("bench", &["--fps", "10"], &png), "--fps", "--fps without --animation");
+    let sticky = run("render", &["--stickiness", "2"], &png);
+    assert_usage_error(&sticky, "--stickiness", "--stickiness without --budget");
+    let fps = bin()
+        .args(["report", "--animation", "0", "--fps", "10", "--knobs", "max-depth", "--out"])
+        .arg(tmp("noeffect").join("report"))
+        .output()
+        .unwrap();
+    assert_usage_error(&fps, "--fps", "--fps on report without the accel-update knob");
 }
 
 /// Negative values parse where they are valid: a camera position with a

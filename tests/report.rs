@@ -283,3 +283,35 @@ fn accel_update_knob_plays_the_animation() {
     assert!(rep.rows.iter().all(|r| r.knob == "max-depth"), "accel-update rows on a still scene");
     assert_eq!(rep.skipped.iter().filter(|s| s.contains("not animated")).count(), 3, "{:?}", rep.skipped);
 }
+
+/// The budget knob: its shares are of the cost of tracing every visible
+/// object, so share 1 renders the base settings' image and share 0 the
+/// raster-only one.
+#[test]
+fn budget_knob_spans_raster_only_to_every_object_traced() {
+    let dir = tmp("budget");
+    let job = RenderJob::new(app::default_scene_path().unwrap(), 32, 18);
+    let opts = ReportOptions {
+        frames: 5,
+        warmup: 1,
+        knobs: knobs::parse_selection("budget=0:1,effects=none").unwrap(),
+        count_rays: false,
+        ..ReportOptions::new(job, &dir)
+    };
+    let ctx = common::validated_context();
+    let rep = report::run(&ctx, &opts).expect("report runs");
+    common::assert_validation_clean(&ctx);
+    let row = |knob: &str, value: &str| {
+        let r = rep.rows.iter().find(|r| r.knob == knob && r.value == value).expect("a row");
+        &rep.measured[r.measured]
+    };
+    let same = |a: &report::measure::Measured, b: &report::measure::Measured| {
+        metrics::compare_hdr(&a.image, &b.image, rep.reference_exposure).unwrap().flip_mean
+    };
+    let base = &rep.measured[rep.base];
+    let (none, zero, one) = (row("effects", "none"), row("budget", "0"), row("budget", "1"));
+    assert_eq!(same(zero, none), 0.0, "budget share 0 is the raster-only image");
+    assert_eq!(same(one, base), 0.0, "budget share 1 is the base image");
+    assert!(same(none, base) > 0.0, "the effects show in this view");
+    assert!(one.timing.pass("heuristic").is_some(), "the budget's pass is timed: {:?}", one.timing.passes);
+}

@@ -36,6 +36,12 @@ vec3 trace_shadow(vec3 o, vec3 d, float tmax) { return vec3(1.0); }
 
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 
+// Whether the primary hit being shaded gets ray-traced effects (the
+// budget's selection, budget_traced); false: no shadow, reflection or
+// refraction ray, exactly the raster-only shading. Secondary hits only
+// exist under a traced pixel.
+bool g_rt = true;
+
 // Direct light from every punctual light; with SHADOWS, each light that
 // casts shadows is tested with a transmittance ray. `gn` is the unit
 // geometric normal on the viewer's side.
@@ -45,7 +51,7 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
         Light light = lights[i];
         LightSample ls = sample_light(light, s.position);
         vec3 contrib = brdf_eval(s, v, ls.l, ls.irradiance);
-        if (SHADOWS && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && max3(contrib) > 0.0) {
+        if (SHADOWS && g_rt && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && max3(contrib) > 0.0) {
             bool light_side = dot(gn, ls.l) > 0.0;
             if (!light_side && s.transmission <= 0.0) {
                 // A normal map tilted the shading normal towards a light
@@ -111,7 +117,7 @@ float face_viewer(inout Surface s, vec3 v) {
 
 // Whether `s` spawns a mirror reflection at `depth`.
 bool is_mirror(Surface s, uint depth) {
-    return REFLECTIONS && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
+    return REFLECTIONS && g_rt && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
 }
 
 // Constant environment light on `s` (the ambient term). A mirror's specular
@@ -128,7 +134,7 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
     bool can_branch = depth < MAX_DEPTH;
     float tm = s.transmission * (1.0 - s.metallic);
     bool mirror = is_mirror(s, depth);
-    bool refract_on = REFRACTIONS && can_branch && tm > 0.0;
+    bool refract_on = REFRACTIONS && g_rt && can_branch && tm > 0.0;
     if (!mirror && !refract_on) return;
     // Dielectric interface for the transmissive part; Schlick for the rest.
     vec3 f0 = surface_f0(s);

@@ -15,6 +15,17 @@ layout(set = SET_SCENE, binding = SCENE_TEXTURES) uniform sampler2D textures[]; 
 // truncated and bad-pixel slots always):
 // by RAY_KIND_*: camera rays (pure RT), shadow rays, reflection/refraction rays.
 layout(set = SET_SCENE, binding = SCENE_RAY_COUNTERS) buffer RayCounters { uint ray_counts[RAY_COUNTER_SLOTS]; };
+// The ray-tracing budget (render/budget): statistics the `heuristic` pass
+// gathers, and the host's selection of the objects whose pixels get
+// ray-traced effects.
+layout(set = SET_SCENE, binding = SCENE_BUDGET_STATS) buffer BudgetStats { uint budget_stats[]; };
+layout(set = SET_SCENE, binding = SCENE_BUDGET_MASK) readonly buffer BudgetMask { uint budget_mask[]; };
+
+// Whether the pixels of `instance` get ray-traced effects: always without a
+// budget, else when the budget selected its object.
+bool budget_traced(uint instance) {
+    return (frame.flags & FRAME_BUDGET) == 0u || budget_mask[instances[instance].object_id] != 0u;
+}
 
 vec4 sample_tex(int index, vec2 uv, vec4 fallback) {
     return index < 0 ? fallback : texture(textures[nonuniformEXT(index)], uv);

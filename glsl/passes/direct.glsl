@@ -11,5 +11,6 @@ void direct_pixel(ivec2 px) {
     if (outside_frame(px) || !read_primary(px, p)) return;
     vec3 v = -p.dir;
     face_viewer(p.s, v);
+    g_rt = budget_traced(p.instance);
     imageStore(direct_out, px, vec4(direct_light(p.s, v, p.gn), 1.0));
 }

@@ -10,8 +10,9 @@ use gpu_allocator::MemoryLocation;
 
 use super::origin::RenderOrigin;
 use super::shared::{
-    RAY_COUNTER_SLOTS, SCENE_ENV_MAP, SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES,
-    SCENE_LIGHTS, SCENE_MATERIALS, SCENE_RAY_COUNTERS, SCENE_TEXTURES, SCENE_VERTICES,
+    BUDGET_STAT_WORDS, RAY_COUNTER_SLOTS, SCENE_BUDGET_MASK, SCENE_BUDGET_STATS, SCENE_ENV_MAP,
+    SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS, SCENE_MATERIALS,
+    SCENE_RAY_COUNTERS, SCENE_TEXTURES, SCENE_VERTICES,
 };
 use super::types::*;
 use crate::scene::tangents::bounds_of;
@@ -51,6 +52,11 @@ pub struct GpuScene {
     /// Auto-exposure state kept across frames, then the luminance
     /// reduction's scratch (render/tone.rs), host-visible.
     pub exposure: Buffer,
+    /// The ray-tracing budget's per-object statistics (written by the
+    /// `heuristic` pass, host-visible) and selection (written by the host),
+    /// BUDGET_STAT_WORDS + 1 words per object (render/budget).
+    pub budget_stats: Buffer,
+    pub budget_mask: Buffer,
     pub textures: Vec<Image>,
     samplers: Vec<(SamplerDesc, vk::Sampler)>,
     pub env_map: Image,
@@ -105,6 +111,8 @@ impl GpuScene {
             frame: Buffer::null(),
             ray_counters: Buffer::null(),
             exposure: Buffer::null(),
+            budget_stats: Buffer::null(),
+            budget_mask: Buffer::null(),
             textures: Vec::new(),
             samplers: Vec::new(),
             env_map: Image::null(),
@@ -196,6 +204,21 @@ impl GpuScene {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::GpuToCpu,
         )?;
+        let objects = scene.objects.len().max(1) as u64;
+        self.budget_stats = Buffer::new(
+            ctx,
+            "budget statistics",
+            objects * BUDGET_STAT_WORDS as u64 * 4,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuToCpu,
+        )?;
+        self.budget_mask = Buffer::new(
+            ctx,
+            "budget selection",
+            objects * 4,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
         // No history yet (`valid` 0): the first measured frame converges at once.
         self.exposure.write(0, &[0u8; EXPOSURE_STATE_BYTES])?;
         (self.env_map, self.env_mean) = upload_environment(ctx, scene)?;
@@ -223,6 +246,8 @@ impl GpuScene {
             (SCENE_ENV_MAP, Binding::one(sampled)),
             (SCENE_RAY_COUNTERS, Binding::one(storage)),
             (SCENE_EXPOSURE, Binding::one(storage)),
+            (SCENE_BUDGET_STATS, Binding::one(storage)),
+            (SCENE_BUDGET_MASK, Binding::one(storage)),
             // Bindless textures: variable-count, so the last binding.
             (
                 SCENE_TEXTURES,
@@ -241,6 +266,8 @@ impl GpuScene {
         set.write_buffer(ctx, SCENE_LIGHTS, self.lights.raw);
         set.write_buffer(ctx, SCENE_RAY_COUNTERS, self.ray_counters.raw);
         set.write_buffer(ctx, SCENE_EXPOSURE, self.exposure.raw);
+        set.write_buffer(ctx, SCENE_BUDGET_STATS, self.budget_stats.raw);
+        set.write_buffer(ctx, SCENE_BUDGET_MASK, self.budget_mask.raw);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         set.write_image(ctx, SCENE_ENV_MAP, 0, self.env_map.view, self.env_sampler, read);
         for (i, (img, tex)) in self.textures.iter().zip(&scene.textures).enumerate() {
@@ -279,6 +306,8 @@ impl GpuScene {
             &mut self.frame,
             &mut self.ray_counters,
             &mut self.exposure,
+            &mut self.budget_stats,
+            &mut self.budget_mask,
         ] {
             b.destroy(ctx);
         }

@@ -22,8 +22,18 @@ shared! {
     id SCENE_RAY_COUNTERS = 7;
     // Auto-exposure state, kept across frames (render/passes/luminance.rs).
     id SCENE_EXPOSURE = 8;
+    // The per-object ray-tracing budget (render/budget): per object the
+    // `heuristic` pass's statistics of the primary hits (BUDGET_STAT_WORDS
+    // words: covered pixels, then min x, min y, max x, max y of the covered
+    // pixels), and the selection the host made (one word: non-zero =
+    // ray-traced), honoured where Frame.flags has FRAME_BUDGET.
+    id SCENE_BUDGET_STATS = 9;
+    id SCENE_BUDGET_MASK = 10;
     // Bindless textures: variable-count, so the last binding.
-    id SCENE_TEXTURES = 9;
+    id SCENE_TEXTURES = 11;
+    uint BUDGET_STAT_WORDS = 5;
+    // Frame.flags bits.
+    uint FRAME_BUDGET = 1;
 
     // Set 1 of the passes that read the primary hit (render/passes): the
     // G-buffer targets first, then each pass's own images.
@@ -178,6 +188,8 @@ shared! {
     uint DEBUG_DEPTH = 3;
     uint DEBUG_MATERIAL = 4;
     uint DEBUG_OBJECT = 5;
+    // The budget's selection: ray-traced objects red, the others grey.
+    uint DEBUG_SELECTION = 6;
 
     // Strides of the host/shader structs in bytes (scalar layout); the Rust
     // mirrors assert them, tests/shared_layout.rs reads them from SPIR-V.

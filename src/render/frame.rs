@@ -28,6 +28,8 @@ pub enum SharedBuffer {
     Exposure,
     /// The frame counters (rays by kind, truncated and bad pixels).
     Counters,
+    /// The ray-tracing budget's per-object statistics.
+    Budget,
 }
 
 /// How a pass uses a resource. Shader accesses happen in the pass's own

@@ -23,7 +23,7 @@ use glam::Mat4;
 use gpu_allocator::MemoryLocation;
 
 use crate::accel::dynamic::RebuildPolicy;
-use crate::gpu::shared::{RAY_COUNTER_BAD_PIXELS, RAY_COUNTER_SLOTS, RAY_COUNTER_TRUNCATED};
+use crate::gpu::shared::{FRAME_BUDGET, RAY_COUNTER_BAD_PIXELS, RAY_COUNTER_SLOTS, RAY_COUNTER_TRUNCATED};
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
@@ -47,6 +47,8 @@ pub enum DebugView {
     Depth,
     Material,
     Object,
+    /// The ray-tracing budget's selection (`--budget`): traced objects red.
+    Selection,
 }
 
 impl DebugView {
@@ -59,6 +61,7 @@ impl DebugView {
             DebugView::Depth => DEBUG_DEPTH,
             DebugView::Material => DEBUG_MATERIAL,
             DebugView::Object => DEBUG_OBJECT,
+            DebugView::Selection => DEBUG_SELECTION,
         }
     }
 }
@@ -75,6 +78,8 @@ pub struct RenderSettings {
     pub backend: Backend,
     /// Anti-aliasing after tone mapping (edge by default).
     pub aa: AaMode,
+    /// Per-object ray-tracing budget (None: every object is traced).
+    pub budget: Option<budget::BudgetSettings>,
 }
 
 impl Default for RenderSettings {
@@ -87,6 +92,7 @@ impl Default for RenderSettings {
             effects: Effects::default(),
             backend: Backend::Auto,
             aa: AaMode::Edge,
+            budget: None,
         }
     }
 }
@@ -185,6 +191,8 @@ pub struct Renderer {
     pub adapt_dt: Option<f32>,
     /// Test fault injection into the HDR frame (`inject_radiance`).
     injection: Option<inject::Injection>,
+    /// The per-object ray-tracing budget's selection across frames.
+    budget: budget::BudgetState,
 }
 
 fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
@@ -232,6 +240,7 @@ impl Renderer {
             frame_index: 0,
             adapt_dt: None,
             injection: None,
+            budget: budget::BudgetState::default(),
         };
         match r.create_resources(ctx, scene) {
             Ok(()) => Ok(r),
@@ -484,6 +493,10 @@ impl Renderer {
         let e = self.extent;
         let aspect = e.width as f32 / e.height.max(1) as f32;
         // The camera relative to the render origin, like every GPU transform.
+        let budget_on = self.config.is_some_and(|c| c.budget);
+        if let (true, Some(b)) = (budget_on, &settings.budget) {
+            self.budget.before_frame(&mut self.gpu, b, scene.objects.len())?;
+        }
         let camera = &Camera { world: self.gpu.origin.relative(&camera.world), ..camera.clone() };
         let view = camera.view().as_mat4();
         let proj = camera.projection(aspect);
@@ -505,7 +518,7 @@ impl Renderer {
             debug_view: settings.debug_view.code(),
             exposure: settings.exposure,
             frame_index: self.frame_index,
-            flags: 0,
+            flags: if budget_on { FRAME_BUDGET } else { 0 },
             znear: camera.znear,
             ..tone_uniforms(&settings.tone, self.adapt_dt)
         };
@@ -544,8 +557,23 @@ impl Renderer {
         Ok(())
     }
 
-    /// Renders one frame offscreen and reads back both outputs.
+    /// Renders one frame offscreen and reads back both outputs. With a
+    /// budget and no selection for it yet, a frame that only measures the
+    /// objects runs first (the selection lags the statistics by a frame).
     pub fn render(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<FrameOutput> {
+        if settings.budget.is_some_and(|b| !self.budget.ready(&b)) {
+            self.render_frame(ctx, scene, camera, settings)?;
+        }
+        self.render_frame(ctx, scene, camera, settings)
+    }
+
+    fn render_frame(
         &mut self,
         ctx: &Context,
         scene: &Scene,
@@ -603,6 +631,7 @@ impl Renderer {
         let truncated_pixels = counts[RAY_COUNTER_TRUNCATED as usize];
         let bad_pixels = counts[RAY_COUNTER_BAD_PIXELS as usize];
         let exposure = self.exposure_state()?;
+        self.finish_budget(scene, camera, settings)?;
         let e = self.extent;
         Ok(FrameOutput {
             width: e.width,
@@ -615,6 +644,21 @@ impl Renderer {
             bad_pixels,
             exposure,
         })
+    }
+
+    /// After a completed frame: the budget's selection for the next one
+    /// (nothing without a budget).
+    pub fn finish_budget(&mut self, scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<()> {
+        let (Some(b), true) = (&settings.budget, self.config.is_some_and(|c| c.budget)) else {
+            return Ok(());
+        };
+        let screen = budget::Screen { width: self.extent.width, height: self.extent.height };
+        self.budget.after_frame(&self.gpu, scene, camera, screen, b)
+    }
+
+    /// The budget's last selection and what it was made from.
+    pub fn budget_report(&self) -> Option<&budget::BudgetReport> {
+        self.budget.last()
     }
 
     /// What auto exposure measured in the last completed frame (None when

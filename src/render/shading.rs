@@ -224,6 +224,10 @@ pub struct ShadingConfig {
     /// The frame's luminance is measured (auto exposure, or the white point
     /// of `reinhard-white` from the frame's maximum): the `luminance` pass runs.
     pub luminance: bool,
+    /// The per-object ray-tracing budget selects which pixels get traced
+    /// effects: the `heuristic` pass runs and the ray passes honour the
+    /// selection (only when something is traced, or its debug view shows).
+    pub budget: bool,
     /// Anti-aliasing after tone mapping (left out in debug views).
     pub aa: AaMode,
 }
@@ -255,7 +259,10 @@ impl ShadingConfig {
             Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs, software(ctx))?)
         };
         let luminance = settings.tone.measures_luminance() && !debug_view;
-        Ok(ShadingConfig { mode, effects, backend, debug_view, needs, luminance, aa: settings.aa })
+        let secondary = backend.is_some() && (effects.shadows || effects.reflections || effects.refractions);
+        let budget = settings.budget.is_some()
+            && (secondary || settings.debug_view == crate::render::DebugView::Selection);
+        Ok(ShadingConfig { mode, effects, backend, debug_view, needs, luminance, budget, aa: settings.aa })
     }
 
     /// Why this backend (for the log).
@@ -301,10 +308,11 @@ impl ShadingConfig {
                 .collect();
         let aa = if self.debug_view { "none (debug view)" } else { self.aa.name() };
         format!(
-            "mode {:?}, backend {}, secondary effects: {}, aa {aa}",
+            "mode {:?}, backend {}, secondary effects: {}{}, aa {aa}",
             self.mode,
             self.backend.map(|b| format!("{b:?}").to_lowercase()).unwrap_or_else(|| "none".into()),
-            if on.is_empty() { "none".to_string() } else { on.join(", ") }
+            if on.is_empty() { "none".to_string() } else { on.join(", ") },
+            if self.budget { " (per-object budget)" } else { "" }
         )
     }
 }

@@ -19,12 +19,16 @@ pub struct Variant {
     /// the report's time, keeping the acceleration structures current this
     /// way (measure::measure_animated); None: one still pose.
     pub accel: Option<AccelUpdate>,
+    /// The `budget` knob's share of the cost of tracing every visible
+    /// object; `run` turns it into `settings.budget` once it has measured
+    /// that cost.
+    pub budget_share: Option<f64>,
 }
 
 impl Variant {
     /// A still frame at full size.
     pub fn new(settings: RenderSettings) -> Variant {
-        Variant { settings, scale: 1.0, accel: None }
+        Variant { settings, scale: 1.0, accel: None, budget_share: None }
     }
 }
 
@@ -153,6 +157,22 @@ pub const KNOBS: &[Knob] = &[
             Ok(())
         },
         skip_unavailable: true,
+    },
+    Knob {
+        name: "budget",
+        about: "per-object ray-tracing budget (paper mode, no stickiness) as a share of the estimated cost of \
+                tracing every visible object in this view (measured first): 0 = raster shading only, 1 = \
+                every object traced",
+        values: &["0", "0.1", "0.25", "0.5", "0.75", "1"],
+        apply: |v, s| {
+            let f: f64 = s.parse().with_context(|| format!("budget '{s}': expected a share in [0, 1]"))?;
+            if !(0.0..=1.0).contains(&f) {
+                bail!("budget {f}: expected a share in [0, 1]");
+            }
+            v.budget_share = Some(f);
+            Ok(())
+        },
+        skip_unavailable: false,
     },
     Knob {
         name: "resolution-scale",

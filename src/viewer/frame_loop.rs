@@ -161,6 +161,10 @@ impl Viewer {
         if bad > 0 {
             self.stats.bad_pixels(bad);
         }
+        // The budget selects the next frame's objects from the finished
+        // frame's statistics (the camera has not moved since it).
+        let camera = self.controller.camera();
+        self.renderer.finish_budget(&self.scene, &camera, &self.settings)?;
 
         // --capture-frame N or F9: this frame, from its uniforms to its
         // present, in a RenderDoc capture.

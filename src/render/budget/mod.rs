@@ -25,8 +25,40 @@
 //! units (rays, scaled by `E`). Where the paper leaves a detail open (the
 //! falloff of `P`, ties, degenerate inputs) [`paper`] documents the choice.
 
+//!
+//! In a frame: the `heuristic` pass (render/passes/heuristic.rs) measures
+//! `A` and the covered pixels' bounds of every object from the G-buffer's
+//! hit ids; [`frame`] reads them after the frame and selects on the host
+//! (one frame of latency: the selection is a few hundred objects of
+//! arithmetic, and the host reads the statistics anyway, so no GPU sort);
+//! the next frame's `direct`, `specular` and `composite` passes honour the
+//! selection per pixel: an unselected object's pixels get no shadow,
+//! reflection or refraction ray — exactly the raster-only shading (the
+//! paper's fallback).
+
+pub mod frame;
 pub mod paper;
 
+pub use frame::{BudgetReport, BudgetState};
 pub use paper::{
     centrality, rays_per_pixel, score, select, ObjectStats, Params, Scored, Screen, Selection, MIN_DISTANCE,
 };
+
+/// How `--budget` selects.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum BudgetMode {
+    /// Walewski et al.'s formulas and greedy selection, `--budget` in their
+    /// abstract cost units (estimated rays x `cost`).
+    #[default]
+    Paper,
+}
+
+/// The per-object ray-tracing budget of a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BudgetSettings {
+    pub mode: BudgetMode,
+    /// `T` (>= 0; infinite: every visible, relevant object).
+    pub budget: f64,
+    /// `I`, in the units of `V` (pixels per world unit).
+    pub stickiness: f32,
+}

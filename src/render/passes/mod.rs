@@ -10,6 +10,7 @@ pub mod edge_aa;
 pub mod fullscreen;
 pub mod fxaa;
 pub mod gbuffer;
+pub mod heuristic;
 pub mod luminance;
 pub mod primary;
 pub mod specular;
@@ -26,12 +27,13 @@ use crate::gpu::GpuScene;
 use crate::vk::Context;
 
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
-/// or camera rays) -> direct light -> reflection/refraction chain ->
+/// or camera rays) -> per-object statistics for the budget -> direct light -> reflection/refraction chain ->
 /// composite -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one technique). The scene update (skinning, refit, top level)
 /// comes before it, recorded by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
     gbuffer::PASS,
     primary::PASS,
+    heuristic::PASS,
     direct::PASS,
     specular::PASS,
     composite::PASS,

@@ -6,7 +6,7 @@ use anyhow::{bail, ensure, Context, Result};
 use glam::{DMat4, DVec3, Mat4, Quat, Vec3};
 
 use super::values::HUGE;
-use crate::scene::{Camera, Light, LightKind, Node, Object, Scene, Transform};
+use crate::scene::{Camera, Light, LightKind, Node, Object, ObjectProps, Scene, Transform};
 
 pub(super) fn build_nodes(doc: &gltf::Document, scene: &mut Scene) -> Result<()> {
     for node in doc.nodes() {
@@ -23,7 +23,7 @@ pub(super) fn build_nodes(doc: &gltf::Document, scene: &mut Scene) -> Result<()>
     let reachable = reachable_nodes(scene);
     let world = scene.world_matrices();
     for node in doc.nodes().filter(|n| reachable[n.index()]) {
-        attach_node_content(&node, &world[node.index()], scene);
+        attach_node_content(&node, &world[node.index()], scene)?;
     }
     Ok(())
 }
@@ -107,13 +107,14 @@ fn reachable_nodes(scene: &Scene) -> Vec<bool> {
 }
 
 /// Mesh (as its own object), camera and light of one node of the drawn scene.
-fn attach_node_content(node: &gltf::Node, world: &DMat4, scene: &mut Scene) {
+fn attach_node_content(node: &gltf::Node, world: &DMat4, scene: &mut Scene) -> Result<()> {
     let i = node.index();
     if let Some(mesh) = node.mesh() {
         let name = node.name().or(mesh.name()).map_or_else(|| format!("node {i}"), str::to_string);
+        let props = object_props(node).with_context(|| format!("node {i} '{name}'"))?;
         scene.nodes[i].mesh = Some(mesh.index());
         scene.nodes[i].object = Some(scene.objects.len());
-        scene.objects.push(Object { name, props: Default::default() });
+        scene.objects.push(Object { name, props });
     }
     if let Some(cam) = node.camera() {
         scene.nodes[i].camera = Some(scene.cameras.len());
@@ -122,6 +123,24 @@ fn attach_node_content(node: &gltf::Node, world: &DMat4, scene: &mut Scene) {
     if let Some(light) = node.light() {
         scene.lights.push(convert_light(&light, &scene.nodes[i].name, world, i));
     }
+    Ok(())
+}
+
+/// The ray-tracing budget's relevance K and cost factor E of a mesh node's
+/// object, from the node's `extras` (`{"relevance": K, "cost": E}`, each
+/// optional, numbers >= 0; other extras are ignored).
+fn object_props(node: &gltf::Node) -> Result<ObjectProps> {
+    let mut props = ObjectProps::default();
+    let Some(raw) = node.extras() else { return Ok(props) };
+    let extras: gltf::json::Value = gltf::json::deserialize::from_str(raw.get()).context("extras")?;
+    for (key, field) in [("relevance", &mut props.relevance), ("cost", &mut props.cost)] {
+        if let Some(v) = extras.get(key) {
+            let x = v.as_f64().filter(|x| x.is_finite() && *x >= 0.0 && *x <= f32::MAX as f64);
+            *field =
+                x.with_context(|| format!("extras.{key} must be a finite number >= 0 (got {v})"))? as f32;
+        }
+    }
+    Ok(props)
 }
 
 fn convert_camera(cam: &gltf::Camera, node_name: &str, world: &DMat4) -> Camera {

@@ -564,3 +564,21 @@ fn invalid_json_references_are_reported_with_the_file() {
     let err = error_of(&path);
     assert!(err.contains("tri.gltf") && err.contains("indices"), "{err}");
 }
+
+#[test]
+fn node_extras_set_the_budget_relevance_and_cost() {
+    let dir = temp_dir("extras");
+    let bin = triangle_bin(TRIANGLE, [0, 1, 2]);
+    let json = triangle_json("tri.bin", 3, false, "").replace(
+        r#""name": "tri node"}"#,
+        r#""name": "tri node", "extras": {"relevance": 0.5, "cost": 3, "author": "x"}}"#,
+    );
+    let scene = load(&write_triangle(&dir, &bin, &json)).unwrap();
+    assert_eq!((scene.objects[0].props.relevance, scene.objects[0].props.cost), (0.5, 3.0));
+    let plain = load(&write_triangle(&dir, &bin, &triangle_json("tri.bin", 3, false, ""))).unwrap();
+    assert_eq!((plain.objects[0].props.relevance, plain.objects[0].props.cost), (1.0, 1.0));
+    for bad in [r#""cost": -1"#, r#""cost": "high""#] {
+        let e = error_of(&write_triangle(&dir, &bin, &json.replace(r#""cost": 3"#, bad)));
+        assert!(e.contains("tri.gltf") && e.contains("tri node") && e.contains("extras.cost"), "{e}");
+    }
+}

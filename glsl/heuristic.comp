@@ -1,0 +1,23 @@
+#version 460
+// Pass `heuristic`: what the ray-tracing budget (render/budget) needs to
+// know of each object from the primary hits, in one pass over the hit ids:
+// its covered pixels and their bounds, by atomics into set 0's budget
+// statistics (reset by the host before the frame). No per-object draw and
+// no occlusion query: the G-buffer already says who is visible where.
+#include "common/scene.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = SET_PASS, binding = GB_HIT) uniform usampler2D gb_hit;
+
+void main() {
+    uvec2 px = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(px, frame.resolution))) return;
+    uint hit = texelFetch(gb_hit, ivec2(px), 0).x;
+    if (hit == 0u) return;
+    uint base = BUDGET_STAT_WORDS * instances[hit - 1u].object_id;
+    atomicAdd(budget_stats[base], 1u);
+    atomicMin(budget_stats[base + 1u], px.x);
+    atomicMin(budget_stats[base + 2u], px.y);
+    atomicMax(budget_stats[base + 3u], px.x);
+    atomicMax(budget_stats[base + 4u], px.y);
+}

@@ -1,0 +1,49 @@
+//! The command-line options of the per-object ray-tracing budget
+//! (render/budget), shared by render, bench, report and view.
+
+use clap::Args;
+
+use crate::render::budget::{BudgetMode, BudgetSettings};
+
+/// The per-object ray-tracing budget (render/budget).
+#[derive(Args, Clone)]
+pub struct BudgetArgs {
+    /// Ray-tracing budget T per frame: only the most relevant visible
+    /// objects whose estimated cost fits get shadows, reflections and
+    /// refractions, the others raster shading (paper mode: T in estimated
+    /// rays x object cost; "inf": every visible object) [default: no budget].
+    #[arg(long, value_parser = parse_budget, allow_hyphen_values = true)]
+    pub budget: Option<f64>,
+    /// How --budget selects.
+    #[arg(long, value_enum)]
+    pub budget_mode: Option<BudgetMode>,
+    /// Stickiness I with --budget: relevance bonus of an object selected
+    /// the frame before, in the units of the visibility A·P/D (pixels per
+    /// world unit) [default: 0].
+    #[arg(long, value_parser = parse_stickiness, allow_hyphen_values = true)]
+    pub stickiness: Option<f32>,
+}
+
+impl BudgetArgs {
+    pub fn settings(&self) -> Option<BudgetSettings> {
+        Some(BudgetSettings {
+            mode: self.budget_mode.unwrap_or_default(),
+            budget: self.budget?,
+            stickiness: self.stickiness.unwrap_or(0.0),
+        })
+    }
+}
+
+fn parse_budget(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}': expected a number >= 0, or inf")),
+    }
+}
+
+fn parse_stickiness(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}': expected a finite number >= 0")),
+    }
+}

@@ -1,0 +1,33 @@
+//! Pass `heuristic`: per-object statistics of the primary hits for the
+//! ray-tracing budget (render/budget): covered pixels and their bounds, in
+//! one compute pass over the G-buffer's hit ids (glsl/heuristic.comp). The
+//! host reads them once the frame is done and selects the objects the next
+//! frame traces. Left out without `--budget`.
+
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::{gbuffer, Init, PassDesc};
+use crate::gpu::shared::GB_HIT;
+use crate::render::frame::{Access, SharedBuffer, Use};
+use crate::render::shading::ShadingConfig;
+use crate::vk::pipeline::Specialization;
+
+fn io() -> Vec<Io> {
+    vec![Io::new(GB_HIT, &gbuffer::HIT, Access::Sampled)]
+}
+
+fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    (!c.budget).then_some("no --budget: every object gets ray-traced effects")
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "heuristic",
+    skip,
+    uses: |_| {
+        let mut u = fullscreen::uses(&io(), false);
+        u.push(Use::buffer(SharedBuffer::Budget, Access::ShaderWrite));
+        u
+    },
+    create: |i: &Init| {
+        FullScreen::create(i, "heuristic", io(), Shader::Compute("heuristic.comp"), &Specialization::new(&[]))
+    },
+};

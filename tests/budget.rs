@@ -1,0 +1,159 @@
+//! The per-object ray-tracing budget in paper mode (render/budget): a budget
+//! of 0 renders exactly the raster-only image and an unlimited one exactly
+//! the full hybrid image, on every backend; a K = 0 object is never
+//! selected; stickiness keeps the selection steady over a slow pan.
+mod common;
+
+use common::BACKENDS;
+use glam::Vec3;
+use hybrid_rt::metrics::diff_stats;
+use hybrid_rt::render::budget::{BudgetMode, BudgetSettings};
+use hybrid_rt::render::shading::Effects;
+use hybrid_rt::render::{RenderSettings, Renderer};
+use hybrid_rt::scene::{Camera, Scene};
+
+const W: u32 = 96;
+const H: u32 = 54;
+
+fn budget(t: f64, stickiness: f32) -> Option<BudgetSettings> {
+    Some(BudgetSettings { mode: BudgetMode::Paper, budget: t, stickiness })
+}
+
+fn default_scene() -> Scene {
+    Scene::load(&common::repo_path("assets/default.toml")).unwrap()
+}
+
+#[test]
+fn zero_budget_is_raster_only_and_unlimited_is_full_hybrid_on_every_backend() {
+    let scene = default_scene();
+    for backend in BACKENDS {
+        let full = RenderSettings { backend, ..Default::default() };
+        let none = Effects { shadows: false, reflections: false, refractions: false, ..full.effects };
+        let raster = common::render_scene(&scene, W, H, &RenderSettings { effects: none, ..full });
+        let hybrid = common::render_scene(&scene, W, H, &full);
+        let zero = common::render_scene(&scene, W, H, &RenderSettings { budget: budget(0.0, 0.0), ..full });
+        let inf = common::render_scene(
+            &scene,
+            W,
+            H,
+            &RenderSettings { budget: budget(f64::INFINITY, 0.0), ..full },
+        );
+        let (max_zero, _) = diff_stats(&raster.rgb8(), &zero.rgb8(), 3, 0);
+        let (max_inf, _) = diff_stats(&hybrid.rgb8(), &inf.rgb8(), 3, 0);
+        // The scene's effects are visible: the two references differ.
+        let (max_effects, share) = diff_stats(&raster.rgb8(), &hybrid.rgb8(), 3, 8);
+        eprintln!(
+            "{backend:?}: budget 0 vs raster only max {max_zero}, inf vs hybrid max {max_inf}; \
+             effects change {:.1}% of pixels (max {max_effects})",
+            share * 100.0
+        );
+        assert!(share > 0.02, "{backend:?}: the effects barely show ({:.2}%)", share * 100.0);
+        assert_eq!(max_zero, 0, "{backend:?}: budget 0 differs from the raster-only image");
+        assert_eq!(max_inf, 0, "{backend:?}: an unlimited budget differs from the full hybrid image");
+    }
+}
+
+/// Renders `frames` frames of `scene` from `cameras(i)` with one renderer
+/// and returns each frame's selection (per object).
+fn selections(
+    scene: &Scene,
+    settings: &RenderSettings,
+    frames: usize,
+    camera: impl Fn(usize) -> Camera,
+) -> Vec<Vec<bool>> {
+    let ctx = common::validated_context();
+    let mut r = Renderer::new(&ctx, scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
+    let mut out = Vec::new();
+    for i in 0..frames {
+        r.render(&ctx, scene, &camera(i), settings).unwrap();
+        out.push(r.budget_report().expect("a budget report").selection.mask.clone());
+    }
+    r.destroy(&ctx);
+    drop(ctx);
+    out
+}
+
+#[test]
+fn an_object_of_relevance_zero_is_never_selected() {
+    let mut scene = default_scene();
+    let red = scene.objects.iter().position(|o| o.name == "red cube").expect("the default scene's red cube");
+    scene.objects[red].props.relevance = 0.0;
+    let settings = RenderSettings { budget: budget(f64::INFINITY, 0.0), ..Default::default() };
+    let cam = scene.cameras[0].clone();
+    let sel = selections(&scene, &settings, 2, |_| cam.clone());
+    for mask in &sel {
+        assert!(!mask[red], "the K = 0 object was selected: {mask:?}");
+        assert!(mask.iter().filter(|&&m| m).count() >= 4, "an unlimited budget selects the rest: {mask:?}");
+    }
+}
+
+/// Two equal mirror spheres side by side; the budget fits one. The camera
+/// sways left and right across the midpoint: by centrality the selection
+/// flips at every crossing, unless the selected sphere keeps its place.
+const TWO_SPHERES: &str = r#"
+[[camera]]
+position = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+yfov_deg = 50
+
+[[light]]
+type = "directional"
+direction = [-0.3, -1.0, -0.4]
+intensity = 3.0
+
+[[material]]
+name = "mirror"
+base_color = [0.9, 0.9, 0.9]
+metallic = 1.0
+roughness = 0.05
+
+[[object]]
+name = "left"
+primitive = "sphere"
+radius = 0.5
+translation = [-1.0, 0.0, 0.0]
+material = "mirror"
+
+[[object]]
+name = "right"
+primitive = "sphere"
+radius = 0.5
+translation = [1.0, 0.0, 0.0]
+material = "mirror"
+"#;
+
+#[test]
+fn stickiness_steadies_the_selection_over_a_slow_pan() {
+    let scene = common::scene_from_toml("budget_two_spheres", TWO_SPHERES);
+    let base = scene.cameras[0].clone();
+    // 40 frames swaying the view +-0.4 units, period 10 frames.
+    let pan = |i: usize| {
+        let x = 0.4 * (i as f32 * std::f32::consts::TAU / 10.0 + 0.3).sin();
+        Camera::look_at("pan", base.position(), Vec3::new(x, 0.0, 0.0), base.yfov, base.znear)
+    };
+    let all = selections(
+        &scene,
+        &RenderSettings { budget: budget(f64::INFINITY, 0.0), ..Default::default() },
+        1,
+        pan,
+    );
+    assert!(all[0].iter().all(|&m| m), "both spheres visible: {all:?}");
+    // Room for one sphere (their costs are about equal).
+    let ctx = common::validated_context();
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
+    let settings = RenderSettings { budget: budget(f64::INFINITY, 0.0), ..Default::default() };
+    r.render(&ctx, &scene, &pan(0), &settings).unwrap();
+    let t = 0.6 * r.budget_report().unwrap().selection.spent;
+    r.destroy(&ctx);
+    drop(ctx);
+    let changes = |stickiness: f32| {
+        let settings = RenderSettings { budget: budget(t, stickiness), ..Default::default() };
+        let sel = selections(&scene, &settings, 40, pan);
+        assert!(sel.iter().all(|m| m.iter().filter(|&&b| b).count() == 1), "one sphere fits: {sel:?}");
+        sel.windows(2).filter(|w| w[0] != w[1]).count()
+    };
+    let (loose, sticky) = (changes(0.0), changes(1e4));
+    eprintln!("budget {t:.0}: selection changes over the sway: I = 0: {loose}, I = 1e4: {sticky}");
+    assert!(loose >= 4, "without stickiness the selection should follow the sway ({loose} changes)");
+    assert!(sticky * 4 <= loose, "stickiness does not steady the selection: {sticky} vs {loose} changes");
+}
