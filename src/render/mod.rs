@@ -567,7 +567,9 @@ impl Renderer {
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<FrameOutput> {
-        if settings.budget.is_some_and(|b| !self.budget.ready(&b)) {
+        // (A budget the frame leaves out, with nothing traced, needs none.)
+        let measures = self.config.is_none_or(|c| c.budget);
+        if measures && settings.budget.is_some_and(|b| !self.budget.ready(&b)) {
             self.render_frame(ctx, scene, camera, settings)?;
         }
         self.render_frame(ctx, scene, camera, settings)
