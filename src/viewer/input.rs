@@ -1,6 +1,7 @@
 //! Window events and keys: camera input goes to the controller, viewer keys
-//! change the render settings (debug view, exposure, tone mapping, effects, mode, AA), the
-//! animation clock or request a screenshot; the window title shows them.
+//! change the render settings (debug view, exposure, tone mapping, effects,
+//! the ray-tracing budget, mode, AA), the animation clock or request a
+//! screenshot; the window title shows them.
 
 use std::path::PathBuf;
 
@@ -11,6 +12,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use super::camera_controller::{self, digit};
 use super::session::Viewer;
 use super::{Flow, DEBUG_VIEWS};
+use crate::render::budget::{BudgetMode, BudgetSettings};
 use crate::render::shading::{AaMode, Mode};
 use crate::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use crate::render::DebugView;
@@ -30,6 +32,9 @@ impl Viewer {
         }
         if self.controller.mode() == camera_controller::Mode::Orbit {
             t.push_str(" - orbit");
+        }
+        if let Some(b) = &self.settings.budget {
+            t.push_str(&format!(" - {}", self.budget_title(b)));
         }
         if let Some(s) = &self.stats.last {
             t.push_str(&format!(" - {}", s.line()));
@@ -129,7 +134,38 @@ impl Viewer {
             KeyCode::F5 => toggle("shadows", &mut self.settings.effects.shadows),
             KeyCode::F6 => toggle("reflections", &mut self.settings.effects.reflections),
             KeyCode::F7 => toggle("refractions", &mut self.settings.effects.refractions),
-            KeyCode::F8 => log::info!("toggle the per-object heuristic: not available yet"),
+            KeyCode::F8 => {
+                // On: every visible object first; [ and ] then halve / double it.
+                let unlimited =
+                    BudgetSettings { mode: BudgetMode::Paper, budget: f64::INFINITY, stickiness: 0.0 };
+                self.settings.budget = match self.settings.budget {
+                    Some(_) => None,
+                    None => Some(unlimited),
+                };
+                self.log_budget();
+            }
+            KeyCode::BracketLeft | KeyCode::BracketRight => {
+                let up = code == KeyCode::BracketRight;
+                // From "everything", the cost of everything the last frame saw.
+                let everything = self.renderer.budget_report().map(|r| r.selection.spent);
+                match &mut self.settings.budget {
+                    Some(b) => {
+                        let base = if b.budget.is_finite() { b.budget } else { everything.unwrap_or(0.0) };
+                        b.budget = if up { base * 2.0 } else { base * 0.5 };
+                    }
+                    None => log::info!("[ / ]: F8 turns the ray-tracing budget on first"),
+                }
+                self.log_budget();
+            }
+            KeyCode::Semicolon => {
+                if let Some(b) = &mut self.settings.budget {
+                    const STEPS: [f32; 4] = [0.0, 10.0, 100.0, 1000.0];
+                    let i =
+                        STEPS.iter().position(|s| *s == b.stickiness).map_or(0, |i| (i + 1) % STEPS.len());
+                    b.stickiness = STEPS[i];
+                }
+                self.log_budget();
+            }
             KeyCode::KeyG => {
                 let all = AaMode::ALL;
                 let i = all.iter().position(|m| *m == self.settings.aa).unwrap_or(0);
@@ -169,6 +205,38 @@ impl Viewer {
             }
         }
         Flow::Continue
+    }
+
+    /// "budget 1.2e4 (3/6 objects, rays 4.1 ms)": T, what the last
+    /// selection took, and the ray passes' GPU time in the last stats window.
+    fn budget_title(&self, b: &BudgetSettings) -> String {
+        let mut t = format!("budget {:.3e}", b.budget);
+        if b.stickiness > 0.0 {
+            t.push_str(&format!(" I {}", b.stickiness));
+        }
+        if let Some(r) = self.renderer.budget_report() {
+            let visible = r.objects.iter().filter(|o| o.pixels > 0).count();
+            t.push_str(&format!(" ({}/{visible} objects", r.selection.selected.len()));
+            if let Some(s) = &self.stats.last {
+                let ray_ms: f64 = s
+                    .passes
+                    .iter()
+                    .filter(|(n, _)| matches!(*n, "direct" | "specular"))
+                    .map(|(_, ms)| ms)
+                    .sum();
+                t.push_str(&format!(", rays {ray_ms:.2} ms"));
+            }
+            t.push(')');
+        }
+        t
+    }
+
+    fn log_budget(&mut self) {
+        match &self.settings.budget {
+            Some(b) => log::info!("ray-tracing budget {} (stickiness {})", b.budget, b.stickiness),
+            None => log::info!("ray-tracing budget off: every object traced"),
+        }
+        self.window.set_title(&self.title());
     }
 
     fn set_debug_view(&mut self, v: DebugView) {

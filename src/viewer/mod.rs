@@ -39,14 +39,15 @@ pub use swapchain::PresentMode;
 /// Command buffers / fences / image-available semaphores.
 pub const FRAMES_IN_FLIGHT: usize = 2;
 
-/// The debug views in key order: 0 (lit), 1..5.
-pub const DEBUG_VIEWS: [DebugView; 6] = [
+/// The debug views in key order: 0 (lit), 1..6.
+pub const DEBUG_VIEWS: [DebugView; 7] = [
     DebugView::None,
     DebugView::Albedo,
     DebugView::Normal,
     DebugView::Depth,
     DebugView::Material,
     DebugView::Object,
+    DebugView::Selection,
 ];
 
 /// What `hybrid-rt view` was asked to do.
