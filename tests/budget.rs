@@ -7,7 +7,7 @@ mod common;
 use common::BACKENDS;
 use glam::Vec3;
 use hybrid_rt::metrics::diff_stats;
-use hybrid_rt::render::budget::{BudgetMode, BudgetSettings};
+use hybrid_rt::render::budget::BudgetSettings;
 use hybrid_rt::render::shading::Effects;
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::{Camera, Scene};
@@ -16,7 +16,7 @@ const W: u32 = 96;
 const H: u32 = 54;
 
 fn budget(t: f64, stickiness: f32) -> Option<BudgetSettings> {
-    Some(BudgetSettings { mode: BudgetMode::Paper, budget: t, stickiness })
+    Some(BudgetSettings { stickiness, ..BudgetSettings::paper(t) })
 }
 
 fn default_scene() -> Scene {

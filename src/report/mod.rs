@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _, Result};
 
 use crate::app::{load_posed, resolve_shading, with_context, GpuOptions, RenderJob};
-use crate::render::budget::{BudgetMode, BudgetSettings};
+use crate::render::budget::BudgetSettings;
 use crate::render::shading::{Backend, Mode};
 use crate::render::supersample::{render_supersampled, SampleFilter, Supersample};
 use crate::render::{RenderSettings, Renderer};
@@ -213,21 +213,18 @@ impl Renderers {
 }
 
 /// The paper-mode cost of tracing every visible object of the view with
-/// `settings` (one frame under an unlimited budget).
+/// `settings` (one frame under an unlimited budget, with `renderer`).
 fn budget_cost_of_everything(
     ctx: &Context,
+    renderer: &mut Renderer,
     scene: &crate::scene::Scene,
     camera: &crate::scene::Camera,
     settings: &RenderSettings,
-    width: u32,
-    height: u32,
 ) -> Result<f64> {
-    let unlimited = BudgetSettings { mode: BudgetMode::Paper, budget: f64::INFINITY, stickiness: 0.0 };
-    let settings = RenderSettings { budget: Some(unlimited), ..*settings };
-    let mut r = Renderer::new(ctx, scene, ash::vk::Extent2D { width, height })?;
-    let spent = r.render(ctx, scene, camera, &settings).map(|_| r.budget_report().map(|b| b.selection.spent));
-    r.destroy(ctx);
-    spent?.context("report: the budget knob: no budget report (nothing is traced with the base settings?)")
+    let settings = RenderSettings { budget: Some(BudgetSettings::paper(f64::INFINITY)), ..*settings };
+    renderer.render(ctx, scene, camera, &settings)?;
+    let spent = renderer.budget_report().map(|b| b.selection.spent);
+    spent.context("report: the budget knob: no budget report (nothing is traced with the base settings?)")
 }
 
 /// Runs the report's renders and comparisons (writes nothing).
@@ -304,17 +301,6 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         }
     }
 
-    if variants.iter().any(|(v, _)| v.budget_share.is_some()) {
-        let all = budget_cost_of_everything(ctx, &scene, &camera, &base.settings, width, height)?;
-        eprintln!("report: the budget knob's shares are of {all:.0} (every visible object traced)");
-        for (v, _) in &mut variants {
-            if let Some(share) = v.budget_share {
-                let budget = share * all;
-                v.settings.budget = Some(BudgetSettings { mode: BudgetMode::Paper, budget, stickiness: 0.0 });
-            }
-        }
-    }
-
     let aa_reference = if planned.iter().any(|(k, _, _)| *k == "aa") {
         let ss = opts.aa_reference;
         eprintln!("report: the aa knob's reference, the base settings {0}x{0} supersampled", ss.factor);
@@ -329,6 +315,16 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
 
     let mut renderers = Renderers(Vec::new());
     let result: Result<Vec<Measured>> = (|| {
+        if variants.iter().any(|(v, _)| v.budget_share.is_some()) {
+            let renderer = renderers.get(ctx, &scene, width, height)?;
+            let all = budget_cost_of_everything(ctx, renderer, &scene, &camera, &base.settings)?;
+            eprintln!("report: the budget knob's shares are of {all:.0} (every visible object traced)");
+            for (v, _) in &mut variants {
+                if let Some(share) = v.budget_share {
+                    v.settings.budget = Some(BudgetSettings::paper(share * all));
+                }
+            }
+        }
         let mut measured: Vec<Measured> = Vec::new();
         let started = std::time::Instant::now();
         let n = variants.len();

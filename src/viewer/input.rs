@@ -12,7 +12,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use super::camera_controller::{self, digit};
 use super::session::Viewer;
 use super::{Flow, DEBUG_VIEWS};
-use crate::render::budget::{BudgetMode, BudgetSettings};
+use crate::render::budget::BudgetSettings;
 use crate::render::shading::{AaMode, Mode};
 use crate::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use crate::render::DebugView;
@@ -136,11 +136,9 @@ impl Viewer {
             KeyCode::F7 => toggle("refractions", &mut self.settings.effects.refractions),
             KeyCode::F8 => {
                 // On: every visible object first; [ and ] then halve / double it.
-                let unlimited =
-                    BudgetSettings { mode: BudgetMode::Paper, budget: f64::INFINITY, stickiness: 0.0 };
                 self.settings.budget = match self.settings.budget {
                     Some(_) => None,
-                    None => Some(unlimited),
+                    None => Some(BudgetSettings::paper(f64::INFINITY)),
                 };
                 self.log_budget();
             }

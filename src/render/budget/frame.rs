@@ -50,7 +50,12 @@ impl BudgetState {
     /// Whether a selection exists for `settings` (else the next frame only
     /// measures).
     pub fn ready(&self, settings: &BudgetSettings) -> bool {
-        self.mask.as_ref().is_some_and(|(s, _)| s == settings)
+        self.mask_for(settings).is_some()
+    }
+
+    /// The selection made under `settings`, if the last one was.
+    fn mask_for(&self, settings: &BudgetSettings) -> Option<&[bool]> {
+        self.mask.as_ref().filter(|(s, _)| s == settings).map(|(_, m)| m.as_slice())
     }
 
     /// The last selection made, with what it was made from.
@@ -67,8 +72,8 @@ impl BudgetState {
             (w[1], w[2]) = (u32::MAX, u32::MAX);
         }
         gpu.budget_stats.write(0, bytemuck::cast_slice(&words))?;
-        let mask: Vec<u32> = match self.mask.as_ref().filter(|(s, _)| s == settings) {
-            Some((_, m)) => (0..objects.max(1)).map(|o| m.get(o).copied().unwrap_or(false) as u32).collect(),
+        let mask: Vec<u32> = match self.mask_for(settings) {
+            Some(m) => (0..objects.max(1)).map(|o| m.get(o).copied().unwrap_or(false) as u32).collect(),
             None => vec![1; objects.max(1)],
         };
         gpu.budget_mask.write(0, bytemuck::cast_slice(&mask))
@@ -85,8 +90,7 @@ impl BudgetState {
         settings: &BudgetSettings,
     ) -> Result<()> {
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(gpu.budget_stats.read()?);
-        let previous = self.mask.as_ref().filter(|(s, _)| s == settings).map(|(_, m)| m.as_slice());
-        let objects = object_stats(scene, camera, &words, previous);
+        let objects = object_stats(scene, camera, &words, self.mask_for(settings));
         let lights = scene.lights.len() as u32;
         let shadow_lights = scene.lights.iter().filter(|l| l.casts_shadows).count() as u32;
         let params =

@@ -62,3 +62,10 @@ pub struct BudgetSettings {
     /// `I`, in the units of `V` (pixels per world unit).
     pub stickiness: f32,
 }
+
+impl BudgetSettings {
+    /// Paper mode with budget `T` and no stickiness.
+    pub fn paper(budget: f64) -> BudgetSettings {
+        BudgetSettings { mode: BudgetMode::Paper, budget, stickiness: 0.0 }
+    }
+}
