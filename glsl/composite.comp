@@ -51,12 +51,18 @@ void main() {
     case DEBUG_OBJECT: color = hash_color(instances[p.instance].object_id + 1u); break;
     case DEBUG_SELECTION: {
         float grey = dot(s.base_color, vec3(0.2126, 0.7152, 0.0722));
-        color = budget_traced(p.instance) ? vec3(0.25 + 0.75 * grey, 0.1, 0.1) : vec3(0.5 * grey + 0.1);
+        // Paper mode's Figure 2: red = every effect traced; per effect
+        // (effects mode) red = shadows, green = reflections, blue =
+        // refractions; grey = raster only.
+        uint e = budget_effects(p.instance);
+        vec3 bits = vec3(e & 1u, (e >> 1u) & 1u, (e >> 2u) & 1u);
+        if (e == EFFECT_ALL) bits = vec3(1.0, 0.0, 0.0);
+        color = e == 0u ? vec3(0.5 * grey + 0.1) : mix(vec3(0.1), vec3(0.25 + 0.75 * grey), bits);
         break;
     }
     }
 #else
-    g_rt = budget_traced(p.instance);
+    g_effects = budget_effects(p.instance);
     color = s.emissive + imageLoad(direct_in, px).rgb + ambient_light(s, is_mirror(s, 0u));
 #ifdef HAS_SPECULAR
     color += imageLoad(specular_in, px).rgb;

@@ -21,8 +21,24 @@ layout(constant_id = SPEC_MAX_DEPTH) const uint MAX_DEPTH = 8u;
 layout(constant_id = SPEC_MIN_WEIGHT) const float MIN_WEIGHT = 0.01;
 layout(constant_id = SPEC_COUNT_RAYS) const bool COUNT_RAYS = false;
 
+// The rays this pixel traced per effect (EFFECT_BIT_*), for the budget's
+// cost model: a ray counts for the effect of the chain it belongs to.
+uint g_effect_rays[EFFECT_COUNT] = uint[](0u, 0u, 0u);
+uint g_ray_effect = EFFECT_BIT_SHADOWS;
+
 void count_ray(uint kind) {
     if (COUNT_RAYS) atomicAdd(ray_counts[kind], 1u);
+    g_effect_rays[g_ray_effect]++;
+}
+
+// Adds this pixel's rays per effect to its object's budget statistics
+// (only under a budget: nothing else reads them).
+void budget_count_rays(uint instance) {
+    if ((frame.flags & FRAME_BUDGET) == 0u) return;
+    uint base = BUDGET_STAT_WORDS * instances[instance].object_id + BUDGET_STAT_RAYS;
+    for (uint e = 0u; e < EFFECT_COUNT; ++e) {
+        if (g_effect_rays[e] != 0u) atomicAdd(budget_stats[base + e], g_effect_rays[e]);
+    }
 }
 
 // MIRROR_ROUGHNESS (generated/shared.glsl): surfaces at most this rough
@@ -36,11 +52,15 @@ vec3 trace_shadow(vec3 o, vec3 d, float tmax) { return vec3(1.0); }
 
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 
-// Whether the primary hit being shaded gets ray-traced effects (the
-// budget's selection, budget_traced); false: no shadow, reflection or
-// refraction ray, exactly the raster-only shading. Secondary hits only
-// exist under a traced pixel.
-bool g_rt = true;
+// The ray-traced effects (EFFECT_* bits) the primary hit being shaded gets
+// (the budget's selection, budget_effects); an effect left out traces no
+// ray: exactly the raster-only shading of that effect. A chain, once
+// started, is traced whole (specular sets EFFECT_ALL after the primary hit).
+uint g_effects = EFFECT_ALL;
+
+bool effect_on(uint bit) {
+    return ((g_effects >> bit) & 1u) != 0u;
+}
 
 // Direct light from every punctual light; with SHADOWS, each light that
 // casts shadows is tested with a transmittance ray. `gn` is the unit
@@ -51,7 +71,7 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
         Light light = lights[i];
         LightSample ls = sample_light(light, s.position);
         vec3 contrib = brdf_eval(s, v, ls.l, ls.irradiance);
-        if (SHADOWS && g_rt && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && max3(contrib) > 0.0) {
+        if (SHADOWS && effect_on(EFFECT_BIT_SHADOWS) && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && max3(contrib) > 0.0) {
             bool light_side = dot(gn, ls.l) > 0.0;
             if (!light_side && s.transmission <= 0.0) {
                 // A normal map tilted the shading normal towards a light
@@ -84,6 +104,7 @@ struct Branch {
     vec3 weight;
     uint depth;
     Cone cone;
+    uint effect;  // EFFECT_BIT_* of the chain it belongs to
 };
 
 Branch g_stack[BRANCH_STACK_SIZE];
@@ -91,12 +112,12 @@ int g_sp = 0;
 // The pixel's tree lost a branch (full stack, or the ray budget ran out).
 bool g_truncated = false;
 
-void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone) {
+void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone, uint effect) {
     // Importance cutoff: branches that can change the pixel by less than
     // MIN_WEIGHT of their radiance are not traced.
     if (max3(w) >= MIN_WEIGHT && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
         if (g_sp < int(BRANCH_STACK_SIZE)) {
-            g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone);
+            g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone, effect);
             g_sp++;
         } else {
             g_truncated = true;
@@ -117,7 +138,7 @@ float face_viewer(inout Surface s, vec3 v) {
 
 // Whether `s` spawns a mirror reflection at `depth`.
 bool is_mirror(Surface s, uint depth) {
-    return REFLECTIONS && g_rt && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
+    return REFLECTIONS && effect_on(EFFECT_BIT_REFLECTIONS) && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
 }
 
 // Constant environment light on `s` (the ambient term). A mirror's specular
@@ -134,24 +155,30 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
     bool can_branch = depth < MAX_DEPTH;
     float tm = s.transmission * (1.0 - s.metallic);
     bool mirror = is_mirror(s, depth);
-    bool refract_on = REFRACTIONS && g_rt && can_branch && tm > 0.0;
+    bool refract_on = REFRACTIONS && effect_on(EFFECT_BIT_REFRACTIONS) && can_branch && tm > 0.0;
     if (!mirror && !refract_on) return;
     // Dielectric interface for the transmissive part; Schlick for the rest.
     vec3 f0 = surface_f0(s);
     float eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
     float fr = fresnel_dielectric(nv, eta);
     vec3 kr = f_schlick(f0, nv);
+    // A chain's rays count for the effect that started it at the primary
+    // hit (total internal reflection there is part of the refraction).
+    bool root = depth == 0u;
+    uint reflect_effect = root ? (mirror ? EFFECT_BIT_REFLECTIONS : EFFECT_BIT_REFRACTIONS) : g_ray_effect;
+    uint refract_effect = root ? EFFECT_BIT_REFRACTIONS : g_ray_effect;
     if (mirror || fr >= 1.0) {
         vec3 rw = kr * (1.0 - tm) + vec3(fr * tm);
         if (!mirror) rw = vec3(fr * tm);  // total internal reflection only
         vec3 rd = reflect(-v, s.normal);
         if (dot(rd, gn) <= 0.0) rd = reflect(-v, gn);  // stay above the surface
-        push_branch(offset_ray(s.position, gn, s.extent), rd, w * rw, depth + 1u, cone);
+        push_branch(offset_ray(s.position, gn, s.extent), rd, w * rw, depth + 1u, cone, reflect_effect);
     }
     if (refract_on && fr < 1.0) {
         vec3 td = refract_dir(-v, s.normal, eta);
         if (dot(td, gn) >= 0.0) td = refract_dir(-v, gn, eta);
-        push_branch(offset_ray(s.position, -gn, s.extent), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u, cone);
+        push_branch(offset_ray(s.position, -gn, s.extent), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u, cone,
+                    refract_effect);
     }
 }
 
@@ -178,6 +205,7 @@ vec3 trace_branches() {
         traced++;
         g_sp--;
         Branch b = g_stack[g_sp];
+        g_ray_effect = b.effect;
         RayHit h;
         count_ray(RAY_KIND_SECONDARY);
         g_alpha_cone = vec2(b.cone.width, b.cone.spread);

@@ -21,10 +21,10 @@ layout(set = SET_SCENE, binding = SCENE_RAY_COUNTERS) buffer RayCounters { uint 
 layout(set = SET_SCENE, binding = SCENE_BUDGET_STATS) buffer BudgetStats { uint budget_stats[]; };
 layout(set = SET_SCENE, binding = SCENE_BUDGET_MASK) readonly buffer BudgetMask { uint budget_mask[]; };
 
-// Whether the pixels of `instance` get ray-traced effects: always without a
-// budget, else when the budget selected its object.
-bool budget_traced(uint instance) {
-    return (frame.flags & FRAME_BUDGET) == 0u || budget_mask[instances[instance].object_id] != 0u;
+// The ray-traced effects (EFFECT_* bits) the pixels of `instance` get: all
+// without a budget, else those the budget selected for its object.
+uint budget_effects(uint instance) {
+    return (frame.flags & FRAME_BUDGET) == 0u ? EFFECT_ALL : budget_mask[instances[instance].object_id];
 }
 
 vec4 sample_tex(int index, vec2 uv, vec4 fallback) {

@@ -13,10 +13,13 @@ void specular_pixel(ivec2 px) {
     if (outside_frame(px) || !read_primary(px, p)) return;
     vec3 v = -p.dir;
     float nv = face_viewer(p.s, v);
-    g_rt = budget_traced(p.instance);
+    g_effects = budget_effects(p.instance);
     // The pixel's cone at the primary hit.
     float spread = pixel_spread_angle();
     Cone cone = Cone(spread * distance(frame.camera_pos, p.s.position), spread);
     push_branches(p.s, v, nv, p.gn, p.back_face, vec3(1.0), 0u, cone);
+    // A chain the selection started is traced whole.
+    g_effects = EFFECT_ALL;
     imageStore(specular_out, px, vec4(trace_branches(), 1.0));
+    budget_count_rays(p.instance);
 }

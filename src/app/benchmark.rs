@@ -41,6 +41,9 @@ pub struct BenchReport {
     pub bad_pixels: u64,
     /// The auto exposure of the last measured frame (None: fixed).
     pub exposure: Option<crate::render::tone::ExposureState>,
+    /// Effects mode's budget: T and, per measured frame, the ray stages'
+    /// predicted and measured ms.
+    pub budget: Option<(f64, Vec<[f64; 2]>)>,
 }
 
 impl BenchReport {
@@ -83,8 +86,33 @@ impl BenchReport {
             ));
         }
         s.push_str(&format!("bad pixels (NaN/Inf radiance, shown magenta): {}\n", self.bad_pixels));
+        if let Some((t, frames)) = &self.budget {
+            s.push_str(&budget_table(*t, frames));
+        }
         s
     }
+}
+
+/// Effects mode's budget against what the ray stages took, per frame.
+fn budget_table(t: f64, frames: &[[f64; 2]]) -> String {
+    let mut s = format!("budget T = {t:.3} ms (effects mode), ray stages (direct + specular) per frame:\n");
+    s.push_str(&format!("{:>6} {:>11} {:>10} {:>8}\n", "frame", "predicted", "measured", "vs T"));
+    for (i, [p, m]) in frames.iter().enumerate() {
+        s.push_str(&format!("{i:>6} {p:>11.3} {m:>10.3} {:>+7.1}%\n", (m / t - 1.0) * 100.0));
+    }
+    let within = frames.iter().filter(|[_, m]| (m / t - 1.0).abs() <= 0.1).count();
+    let m = stats("ray stages", frames.iter().map(|f| f[1]).collect());
+    s.push_str(&format!(
+        "within +-10% of T: {within} of {} frames; measured median {:.3} ms, p95 {:.3} ms",
+        frames.len(),
+        m.median,
+        m.p95
+    ));
+    if frames.iter().all(|[p, _]| *p < 0.9 * t) {
+        s.push_str(" (T is more than tracing every effect of every visible object costs)");
+    }
+    s.push('\n');
+    s
 }
 
 /// The passes that may trace rays (camera, shadow, reflection/refraction).
@@ -155,6 +183,8 @@ struct BenchFrame {
     counts: [usize; 2],
     bad_pixels: u32,
     exposure: Option<crate::render::tone::ExposureState>,
+    /// Effects mode: the ray stages' predicted and measured ms.
+    budget: Option<[f64; 2]>,
 }
 
 /// Renders frame `i` of a benchmark of `variant` (warm-up frames first:
@@ -209,16 +239,22 @@ fn bench_frame_inner(
         update = renderer.update_timings.clone();
         counts = renderer.update_counts;
     }
+    // The prediction the selection this frame honours was made with.
+    let predicted =
+        renderer.budget_report().filter(|r| Some(r.settings) == settings.budget).and_then(|r| r.predicted_ms);
     let out = renderer.render(ctx, scene, &camera, &settings)?;
     if i == warmup {
         log_frame_health(&out);
     }
+    let ray_ms =
+        out.timings.iter().filter(|(n, _)| matches!(*n, "direct" | "specular")).map(|(_, ms)| ms).sum();
     Ok(BenchFrame {
         update,
         timings: out.timings,
         counts,
         bad_pixels: out.bad_pixels,
         exposure: out.exposure,
+        budget: predicted.map(|p| [p, ray_ms]),
     })
 }
 
@@ -321,6 +357,7 @@ pub fn bench(
             let mut totals = Vec::new();
             let mut counts = [0usize; 2];
             let (mut bad_pixels, mut exposure) = (0u64, None);
+            let mut budget_frames = Vec::new();
             for i in warmup..warmup + frames {
                 let f = bench_frame(
                     ctx,
@@ -337,6 +374,7 @@ pub fn bench(
                 counts = [counts[0] + f.counts[0], counts[1] + f.counts[1]];
                 bad_pixels += f.bad_pixels as u64;
                 exposure = f.exposure;
+                budget_frames.extend(f.budget);
                 let mut total = 0.0;
                 for &(name, ms) in f.update.iter().chain(&f.timings).filter(|(n, _)| *n != "readback") {
                     total += ms;
@@ -371,6 +409,13 @@ pub fn bench(
                 rays_first_frame: rays[k],
                 bad_pixels,
                 exposure,
+                budget: job
+                    .settings
+                    .budget
+                    .filter(|b| {
+                        b.mode == crate::render::budget::BudgetMode::Effects && !budget_frames.is_empty()
+                    })
+                    .map(|b| (b.budget, budget_frames)),
             });
         }
         Ok(())

@@ -9,13 +9,19 @@ use crate::render::budget::{BudgetMode, BudgetSettings};
 #[derive(Args, Clone)]
 pub struct BudgetArgs {
     /// Ray-tracing budget T per frame: only the most relevant visible
-    /// objects whose estimated cost fits get shadows, reflections and
-    /// refractions, the others raster shading (paper mode: T in estimated
-    /// rays x object cost; "inf": every visible object) [default: no budget].
-    #[arg(long, value_parser = parse_budget, allow_hyphen_values = true)]
+    /// objects (effects mode: object and effect) whose cost fits get
+    /// shadows, reflections and refractions, the others raster shading
+    /// (effects mode: T in GPU ms of the ray stages; paper mode: in
+    /// estimated rays x object cost; "inf": every visible object)
+    /// [default: no budget].
+    #[arg(long, value_parser = parse_budget, allow_hyphen_values = true, conflicts_with = "budget_ms")]
     pub budget: Option<f64>,
-    /// How --budget selects.
-    #[arg(long, value_enum)]
+    /// The same as --budget T --budget-mode effects: T ms per frame for the
+    /// ray stages (direct + specular).
+    #[arg(long, value_parser = parse_budget, allow_hyphen_values = true)]
+    pub budget_ms: Option<f64>,
+    /// How --budget selects [default: effects].
+    #[arg(long, value_enum, conflicts_with = "budget_ms")]
     pub budget_mode: Option<BudgetMode>,
     /// Stickiness I with --budget: relevance bonus of an object selected
     /// the frame before, in the units of the visibility A·P/D (pixels per
@@ -26,11 +32,12 @@ pub struct BudgetArgs {
 
 impl BudgetArgs {
     pub fn settings(&self) -> Option<BudgetSettings> {
-        Some(BudgetSettings {
-            mode: self.budget_mode.unwrap_or_default(),
-            budget: self.budget?,
-            stickiness: self.stickiness.unwrap_or(0.0),
-        })
+        let (mode, budget) = match (self.budget, self.budget_ms) {
+            (Some(t), _) => (self.budget_mode.unwrap_or_default(), t),
+            (None, Some(ms)) => (BudgetMode::Effects, ms),
+            (None, None) => return None,
+        };
+        Some(BudgetSettings { mode, budget, stickiness: self.stickiness.unwrap_or(0.0) })
     }
 }
 

@@ -25,13 +25,24 @@ shared! {
     // The per-object ray-tracing budget (render/budget): per object the
     // `heuristic` pass's statistics of the primary hits (BUDGET_STAT_WORDS
     // words: covered pixels, then min x, min y, max x, max y of the covered
-    // pixels), and the selection the host made (one word: non-zero =
-    // ray-traced), honoured where Frame.flags has FRAME_BUDGET.
+    // pixels, then the rays the object's pixels traced per effect:
+    // BUDGET_STAT_RAYS + EFFECT_BIT_*), and the selection the host made
+    // (one word: the EFFECT_* bits its pixels trace), honoured where
+    // Frame.flags has FRAME_BUDGET.
     id SCENE_BUDGET_STATS = 9;
     id SCENE_BUDGET_MASK = 10;
     // Bindless textures: variable-count, so the last binding.
     id SCENE_TEXTURES = 11;
-    uint BUDGET_STAT_WORDS = 5;
+    uint BUDGET_STAT_WORDS = 8;
+    uint BUDGET_STAT_RAYS = 5;
+    // Ray-traced effects, as bits of the budget's selection: shadow rays at
+    // the primary hit; the reflection chain; the refraction chain (a chain
+    // includes everything traced beyond its first ray, its shadow rays too).
+    uint EFFECT_BIT_SHADOWS = 0;
+    uint EFFECT_BIT_REFLECTIONS = 1;
+    uint EFFECT_BIT_REFRACTIONS = 2;
+    uint EFFECT_COUNT = 3;
+    uint EFFECT_ALL = 7;
     // Frame.flags bits.
     uint FRAME_BUDGET = 1;
 

@@ -193,6 +193,12 @@ pub struct Renderer {
     injection: Option<inject::Injection>,
     /// The per-object ray-tracing budget's selection across frames.
     budget: budget::BudgetState,
+    /// The passes were (re)created since the last recorded frame, and
+    /// whether the last recorded frame was their first: lavapipe compiles a
+    /// shader on first use, inside the GPU timestamps, so that frame's
+    /// times say nothing of the passes' cost (the budget ignores them).
+    passes_new: bool,
+    recorded_cold: bool,
 }
 
 fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
@@ -241,6 +247,8 @@ impl Renderer {
             adapt_dt: None,
             injection: None,
             budget: budget::BudgetState::default(),
+            passes_new: false,
+            recorded_cold: false,
         };
         match r.create_resources(ctx, scene) {
             Ok(()) => Ok(r),
@@ -468,6 +476,7 @@ impl Renderer {
             let pass = (desc.create)(&init).with_context(|| format!("creating pass {}", desc.name))?;
             self.passes.push(Recorded { name: desc.name, uses, pass });
         }
+        self.passes_new = true;
         log::info!("frame: {} ({})", config.describe(), config.backend_reason(ctx, settings.backend));
         log::info!("frame: passes {}", self.pass_names().join(" -> "));
         if !left_out.is_empty() {
@@ -554,12 +563,15 @@ impl Renderer {
         }
         tail(&mut rec, &self.targets)?;
         self.frame_index = self.frame_index.wrapping_add(1);
+        self.recorded_cold = std::mem::take(&mut self.passes_new);
         Ok(())
     }
 
     /// Renders one frame offscreen and reads back both outputs. With a
-    /// budget and no selection for it yet, a frame that only measures the
-    /// objects runs first (the selection lags the statistics by a frame).
+    /// budget and no selection for it yet, frames that only measure run
+    /// first (the selection lags the statistics by a frame; effects mode
+    /// calibrates its cost model with one frame tracing nothing and one
+    /// tracing everything).
     pub fn render(
         &mut self,
         ctx: &Context,
@@ -569,7 +581,11 @@ impl Renderer {
     ) -> Result<FrameOutput> {
         // (A budget the frame leaves out, with nothing traced, needs none.)
         let measures = self.config.is_none_or(|c| c.budget);
-        if measures && settings.budget.is_some_and(|b| !self.budget.ready(&b)) {
+        // (Up to two calibration frames, and one per cold pass set.)
+        for _ in 0..4 {
+            if !(measures && settings.budget.is_some_and(|b| !self.budget.ready(&b))) {
+                break;
+            }
             self.render_frame(ctx, scene, camera, settings)?;
         }
         self.render_frame(ctx, scene, camera, settings)
@@ -633,7 +649,7 @@ impl Renderer {
         let truncated_pixels = counts[RAY_COUNTER_TRUNCATED as usize];
         let bad_pixels = counts[RAY_COUNTER_BAD_PIXELS as usize];
         let exposure = self.exposure_state()?;
-        self.finish_budget(scene, camera, settings)?;
+        self.finish_budget(scene, camera, settings, &timings)?;
         let e = self.extent;
         Ok(FrameOutput {
             width: e.width,
@@ -648,14 +664,21 @@ impl Renderer {
         })
     }
 
-    /// After a completed frame: the budget's selection for the next one
-    /// (nothing without a budget).
-    pub fn finish_budget(&mut self, scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<()> {
+    /// After a completed frame (its GPU pass times `timings`): the budget's
+    /// selection for the next one (nothing without a budget).
+    pub fn finish_budget(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &RenderSettings,
+        timings: &[(&'static str, f64)],
+    ) -> Result<()> {
         let (Some(b), true) = (&settings.budget, self.config.is_some_and(|c| c.budget)) else {
             return Ok(());
         };
         let screen = budget::Screen { width: self.extent.width, height: self.extent.height };
-        self.budget.after_frame(&self.gpu, scene, camera, screen, b)
+        let timings = (!self.recorded_cold).then_some(timings);
+        self.budget.after_frame(&self.gpu, scene, camera, screen, b, timings)
     }
 
     /// The budget's last selection and what it was made from.

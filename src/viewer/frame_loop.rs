@@ -52,17 +52,20 @@ impl Viewer {
         Ok(Flow::Continue)
     }
 
-    /// Reads the GPU pass times of the last submitted frame (its fence is done).
-    fn collect_gpu_times(&mut self) -> Result<()> {
+    /// Reads the GPU pass times of the last submitted frame (its fence is
+    /// done); returns its passes' times (empty when none was pending).
+    fn collect_gpu_times(&mut self) -> Result<Vec<(&'static str, f64)>> {
         if std::mem::take(&mut self.gpu_pending) {
             let mut t = self.renderer.timer.results(&self.ctx)?;
+            let passes = t.clone();
             // The scene update (skinning, refit, TLAS) of the frame, when it had one.
             if self.animation.as_ref().is_some_and(|(_, _, paused)| !paused) {
                 t.extend(self.renderer.update_timings.iter().copied());
             }
             self.stats.gpu(&t);
+            return Ok(passes);
         }
-        Ok(())
+        Ok(Vec::new())
     }
 
     /// Writes a pending screenshot; its frame has completed.
@@ -155,7 +158,7 @@ impl Viewer {
         unsafe { dev.wait_for_fences(&[prev], true, u64::MAX) }
             .context("waiting for a frame (device lost?)")?;
         self.renderer.finish_scene_update(&self.ctx)?;
-        self.collect_gpu_times()?;
+        let passes = self.collect_gpu_times()?;
         self.finish_screenshot()?;
         let bad = self.renderer.take_bad_pixels()?;
         if bad > 0 {
@@ -164,7 +167,7 @@ impl Viewer {
         // The budget selects the next frame's objects from the finished
         // frame's statistics (the camera has not moved since it).
         let camera = self.controller.camera();
-        self.renderer.finish_budget(&self.scene, &camera, &self.settings)?;
+        self.renderer.finish_budget(&self.scene, &camera, &self.settings, &passes)?;
 
         // --capture-frame N or F9: this frame, from its uniforms to its
         // present, in a RenderDoc capture.

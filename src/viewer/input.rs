@@ -12,7 +12,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use super::camera_controller::{self, digit};
 use super::session::Viewer;
 use super::{Flow, DEBUG_VIEWS};
-use crate::render::budget::BudgetSettings;
+use crate::render::budget::{BudgetMode, BudgetSettings};
 use crate::render::shading::{AaMode, Mode};
 use crate::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use crate::render::DebugView;
@@ -135,17 +135,24 @@ impl Viewer {
             KeyCode::F6 => toggle("reflections", &mut self.settings.effects.reflections),
             KeyCode::F7 => toggle("refractions", &mut self.settings.effects.refractions),
             KeyCode::F8 => {
-                // On: every visible object first; [ and ] then halve / double it.
-                self.settings.budget = match self.settings.budget {
-                    Some(_) => None,
-                    None => Some(BudgetSettings::paper(f64::INFINITY)),
+                // Off -> effects mode -> paper mode -> off, each starting at
+                // every visible object; [ and ] then halve / double it.
+                self.settings.budget = match self.settings.budget.map(|b| b.mode) {
+                    None => Some(BudgetSettings::effects(f64::INFINITY)),
+                    Some(BudgetMode::Effects) => Some(BudgetSettings::paper(f64::INFINITY)),
+                    Some(BudgetMode::Paper) => None,
                 };
                 self.log_budget();
             }
             KeyCode::BracketLeft | KeyCode::BracketRight => {
                 let up = code == KeyCode::BracketRight;
-                // From "everything", the cost of everything the last frame saw.
-                let everything = self.renderer.budget_report().map(|r| r.selection.spent);
+                // From "everything", the cost of everything the last frame
+                // saw (effects mode: its ray stages' measured ms).
+                let everything = self
+                    .renderer
+                    .budget_report()
+                    .map(|r| if r.predicted_ms.is_some() { r.measured_ms } else { r.selection.spent })
+                    .filter(|t| t.is_finite());
                 match &mut self.settings.budget {
                     Some(b) => {
                         let base = if b.budget.is_finite() { b.budget } else { everything.unwrap_or(0.0) };
@@ -205,10 +212,14 @@ impl Viewer {
         Flow::Continue
     }
 
-    /// "budget 1.2e4 (3/6 objects, rays 4.1 ms)": T, what the last
+    /// "budget 1.2e4 (3/6 objects, rays 4.1 ms)" (paper mode) or "budget
+    /// 4.00 ms (3/6 objects, rays 4.1 ms)" (effects mode): T, what the last
     /// selection took, and the ray passes' GPU time in the last stats window.
     fn budget_title(&self, b: &BudgetSettings) -> String {
-        let mut t = format!("budget {:.3e}", b.budget);
+        let mut t = match b.mode {
+            BudgetMode::Paper => format!("budget {:.3e}", b.budget),
+            BudgetMode::Effects => format!("budget {:.2} ms", b.budget),
+        };
         if b.stickiness > 0.0 {
             t.push_str(&format!(" I {}", b.stickiness));
         }
@@ -231,7 +242,9 @@ impl Viewer {
 
     fn log_budget(&mut self) {
         match &self.settings.budget {
-            Some(b) => log::info!("ray-tracing budget {} (stickiness {})", b.budget, b.stickiness),
+            Some(b) => {
+                log::info!("ray-tracing budget {} ({:?} mode, stickiness {})", b.budget, b.mode, b.stickiness)
+            }
             None => log::info!("ray-tracing budget off: every object traced"),
         }
         self.window.set_title(&self.title());

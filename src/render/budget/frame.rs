@@ -9,8 +9,8 @@
 use anyhow::Result;
 
 use super::paper::{self, ObjectStats, Params, Screen, Selection};
-use super::BudgetSettings;
-use crate::gpu::shared::{BUDGET_STAT_WORDS, MIRROR_ROUGHNESS};
+use super::{effects, BudgetMode, BudgetSettings};
+use crate::gpu::shared::{BUDGET_STAT_RAYS, BUDGET_STAT_WORDS, EFFECT_ALL, MIRROR_ROUGHNESS};
 use crate::gpu::GpuScene;
 use crate::scene::{Aabb, Camera, Scene};
 
@@ -22,27 +22,55 @@ pub struct BudgetReport {
     pub settings: BudgetSettings,
     /// Per object: what the frame measured.
     pub objects: Vec<ObjectStats>,
+    /// The objects selected for any effect (`spent`: paper mode's cost
+    /// units; effects mode's predicted ms of the traced rays).
     pub selection: Selection,
+    /// Per object, the EFFECT_* bits selected.
+    pub effects: Vec<u32>,
+    /// Effects mode: predicted ms of the ray stages for the selection, and
+    /// what the frame measured them at (`direct` + `specular`).
+    pub predicted_ms: Option<f64>,
+    pub measured_ms: f64,
 }
 
 impl BudgetReport {
     /// One line: how much was selected of what was visible.
     pub fn summary(&self) -> String {
         let visible = self.objects.iter().filter(|o| o.pixels > 0).count();
-        format!(
-            "budget {}: {} of {visible} visible objects ray-traced, estimated cost {:.0}",
-            self.settings.budget,
-            self.selection.selected.len(),
-            self.selection.spent
-        )
+        let picked = self.selection.selected.len();
+        match self.predicted_ms {
+            Some(p) => {
+                let per_effect: Vec<String> = (0..effects::EFFECTS)
+                    .map(|e| {
+                        let n = self.effects.iter().filter(|b| (*b >> e) & 1 == 1).count();
+                        format!("{n} {}", effects::EFFECT_NAMES[e])
+                    })
+                    .collect();
+                format!(
+                    "budget {} ms: {picked} of {visible} visible objects ray-traced ({}), ray stages predicted \
+                     {p:.2} ms (last frame {:.2} ms)",
+                    self.settings.budget,
+                    per_effect.join(", "),
+                    self.measured_ms
+                )
+            }
+            None => format!(
+                "budget {}: {picked} of {visible} visible objects ray-traced, estimated cost {:.0}",
+                self.settings.budget, self.selection.spent
+            ),
+        }
     }
 }
 
 #[derive(Default)]
 pub struct BudgetState {
-    /// The selection the next frame honours, and the settings it was made
-    /// under.
-    mask: Option<(BudgetSettings, Vec<bool>)>,
+    /// The selection the next frame honours (EFFECT_* bits per object),
+    /// and the settings it was made under.
+    mask: Option<(BudgetSettings, Vec<u32>)>,
+    /// The bits the frame in flight traces, per object.
+    in_flight: Vec<u32>,
+    /// Effects mode's measured costs (kept when the budget changes).
+    model: effects::CostModel,
     last: Option<BudgetReport>,
 }
 
@@ -54,7 +82,7 @@ impl BudgetState {
     }
 
     /// The selection made under `settings`, if the last one was.
-    fn mask_for(&self, settings: &BudgetSettings) -> Option<&[bool]> {
+    fn mask_for(&self, settings: &BudgetSettings) -> Option<&[u32]> {
         self.mask.as_ref().filter(|(s, _)| s == settings).map(|(_, m)| m.as_slice())
     }
 
@@ -63,24 +91,42 @@ impl BudgetState {
         self.last.as_ref()
     }
 
+    /// Effects mode's cost model.
+    pub fn model(&self) -> &effects::CostModel {
+        &self.model
+    }
+
     /// Resets the statistics and writes the selection for `objects`
-    /// objects: the current one, or every object before the first.
-    pub fn before_frame(&self, gpu: &mut GpuScene, settings: &BudgetSettings, objects: usize) -> Result<()> {
+    /// objects: the current one, or, before there is one, everything
+    /// (a measuring frame; effects mode calibrates first with nothing).
+    pub fn before_frame(
+        &mut self,
+        gpu: &mut GpuScene,
+        settings: &BudgetSettings,
+        objects: usize,
+    ) -> Result<()> {
         let mut words = vec![0u32; objects.max(1) * WORDS];
         for w in words.chunks_exact_mut(WORDS) {
-            // Count and maxima 0, minima at the largest value: atomicMin/Max.
+            // Count, maxima and ray counts 0, minima at the largest value:
+            // atomicMin/Max/Add.
             (w[1], w[2]) = (u32::MAX, u32::MAX);
         }
         gpu.budget_stats.write(0, bytemuck::cast_slice(&words))?;
-        let mask: Vec<u32> = match self.mask_for(settings) {
-            Some(m) => (0..objects.max(1)).map(|o| m.get(o).copied().unwrap_or(false) as u32).collect(),
-            None => vec![1; objects.max(1)],
+        let measuring = match settings.mode {
+            BudgetMode::Effects if !self.model.calibrated() => self.model.calibration_mask(),
+            _ => EFFECT_ALL,
         };
-        gpu.budget_mask.write(0, bytemuck::cast_slice(&mask))
+        self.in_flight = match self.mask_for(settings) {
+            Some(m) => (0..objects.max(1)).map(|o| m.get(o).copied().unwrap_or(0)).collect(),
+            None => vec![measuring; objects.max(1)],
+        };
+        gpu.budget_mask.write(0, bytemuck::cast_slice(&self.in_flight))
     }
 
     /// Reads the statistics of the frame that just completed (rendered
-    /// from `camera` at `screen`) and selects what the next frame traces.
+    /// from `camera` at `screen`, its passes' GPU ms in `timings`, None
+    /// when they are not representative) and selects what the next frame
+    /// traces.
     pub fn after_frame(
         &mut self,
         gpu: &GpuScene,
@@ -88,18 +134,67 @@ impl BudgetState {
         camera: &Camera,
         screen: Screen,
         settings: &BudgetSettings,
+        timings: Option<&[(&'static str, f64)]>,
     ) -> Result<()> {
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(gpu.budget_stats.read()?);
-        let objects = object_stats(scene, camera, &words, self.mask_for(settings));
+        let n = scene.objects.len();
+        let stage_ms = timings.map(|t| {
+            effects::STAGES.map(|s| t.iter().filter(|(p, _)| *p == s).map(|(_, ms)| ms).sum::<f64>())
+        });
+        let measured_ms = stage_ms.map_or(f64::NAN, |m| m.iter().sum());
+        let stat = |o: usize| words.get(o * WORDS..(o + 1) * WORDS).unwrap_or(&[0; WORDS]);
+        let pixels: Vec<u32> = (0..n).map(|o| stat(o)[0]).collect();
+        let rays: Vec<[u32; effects::EFFECTS]> =
+            (0..n).map(|o| std::array::from_fn(|e| stat(o)[BUDGET_STAT_RAYS as usize + e])).collect();
+        self.model.observe(&effects::Observation {
+            pixels: &pixels,
+            rays: &rays,
+            traced: &self.in_flight,
+            stage_ms,
+        });
+        let previous = self.mask_for(settings).map(|m| m.to_vec());
+        let traced_before: Option<Vec<bool>> = previous.as_ref().map(|m| m.iter().map(|&b| b != 0).collect());
+        let objects = object_stats(scene, camera, &words, traced_before.as_deref());
         let lights = scene.lights.len() as u32;
         let shadow_lights = scene.lights.iter().filter(|l| l.casts_shadows).count() as u32;
         let params =
             Params { budget: settings.budget, stickiness: settings.stickiness, shadow_lights, lights };
-        let selection = paper::select(&paper::score(&objects, screen, &params), settings.budget);
-        let mut mask = selection.mask.clone();
-        mask.resize(scene.objects.len(), false);
-        self.mask = Some((*settings, mask));
-        let report = BudgetReport { settings: *settings, objects, selection };
+        let (bits, predicted_ms, selection) = match settings.mode {
+            BudgetMode::Paper => {
+                let selection = paper::select(&paper::score(&objects, screen, &params), settings.budget);
+                let mut bits: Vec<u32> =
+                    selection.mask.iter().map(|&m| if m { EFFECT_ALL } else { 0 }).collect();
+                bits.resize(n, 0);
+                (bits, None, selection)
+            }
+            BudgetMode::Effects => {
+                if !self.model.calibrated() {
+                    // Another calibration frame first; no selection yet.
+                    return Ok(());
+                }
+                let chosen = effects::select(
+                    &objects,
+                    screen,
+                    &params,
+                    &self.model,
+                    settings.budget,
+                    previous.as_deref(),
+                );
+                let selected: Vec<usize> = (0..n).filter(|&o| chosen.bits[o] != 0).collect();
+                let spent = chosen.predicted_ms - chosen.base_ms;
+                let mask = chosen.bits.iter().map(|&b| b != 0).collect();
+                (chosen.bits, Some(chosen.predicted_ms), Selection { selected, spent, mask })
+            }
+        };
+        self.mask = Some((*settings, bits.clone()));
+        let report = BudgetReport {
+            settings: *settings,
+            objects,
+            selection,
+            effects: bits,
+            predicted_ms,
+            measured_ms,
+        };
         log::debug!("{}", report.summary());
         self.last = Some(report);
         Ok(())

@@ -20,10 +20,12 @@
 //! Selection is greedy: while budget remains, among the objects whose cost
 //! fits what is left take the most relevant and subtract its cost.
 //!
-//! This is the host side of paper mode (`--budget-mode paper`): exactly
+//! [`paper`] is the host side of paper mode (`--budget-mode paper`): exactly
 //! those formulas and that selection, `T` in the paper's abstract cost
 //! units (rays, scaled by `E`). Where the paper leaves a detail open (the
 //! falloff of `P`, ties, degenerate inputs) [`paper`] documents the choice.
+//! [`effects`] is our mode, the default: the same relevance, selection per
+//! (object, effect), costs in measured milliseconds.
 
 //!
 //! In a frame: the `heuristic` pass (render/passes/heuristic.rs) measures
@@ -32,10 +34,12 @@
 //! (one frame of latency: the selection is a few hundred objects of
 //! arithmetic, and the host reads the statistics anyway, so no GPU sort);
 //! the next frame's `direct`, `specular` and `composite` passes honour the
-//! selection per pixel: an unselected object's pixels get no shadow,
-//! reflection or refraction ray — exactly the raster-only shading (the
-//! paper's fallback).
+//! selection per pixel and effect (EFFECT_* bits; paper mode selects all
+//! or none): an effect left out traces no ray — exactly the raster-only
+//! shading of it (the paper's fallback). The passes also count the rays
+//! each object traced per effect, which effects mode's cost model reads.
 
+pub mod effects;
 pub mod frame;
 pub mod paper;
 
@@ -47,9 +51,12 @@ pub use paper::{
 /// How `--budget` selects.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum BudgetMode {
+    /// Per (object, effect), `--budget` in GPU ms of the ray stages
+    /// (`direct` + `specular`), costs measured every frame ([`effects`]).
+    #[default]
+    Effects,
     /// Walewski et al.'s formulas and greedy selection, `--budget` in their
     /// abstract cost units (estimated rays x `cost`).
-    #[default]
     Paper,
 }
 
@@ -57,7 +64,8 @@ pub enum BudgetMode {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BudgetSettings {
     pub mode: BudgetMode,
-    /// `T` (>= 0; infinite: every visible, relevant object).
+    /// `T` (>= 0; infinite: every visible, relevant object): ms in effects
+    /// mode, the paper's cost units in paper mode.
     pub budget: f64,
     /// `I`, in the units of `V` (pixels per world unit).
     pub stickiness: f32,
@@ -67,5 +75,10 @@ impl BudgetSettings {
     /// Paper mode with budget `T` and no stickiness.
     pub fn paper(budget: f64) -> BudgetSettings {
         BudgetSettings { mode: BudgetMode::Paper, budget, stickiness: 0.0 }
+    }
+
+    /// Effects mode with `ms` for the ray stages and no stickiness.
+    pub fn effects(ms: f64) -> BudgetSettings {
+        BudgetSettings { mode: BudgetMode::Effects, budget: ms, stickiness: 0.0 }
     }
 }
