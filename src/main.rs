@@ -170,6 +170,13 @@ enum Command {
         /// "translate-1e3,ior-1.0".
         #[arg(long, requires = "stability", value_delimiter = ',')]
         cases: Vec<String>,
+        /// The ray-tracing budget along the scene's camera path instead:
+        /// paper and effects mode at these shares of the cost of tracing
+        /// everything (comma-separated in [0, 1]), --frames points along
+        /// the path after --warmup frames at its start; frame ms, heuristic
+        /// share and ꟻLIP/PSNR against full effects per run, table + plot.
+        #[arg(long, value_delimiter = ',', value_parser = parse_share, conflicts_with_all = ["stability", "knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts", "tone_sheet"])]
+        budget_paths: Vec<f64>,
         /// Tone operators side by side instead: a contact sheet per Radiance
         /// .hdr map (comma-separated), the scene lit by each; rows operators,
         /// columns key values (log-average auto exposure) and the fixed
@@ -441,6 +448,13 @@ fn parse_min_weight(s: &str) -> Result<f32, String> {
     parse_f32(s, "finite, in [0, 1]", |v| (0.0..=1.0).contains(&v))
 }
 
+fn parse_share(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}': expected a share in [0, 1]")),
+    }
+}
+
 fn parse_time(s: &str) -> Result<f32, String> {
     parse_f32(s, "finite seconds", |_| true)
 }
@@ -645,9 +659,20 @@ fn run(cli: Cli) -> Result<()> {
             ref_ss_filter,
             stability,
             cases,
+            budget_paths,
             tone_sheet,
             out,
         }) => {
+            if !budget_paths.is_empty() {
+                let opts = report::budget_paths::BudgetPathOptions {
+                    job: view.job()?,
+                    out,
+                    frames,
+                    warmup,
+                    shares: budget_paths,
+                };
+                return report::budget_paths::command(&gpu, &opts);
+            }
             if !tone_sheet.is_empty() {
                 let job = view.job()?;
                 let files = app::with_context(&gpu, |ctx| {

@@ -1,13 +1,17 @@
-//! The per-object ray-tracing budget in paper mode (render/budget): a budget
-//! of 0 renders exactly the raster-only image and an unlimited one exactly
-//! the full hybrid image, on every backend; a K = 0 object is never
-//! selected; stickiness keeps the selection steady over a slow pan.
+//! The per-object ray-tracing budget (render/budget): in paper and effects
+//! mode a budget of 0 renders exactly the raster-only image and an
+//! unlimited one exactly the full hybrid image, on every backend; each
+//! effect's selection bit gates exactly that effect; a K = 0 object is never selected;
+//! stickiness keeps the selection steady over a slow pan.
 mod common;
 
 use common::BACKENDS;
 use glam::Vec3;
+use hybrid_rt::gpu::shared::{
+    EFFECT_ALL, EFFECT_BIT_REFLECTIONS, EFFECT_BIT_REFRACTIONS, EFFECT_BIT_SHADOWS,
+};
 use hybrid_rt::metrics::diff_stats;
-use hybrid_rt::render::budget::BudgetSettings;
+use hybrid_rt::render::budget::{BudgetMode, BudgetSettings};
 use hybrid_rt::render::shading::Effects;
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::{Camera, Scene};
@@ -31,26 +35,76 @@ fn zero_budget_is_raster_only_and_unlimited_is_full_hybrid_on_every_backend() {
         let none = Effects { shadows: false, reflections: false, refractions: false, ..full.effects };
         let raster = common::render_scene(&scene, W, H, &RenderSettings { effects: none, ..full });
         let hybrid = common::render_scene(&scene, W, H, &full);
-        let zero = common::render_scene(&scene, W, H, &RenderSettings { budget: budget(0.0, 0.0), ..full });
-        let inf = common::render_scene(
-            &scene,
-            W,
-            H,
-            &RenderSettings { budget: budget(f64::INFINITY, 0.0), ..full },
-        );
-        let (max_zero, _) = diff_stats(&raster.rgb8(), &zero.rgb8(), 3, 0);
-        let (max_inf, _) = diff_stats(&hybrid.rgb8(), &inf.rgb8(), 3, 0);
         // The scene's effects are visible: the two references differ.
         let (max_effects, share) = diff_stats(&raster.rgb8(), &hybrid.rgb8(), 3, 8);
-        eprintln!(
-            "{backend:?}: budget 0 vs raster only max {max_zero}, inf vs hybrid max {max_inf}; \
-             effects change {:.1}% of pixels (max {max_effects})",
-            share * 100.0
-        );
         assert!(share > 0.02, "{backend:?}: the effects barely show ({:.2}%)", share * 100.0);
-        assert_eq!(max_zero, 0, "{backend:?}: budget 0 differs from the raster-only image");
-        assert_eq!(max_inf, 0, "{backend:?}: an unlimited budget differs from the full hybrid image");
+        for mode in [BudgetMode::Paper, BudgetMode::Effects] {
+            let with = |t: f64| RenderSettings {
+                budget: Some(BudgetSettings { mode, budget: t, stickiness: 0.0 }),
+                ..full
+            };
+            let zero = common::render_scene(&scene, W, H, &with(0.0));
+            let inf = common::render_scene(&scene, W, H, &with(f64::INFINITY));
+            let (max_zero, _) = diff_stats(&raster.rgb8(), &zero.rgb8(), 3, 0);
+            let (max_inf, _) = diff_stats(&hybrid.rgb8(), &inf.rgb8(), 3, 0);
+            eprintln!(
+                "{backend:?} {mode:?}: budget 0 vs raster only max {max_zero}, inf vs hybrid max {max_inf}; \
+                 effects change {:.1}% of pixels (max {max_effects})",
+                share * 100.0
+            );
+            assert_eq!(max_zero, 0, "{backend:?} {mode:?}: budget 0 differs from the raster-only image");
+            assert_eq!(
+                max_inf, 0,
+                "{backend:?} {mode:?}: an unlimited budget differs from the full hybrid image"
+            );
+        }
     }
+}
+
+/// Each effect's bit gates exactly that effect: with only effect e on, a
+/// selection of e alone renders the traced image and a selection of every
+/// other bit the untraced one, bit for bit. (Effects are checked one at a
+/// time: a traced chain keeps everything beyond its first ray, its own
+/// shadow rays and nested reflections included, which global switches turn
+/// off, so "all but e" has no global-switch equivalent.)
+#[test]
+fn each_effect_bit_gates_exactly_its_effect() {
+    let scene = default_scene();
+    let ctx = common::validated_context();
+    let n = scene.objects.len();
+    let camera = scene.cameras[0].clone();
+    let b = BudgetSettings::effects(f64::INFINITY);
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
+    let none = Effects { shadows: false, reflections: false, refractions: false, ..Effects::default() };
+    let with = |effects: Effects| RenderSettings { effects, ..Default::default() };
+    let untraced = r.render(&ctx, &scene, &camera, &with(none)).unwrap();
+    let cases = [
+        (EFFECT_BIT_SHADOWS, "shadows", Effects { shadows: true, ..none }),
+        (EFFECT_BIT_REFLECTIONS, "reflections", Effects { reflections: true, ..none }),
+        (EFFECT_BIT_REFRACTIONS, "refractions", Effects { refractions: true, ..none }),
+    ];
+    for (bit, name, only) in cases {
+        let traced = r.render(&ctx, &scene, &camera, &with(only)).unwrap();
+        let settings = RenderSettings { budget: Some(b), ..with(only) };
+        let mut selected = |bits: u32| {
+            // A frame under the budget first (its passes), then the override.
+            r.render(&ctx, &scene, &camera, &settings).unwrap();
+            r.set_budget_selection(&b, vec![bits; n]);
+            r.render(&ctx, &scene, &camera, &settings).unwrap()
+        };
+        let (max_on, _) = diff_stats(&traced.rgb8(), &selected(1 << bit).rgb8(), 3, 0);
+        let (max_off, _) = diff_stats(&untraced.rgb8(), &selected(EFFECT_ALL & !(1 << bit)).rgb8(), 3, 0);
+        let (_, shows) = diff_stats(&untraced.rgb8(), &traced.rgb8(), 3, 4);
+        eprintln!(
+            "{name}: selected alone vs traced max {max_on}, every other bit vs untraced max {max_off}; \
+             the effect shows on {:.1}% of pixels",
+            shows * 100.0
+        );
+        assert!(shows > 0.005, "{name}: the default scene does not show the effect");
+        assert_eq!(max_on, 0, "{name}: its bit alone does not render the traced effect");
+        assert_eq!(max_off, 0, "{name}: the other bits render some of it");
+    }
+    r.destroy(&ctx);
 }
 
 /// Renders `frames` frames of `scene` from `cameras(i)` with one renderer
@@ -67,6 +121,8 @@ fn selections(
     for i in 0..frames {
         r.render(&ctx, scene, &camera(i), settings).unwrap();
         out.push(r.budget_report().expect("a budget report").selection.mask.clone());
+        let report = r.budget_report().unwrap();
+        assert_eq!(report.effects.iter().map(|&b| b != 0).collect::<Vec<_>>(), report.selection.mask);
     }
     r.destroy(&ctx);
     drop(ctx);
@@ -78,12 +134,17 @@ fn an_object_of_relevance_zero_is_never_selected() {
     let mut scene = default_scene();
     let red = scene.objects.iter().position(|o| o.name == "red cube").expect("the default scene's red cube");
     scene.objects[red].props.relevance = 0.0;
-    let settings = RenderSettings { budget: budget(f64::INFINITY, 0.0), ..Default::default() };
     let cam = scene.cameras[0].clone();
-    let sel = selections(&scene, &settings, 2, |_| cam.clone());
-    for mask in &sel {
-        assert!(!mask[red], "the K = 0 object was selected: {mask:?}");
-        assert!(mask.iter().filter(|&&m| m).count() >= 4, "an unlimited budget selects the rest: {mask:?}");
+    for b in [BudgetSettings::paper(f64::INFINITY), BudgetSettings::effects(f64::INFINITY)] {
+        let settings = RenderSettings { budget: Some(b), ..Default::default() };
+        let sel = selections(&scene, &settings, 2, |_| cam.clone());
+        for mask in &sel {
+            assert!(!mask[red], "{:?}: the K = 0 object was selected: {mask:?}", b.mode);
+            assert!(
+                mask.iter().filter(|&&m| m).count() >= 4,
+                "an unlimited budget selects the rest: {mask:?}"
+            );
+        }
     }
 }
 

@@ -315,3 +315,37 @@ fn budget_knob_spans_raster_only_to_every_object_traced() {
     assert!(same(none, base) > 0.0, "the effects show in this view");
     assert!(one.timing.pass("heuristic").is_some(), "the budget's pass is timed: {:?}", one.timing.passes);
 }
+
+/// `report --budget-paths`: every mode and share runs along the path; the
+/// full-effects run is its own reference, share 0 renders the raster-only
+/// frames in both modes (so the same error), and the effects show.
+#[test]
+fn budget_paths_span_raster_only_to_full_effects_in_both_modes() {
+    use hybrid_rt::report::budget_paths::{self, BudgetPathOptions, MODES};
+    let opts = BudgetPathOptions {
+        job: RenderJob::new(app::default_scene_path().unwrap(), 32, 18),
+        out: tmp("budget_paths"),
+        frames: 3,
+        warmup: 1,
+        shares: vec![0.0, 0.5],
+    };
+    let ctx = common::validated_context();
+    let runs = budget_paths::run(&ctx, &opts).expect("the budget paths run");
+    common::assert_validation_clean(&ctx);
+    let find = |label: &str, share: Option<f64>| {
+        runs.iter()
+            .find(|r| r.label == label && r.share == share)
+            .unwrap_or_else(|| panic!("no run {label} {share:?}"))
+    };
+    assert_eq!(runs.len(), 2 + MODES.len() * 2, "{runs:?}");
+    assert_eq!(find("full effects", None).flip_mean, 0.0, "the reference is its own run");
+    let raster = find("raster only", None);
+    assert!(raster.flip_mean > 0.0, "the effects show along the path");
+    for m in &MODES {
+        let zero = find(m.label, Some(0.0));
+        assert_eq!(zero.flip_mean, raster.flip_mean, "{}: share 0 is raster only", m.label);
+        assert!(zero.heuristic_ms > 0.0, "{}: the heuristic pass is timed", m.label);
+    }
+    let table = budget_paths::table(&opts, &ctx.caps.name, &runs);
+    assert!(table.contains("| effects | 0.50 |"), "{table}");
+}

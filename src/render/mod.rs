@@ -681,6 +681,12 @@ impl Renderer {
         self.budget.after_frame(&self.gpu, scene, camera, screen, b, timings)
     }
 
+    /// Makes the next frame under `budget` trace the effects `bits` (EFFECT_*
+    /// bits per object) instead of what the heuristic chose.
+    pub fn set_budget_selection(&mut self, budget: &budget::BudgetSettings, bits: Vec<u32>) {
+        self.budget.set_selection(budget, bits);
+    }
+
     /// The budget's last selection and what it was made from.
     pub fn budget_report(&self) -> Option<&budget::BudgetReport> {
         self.budget.last()

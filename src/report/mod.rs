@@ -11,6 +11,7 @@
 //! `stability` (`report --stability`: stiff and extreme variants of a scene),
 //! `tone_sheet` (`report --tone-sheet`: tone operators side by side).
 
+pub mod budget_paths;
 pub mod compare;
 pub mod knobs;
 pub mod measure;

@@ -1,5 +1,6 @@
 //! `error_vs_time.png`: ꟻLIP mean against median GPU frame ms (log axis),
-//! one series per knob, the Pareto front over all settings marked. Drawn
+//! one series per knob, the Pareto front over all settings marked; and
+//! [`curves`], a plain line chart of labelled series. Drawn
 //! with `plotters` into a buffer saved by `image`; text through ab_glyph
 //! from a TTF file (DejaVu Sans, Debian's fonts-dejavu-core).
 
@@ -202,6 +203,79 @@ pub fn significant(v: f64, digits: i32) -> String {
     } else {
         s
     }
+}
+
+/// A labelled series of (x, y, point label) for [`curves`].
+pub struct Series {
+    pub label: String,
+    pub points: Vec<(f64, f64, String)>,
+}
+
+/// A plain line chart: one coloured series per entry (points labelled),
+/// linear axes from 0, to `path` (PNG).
+pub fn curves(path: &Path, title: &str, x_desc: &str, y_desc: &str, series: &[Series]) -> Result<()> {
+    register_font()?;
+    let all = || series.iter().flat_map(|s| &s.points).filter(|p| p.0.is_finite() && p.1.is_finite());
+    let xmax = all().fold(0.0f64, |m, p| m.max(p.0)).max(1e-3) * 1.1;
+    let ymax = all().fold(0.0f64, |m, p| m.max(p.1)).max(1e-4) * 1.15;
+    let mut buf = vec![255u8; (W * H * 3) as usize];
+    draw_curves(&mut buf, title, (x_desc, y_desc), (xmax, ymax), series)
+        .map_err(|e| anyhow!("drawing {}: {e}", path.display()))?;
+    image::RgbImage::from_raw(W, H, buf)
+        .context("plot buffer size")?
+        .save(path)
+        .with_context(|| format!("writing {}", path.display()))
+}
+
+fn draw_curves(
+    buf: &mut [u8],
+    title: &str,
+    (x_desc, y_desc): (&str, &str),
+    (xmax, ymax): (f64, f64),
+    series: &[Series],
+) -> DrawResult {
+    let root = BitMapBackend::with_buffer(buf, (W, H)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 24))
+        .margin(16)
+        .x_label_area_size(56)
+        .y_label_area_size(80)
+        .build_cartesian_2d(0.0..xmax, 0.0..ymax)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .axis_desc_style(("sans-serif", 18))
+        .label_style(("sans-serif", 14))
+        .x_label_formatter(&|v| significant(*v, 3))
+        .y_label_formatter(&|v| format!("{v:.4}"))
+        .draw()?;
+    for (k, s) in series.iter().enumerate() {
+        let (r, g, b) = SERIES_COLORS[k % SERIES_COLORS.len()];
+        let color = RGBColor(r, g, b).to_rgba();
+        let mut pts: Vec<&(f64, f64, String)> =
+            s.points.iter().filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart
+            .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1)), color.stroke_width(2)))?
+            .label(s.label.clone())
+            .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+        chart.draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 5, color.filled())))?;
+        chart.draw_series(pts.iter().map(|p| {
+            EmptyElement::at((p.0, p.1))
+                + Text::new(p.2.clone(), (8, -20), ("sans-serif", 15).into_font().color(&color))
+        }))?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 15))
+        .draw()?;
+    root.present()?;
+    Ok(())
 }
 
 #[cfg(test)]

@@ -91,6 +91,13 @@ impl BudgetState {
         self.last.as_ref()
     }
 
+    /// Sets the selection the next frame under `settings` honours (EFFECT_*
+    /// bits per object) in place of the heuristic's: to check the passes
+    /// honour any selection, and to replay one.
+    pub fn set_selection(&mut self, settings: &BudgetSettings, bits: Vec<u32>) {
+        self.mask = Some((*settings, bits));
+    }
+
     /// Effects mode's cost model.
     pub fn model(&self) -> &effects::CostModel {
         &self.model
