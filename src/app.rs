@@ -264,6 +264,12 @@ pub fn render_command(
     with_context(gpu, |ctx| {
         let frame = render_once(ctx, job)?;
         print_timings(&frame.timings);
+        if frame.cold && ctx.caps.device_type == ash::vk::PhysicalDeviceType::CPU {
+            log::info!(
+                "GPU: these are the passes' first frame: on a software device they include compiling the \
+                 shaders (bench warms up before it measures)"
+            );
+        }
         let written = write_outputs(&frame, out, hdr_out, strict);
         // A validation error explains a broken frame better than its pixels.
         check_validation(ctx)?;

@@ -142,6 +142,9 @@ pub struct FrameOutput {
     pub bad_pixels: u32,
     /// What auto exposure measured and applied (None: fixed exposure).
     pub exposure: Option<ExposureState>,
+    /// The first frame of its passes: a driver that compiles shaders on
+    /// first use (lavapipe) did so inside `timings`.
+    pub cold: bool,
 }
 
 /// A pass of the current frame with what it declared.
@@ -477,6 +480,12 @@ impl Renderer {
             self.passes.push(Recorded { name: desc.name, uses, pass });
         }
         self.passes_new = true;
+        if ctx.caps.device_type == vk::PhysicalDeviceType::CPU {
+            log::info!(
+                "frame: compiling shaders: a software device compiles each pipeline on first use, inside the \
+                 first frame (seconds per variant the first time; Mesa keeps them in its disk cache)"
+            );
+        }
         log::info!("frame: {} ({})", config.describe(), config.backend_reason(ctx, settings.backend));
         log::info!("frame: passes {}", self.pass_names().join(" -> "));
         if !left_out.is_empty() {
@@ -661,6 +670,7 @@ impl Renderer {
             truncated_pixels,
             bad_pixels,
             exposure,
+            cold: self.recorded_cold,
         })
     }
 

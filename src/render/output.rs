@@ -19,6 +19,7 @@ impl FrameOutput {
             truncated_pixels: 0,
             bad_pixels: 0,
             exposure: None,
+            cold: false,
         }
     }
 

@@ -114,6 +114,7 @@ pub fn downsample(large: &FrameOutput, ss: &Supersample) -> FrameOutput {
         truncated_pixels: large.truncated_pixels,
         bad_pixels: large.bad_pixels,
         exposure: large.exposure,
+        cold: large.cold,
     }
 }
 
