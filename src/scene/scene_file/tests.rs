@@ -460,6 +460,8 @@ fn semantic_errors_are_reported() {
         ("[[object]]\nname = \"s\"\nprimitive = \"sphere\"\nsize = 1\n", "a sphere takes `radius`"),
         ("[environment]\ncolor = [1, 1, 1]\nhdr = \"sky.hdr\"\n", "either `color` or `hdr`"),
         ("[environment]\nhdr = \"sky.hdr\"\n", "sky.hdr"),
+        ("[environment]\nlayout = \"angular\"\n", "[environment]: `layout` needs an `hdr` map"),
+        ("[environment]\nhdr = \"sky.hdr\"\nlayout = \"cube\"\n", "unknown variant `cube`"),
         ("[[object]]\nname = \"x\"\nprimitive = \"cube\"\nscale = 0\n", "scale must be finite and non-zero"),
     ];
     for (i, (text, expected)) in cases.iter().enumerate() {
