@@ -23,8 +23,11 @@ vec3 environment(vec3 dir) {
 // The environment's irradiance E(n) = ∫ L(w) max(0, n·w) dw from its SH
 // coefficients (scene/sh, 3 bands). The basis is scene/sh/basis.rs's, in
 // its frame x = -n.z, y = n.x, z = n.y (polar angle from +Y, azimuth
-// atan2(n.x, -n.z), the map's own). Not clamped: the windowed projection
-// keeps it non-negative on the shipped maps (tests/ibl.rs checks a sun).
+// atan2(n.x, -n.z), the map's own). The Hann-windowed projection keeps it
+// non-negative on the shipped maps (tests/ibl.rs checks the sun maps), but
+// not everywhere: light from one cap on black dips to -0.3% of the peak
+// opposite it, hence the clamp (a negative pixel would poison the
+// log-average exposure).
 vec3 sh_irradiance(vec3 n) {
     float x = -n.z, y = n.x, z = n.y;
     const float c0 = 0.5 / sqrt(PI);
@@ -40,7 +43,7 @@ vec3 sh_irradiance(vec3 n) {
     for (uint i = 0u; i < SH_IRRADIANCE_COEFFS; i++) {
         e += frame.sh_irradiance[i].rgb * b[i];
     }
-    return e;
+    return max(e, vec3(0.0));
 }
 
 // The radiance a Lambertian surface of albedo 1 with normal n exits under
