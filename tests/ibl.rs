@@ -280,3 +280,63 @@ fn sun_maps_give_no_negative_radiance() {
         b.finish();
     }
 }
+
+fn bin() -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_hybrid-rt"));
+    c.env("HYBRID_RT_VALIDATION", "1").args(["render", "--width", "16", "--height", "9"]);
+    c
+}
+
+/// The environment flags: bad values are usage errors naming the flag (exit
+/// 2, nothing written), a bad map an error naming --env and the file (exit
+/// 1), an angular probe must be square; good ones render.
+#[test]
+fn environment_flags() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("ibl_cli");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("x.png");
+    let square = common::write_hdr("ibl_probe_square", 32, 32, |x, _| [x as f32 / 32.0, 0.5, 0.25]);
+    let wide = plus_x_map();
+    let usage: [(&[&str], &str); 4] = [
+        (&["--env-rotation", "nan"], "--env-rotation"),
+        (&["--env-intensity", "-1"], "--env-intensity"),
+        (&["--env-layout", "angular"], "--env"),
+        (&["--ambient", "sometimes"], "--ambient"),
+    ];
+    for (args, flag) in usage {
+        let _ = std::fs::remove_file(&out);
+        let o = bin().args(args).arg("--out").arg(&out).output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(flag), "{args:?}: does not name {flag}: {stderr}");
+        assert!(!out.exists(), "{args:?}: wrote an image");
+    }
+    let missing = dir.join("missing.hdr");
+    let failing: [(Vec<std::ffi::OsString>, Vec<String>); 2] = [
+        (vec!["--env".into(), missing.clone().into()], vec!["--env".into(), missing.display().to_string()]),
+        (
+            vec!["--env".into(), wide.clone().into(), "--env-layout".into(), "angular".into()],
+            vec![wide.display().to_string(), "square".into()],
+        ),
+    ];
+    for (args, needles) in failing {
+        let o = bin().args(&args).arg("--out").arg(&out).output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        let line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("{stderr}"));
+        for n in needles {
+            assert!(line.contains(&n), "{args:?}: error does not mention '{n}': {line}");
+        }
+    }
+    for args in [
+        vec!["--env".into(), square.into_os_string(), "--env-layout".into(), "angular".into()],
+        vec!["--env".into(), wide.into_os_string(), "--env-rotation".into(), "-45".into()],
+        vec!["--env-intensity".into(), "2".into(), "--ambient".into(), "constant".into()],
+    ] {
+        let _ = std::fs::remove_file(&out);
+        let o = bin().args(&args).arg("--out").arg(&out).output().unwrap();
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(out.exists(), "{args:?}: no image");
+    }
+}
