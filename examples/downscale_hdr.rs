@@ -24,8 +24,8 @@ fn main() -> Result<()> {
             for sy in 0..f {
                 for sx in 0..f {
                     let i = (((y * f + sy) * img.width + x * f + sx) * 3) as usize;
-                    for k in 0..3 {
-                        sum[k] += img.rgb[i + k] as f64;
+                    for (s, v) in sum.iter_mut().zip(&img.rgb[i..i + 3]) {
+                        *s += *v as f64;
                     }
                 }
             }
