@@ -15,8 +15,10 @@ use crate::vk::{Context, ContextOptions, DeviceSelector, RenderDocUse};
 
 mod benchmark;
 mod budget_args;
+mod env_args;
 pub use benchmark::*;
 pub use budget_args::BudgetArgs;
+pub use env_args::{EnvArgs, EnvOverrides};
 
 /// The bundled default scene, looked for in the working directory, next to
 /// the executable (an installed copy, or `target/<profile>/` inside the
@@ -129,6 +131,8 @@ pub struct RenderJob {
     pub fps: f32,
     /// `render --supersample K`: K×K samples per pixel, filtered down.
     pub supersample: Option<Supersample>,
+    /// --env, --env-rotation, --env-intensity.
+    pub env: EnvOverrides,
 }
 
 impl RenderJob {
@@ -143,6 +147,7 @@ impl RenderJob {
             time: 0.0,
             fps: 30.0,
             supersample: None,
+            env: EnvOverrides::default(),
         }
     }
 
@@ -159,7 +164,7 @@ impl RenderJob {
 /// Loads the job's scene; with an animation, also returns its index (the
 /// scene is posed at `job.time`).
 pub(crate) fn load_posed(job: &RenderJob) -> Result<(Scene, Option<usize>)> {
-    let mut scene = Scene::load(&job.scene)?;
+    let mut scene = load_scene(job)?;
     let anim = match &job.animation {
         Some(a) => {
             let i = crate::scene::animation::find_animation(&scene, a)
@@ -170,6 +175,13 @@ pub(crate) fn load_posed(job: &RenderJob) -> Result<(Scene, Option<usize>)> {
         None => None,
     };
     Ok((scene, anim))
+}
+
+/// Loads the job's scene with the command line's environment overrides.
+pub(crate) fn load_scene(job: &RenderJob) -> Result<Scene> {
+    let mut scene = Scene::load(&job.scene)?;
+    job.env.apply(&mut scene)?;
+    Ok(scene)
 }
 
 /// The shading configuration for `settings`; a backend that `--no-rt`

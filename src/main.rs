@@ -299,6 +299,8 @@ struct ViewArgs {
     fps: Option<f32>,
     #[command(flatten)]
     budget: app::BudgetArgs,
+    #[command(flatten)]
+    env: app::EnvArgs,
 }
 
 /// Tone mapping and auto exposure (render/tone.rs).
@@ -529,11 +531,13 @@ impl ViewArgs {
                     count_rays: false,
                 },
                 budget: self.budget.settings(),
+                ambient: self.env.ambient.unwrap_or_default(),
             },
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),
             fps: self.fps.unwrap_or(30.0),
             supersample: None,
+            env: self.env.overrides(),
         })
     }
 }

@@ -355,6 +355,9 @@ fn default_scene_is_found_next_to_the_executable() {
     std::fs::copy(env!("CARGO_BIN_EXE_hybrid-rt"), &exe).unwrap();
     let scene = exe_dir.join("assets/default.toml");
     std::fs::copy(common::repo_path("assets/default.toml"), &scene).unwrap();
+    // Its environment map, which it names relative to itself.
+    let probe = "assets/potsdamer_platz_512.hdr";
+    std::fs::copy(common::repo_path(probe), exe_dir.join(probe)).unwrap();
     let cwd = d.join("elsewhere");
     std::fs::create_dir_all(&cwd).unwrap();
     let out = Command::new(&exe)

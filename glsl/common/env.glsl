@@ -20,4 +20,40 @@ vec3 environment(vec3 dir) {
     return frame.env_color * frame.env_intensity;
 }
 
+// The environment's irradiance E(n) = ∫ L(w) max(0, n·w) dw from its SH
+// coefficients (scene/sh, 3 bands). The basis is scene/sh/basis.rs's, in
+// its frame x = -n.z, y = n.x, z = n.y (polar angle from +Y, azimuth
+// atan2(n.x, -n.z), the map's own). The Hann-windowed projection keeps it
+// non-negative on the shipped maps (tests/ibl.rs checks the sun maps), but
+// not everywhere: light from one cap on black dips to -0.3% of the peak
+// opposite it, hence the clamp (a negative pixel would poison the
+// log-average exposure).
+vec3 sh_irradiance(vec3 n) {
+    float x = -n.z, y = n.x, z = n.y;
+    const float c0 = 0.5 / sqrt(PI);
+    const float c1 = sqrt(3.0 / (4.0 * PI));
+    const float c2 = 0.5 * sqrt(15.0 / PI);
+    const float c20 = 0.25 * sqrt(5.0 / PI);
+    const float c22 = 0.25 * sqrt(15.0 / PI);
+    float b[SH_IRRADIANCE_COEFFS] = float[](
+        c0,
+        -c1 * y, c1 * z, -c1 * x,
+        c2 * x * y, -c2 * y * z, c20 * (3.0 * z * z - 1.0), -c2 * x * z, c22 * (x * x - y * y));
+    vec3 e = vec3(0.0);
+    for (uint i = 0u; i < SH_IRRADIANCE_COEFFS; i++) {
+        e += frame.sh_irradiance[i].rgb * b[i];
+    }
+    return max(e, vec3(0.0));
+}
+
+// The radiance a Lambertian surface of albedo 1 with normal n exits under
+// the environment alone (unshadowed): E(n) / pi with FRAME_AMBIENT_SH, else
+// the map's mean radiance (or the constant colour: E = pi L).
+vec3 ambient_radiance(vec3 n) {
+    if ((frame.flags & FRAME_AMBIENT_SH) != 0u) {
+        return sh_irradiance(n) / PI;
+    }
+    return frame.env_ambient;
+}
+
 #endif

@@ -141,12 +141,13 @@ bool is_mirror(Surface s, uint depth) {
     return REFLECTIONS && effect_on(EFFECT_BIT_REFLECTIONS) && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
 }
 
-// Constant environment light on `s` (the ambient term). A mirror's specular
-// share comes from its traced reflection instead.
+// Environment light on `s` (the ambient term): the irradiance at its
+// normal (env.glsl's ambient_radiance). A mirror's specular share comes from
+// its traced reflection instead.
 vec3 ambient_light(Surface s, bool mirror) {
     vec3 f0 = surface_f0(s);
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
-    return frame.env_ambient * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
+    return ambient_radiance(s.normal) * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
 }
 
 // Pushes the reflection and refraction branches `s` spawns (weight `w`,

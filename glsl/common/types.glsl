@@ -96,6 +96,8 @@ struct Frame {
     float pad0;
     float pad1;
     float pad2;
+    // The environment's SH irradiance E_lm (rgb), with FRAME_AMBIENT_SH.
+    vec4 sh_irradiance[SH_IRRADIANCE_COEFFS];
 };
 
 #endif

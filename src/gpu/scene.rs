@@ -8,6 +8,7 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
+use super::env_sh::project_environment;
 use super::origin::RenderOrigin;
 use super::shared::{
     BUDGET_STAT_WORDS, RAY_COUNTER_SLOTS, SCENE_BUDGET_MASK, SCENE_BUDGET_STATS, SCENE_ENV_MAP,
@@ -15,8 +16,11 @@ use super::shared::{
     SCENE_RAY_COUNTERS, SCENE_TEXTURES, SCENE_VERTICES,
 };
 use super::types::*;
+use crate::scene::sh::ShCoeffs;
 use crate::scene::tangents::bounds_of;
-use crate::scene::{Aabb, AlphaMode, Filter, Instance, LightKind, SamplerDesc, Scene, TextureRef, Wrap};
+use crate::scene::{
+    Aabb, AlphaMode, Filter, HdrImage, Instance, LightKind, SamplerDesc, Scene, TextureRef, Wrap,
+};
 use crate::vk::memory::TextureDesc;
 use crate::vk::pipeline::{Binding, DescriptorSet};
 use crate::vk::{Buffer, Context, Image};
@@ -73,6 +77,8 @@ pub struct GpuScene {
     pub light_count: u32,
     /// Mean environment radiance (solid-angle weighted), for the ambient term.
     pub env_mean: Vec3,
+    /// The map's SH radiance coefficients (gpu/env_sh.rs); None without a map.
+    pub env_sh: Option<crate::scene::sh::ShCoeffs>,
     /// What the GPU's world coordinates are relative to (see origin.rs).
     pub origin: RenderOrigin,
 }
@@ -124,6 +130,7 @@ impl GpuScene {
             draws: Vec::new(),
             light_count: 0,
             env_mean: Vec3::ZERO,
+            env_sh: None,
             origin: RenderOrigin::default(),
         }
     }
@@ -221,7 +228,7 @@ impl GpuScene {
         )?;
         // No history yet (`valid` 0): the first measured frame converges at once.
         self.exposure.write(0, &[0u8; EXPOSURE_STATE_BYTES])?;
-        (self.env_map, self.env_mean) = upload_environment(ctx, scene)?;
+        (self.env_map, self.env_mean, self.env_sh) = upload_environment(ctx, scene)?;
         self.env_sampler = create_sampler(
             ctx,
             &SamplerDesc {
@@ -576,7 +583,9 @@ fn create_sampler(ctx: &Context, d: &SamplerDesc) -> Result<vk::Sampler> {
 /// filters it, so misses and the mean see the same radiance; else it is
 /// clamped to 65504 with a warning and the mean is taken over the clamped
 /// values. Without a map a 1x1 black texture keeps the descriptor valid.
-fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3)> {
+/// Also returns the SH projection of the stored texels (None without a
+/// map: no SH work).
+fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3, Option<ShCoeffs>)> {
     let env = &scene.environment;
     let Some(map) = &env.map else {
         let img = Image::texture(
@@ -587,7 +596,7 @@ fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3)> {
             &[0u8; 8],
             false,
         )?;
-        return Ok((img, env.color * env.intensity));
+        return Ok((img, env.color * env.intensity, None));
     };
     let sanitized = |v: f32| if v.is_finite() { v.max(0.0) } else { 0.0 };
     let over_half = map.rgb.iter().filter(|v| sanitized(**v) > HALF_MAX).count();
@@ -612,7 +621,15 @@ fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3)> {
         }
     }
     let stored = |c: Vec3| if wide { c } else { c.min(Vec3::splat(HALF_MAX)) };
-    let mean = equirect_mean(texels_of.map(stored), map.width, map.height) * env.intensity;
+    let mean = equirect_mean(texels_of.clone().map(stored), map.width, map.height) * env.intensity;
+    // Project what the shaders sample: a copy only when texels were changed.
+    let changed = (over_half > 0 && !wide) || map.rgb.iter().any(|v| sanitized(*v) != *v);
+    let sh = if changed {
+        let rgb = texels_of.flat_map(|c| stored(c).to_array()).collect();
+        project_environment(&HdrImage { width: map.width, height: map.height, rgb })?
+    } else {
+        project_environment(map)?
+    };
     let img = Image::texture(
         ctx,
         "environment map",
@@ -621,7 +638,7 @@ fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3)> {
         &texels,
         false,
     )?;
-    Ok((img, mean))
+    Ok((img, mean, Some(sh)))
 }
 
 const HALF_MAX: f32 = 65504.0;

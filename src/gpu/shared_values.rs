@@ -45,6 +45,13 @@ shared! {
     uint EFFECT_ALL = 7;
     // Frame.flags bits.
     uint FRAME_BUDGET = 1;
+    // The ambient term is the environment's SH irradiance
+    // (Frame.sh_irradiance) instead of the constant Frame.env_ambient.
+    uint FRAME_AMBIENT_SH = 2;
+    // Irradiance coefficients in Frame.sh_irradiance: 3 bands (l <= 2),
+    // which hold all but ~1% of a clamped-cosine convolution (Ramamoorthi &
+    // Hanrahan 2001; Â_3 = 0, |Â_4| = pi/24).
+    uint SH_IRRADIANCE_COEFFS = 9;
 
     // Set 1 of the passes that read the primary hit (render/passes): the
     // G-buffer targets first, then each pass's own images.

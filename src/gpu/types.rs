@@ -8,7 +8,7 @@ pub use super::shared::{
     ALPHA_BLEND, ALPHA_MASK, ALPHA_OPAQUE, INST_CASTS_SHADOWS, LIGHT_CASTS_SHADOWS, LIGHT_DIRECTIONAL,
     LIGHT_POINT, LIGHT_SPOT, MAT_CASTS_SHADOWS, MAT_DOUBLE_SIDED,
 };
-use super::shared::{INSTANCE_STRIDE, LIGHT_STRIDE, MATERIAL_STRIDE, VERTEX_STRIDE};
+use super::shared::{INSTANCE_STRIDE, LIGHT_STRIDE, MATERIAL_STRIDE, SH_IRRADIANCE_COEFFS, VERTEX_STRIDE};
 
 const _: () = assert!(std::mem::size_of::<crate::scene::Vertex>() == VERTEX_STRIDE as usize);
 
@@ -98,8 +98,11 @@ pub struct GpuFrame {
     pub speed_brighten: f32,
     pub speed_darken: f32,
     pub pad: [f32; 3],
+    /// Irradiance E_lm (rgb, w unused) of the environment as shaded: rotated
+    /// and scaled by its intensity; read where `flags` has FRAME_AMBIENT_SH.
+    pub sh_irradiance: [[f32; 4]; SH_IRRADIANCE_COEFFS as usize],
 }
-const _: () = assert!(std::mem::size_of::<GpuFrame>() == 384);
+const _: () = assert!(std::mem::size_of::<GpuFrame>() == 384 + 16 * SH_IRRADIANCE_COEFFS as usize);
 
 /// What the luminance pass measured and the exposure it settled on (the
 /// GPU's `ExposureState`, glsl/common/exposure.glsl).

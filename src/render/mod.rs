@@ -37,6 +37,17 @@ use targets::Targets;
 use tone::{ExposureState, ToneOperator, ToneSettings};
 use tracer::Tracer;
 
+/// How the ambient term lights surfaces from an environment map.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum AmbientMode {
+    /// The map's irradiance at the surface normal, from its 3-band SH
+    /// projection (gpu/env_sh.rs).
+    #[default]
+    Sh,
+    /// The map's mean radiance for every normal (the behaviour before SH).
+    Constant,
+}
+
 /// G-buffer debug views (also selectable in the viewer).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum DebugView {
@@ -80,6 +91,9 @@ pub struct RenderSettings {
     pub aa: AaMode,
     /// Per-object ray-tracing budget (None: every object is traced).
     pub budget: Option<budget::BudgetSettings>,
+    /// Diffuse environment light with a map (without one it is the
+    /// constant colour either way).
+    pub ambient: AmbientMode,
 }
 
 impl Default for RenderSettings {
@@ -93,6 +107,7 @@ impl Default for RenderSettings {
             backend: Backend::Auto,
             aa: AaMode::Edge,
             budget: None,
+            ambient: AmbientMode::Sh,
         }
     }
 }
@@ -520,6 +535,16 @@ impl Renderer {
         let proj = camera.projection(aspect);
         let view_proj = proj * view;
         let env = &scene.environment;
+        // No map: no SH (the constant colour's irradiance is pi L, exactly
+        // the constant ambient).
+        let sh = match (settings.ambient, &self.gpu.env_sh) {
+            (AmbientMode::Sh, Some(sh)) => Some(crate::gpu::env_sh::irradiance_uniform(sh, env)),
+            _ => None,
+        };
+        let mut flags = if budget_on { FRAME_BUDGET } else { 0 };
+        if sh.is_some() {
+            flags |= crate::gpu::shared::FRAME_AMBIENT_SH;
+        }
         let frame = GpuFrame {
             view: view.to_cols_array(),
             proj: proj.to_cols_array(),
@@ -536,8 +561,9 @@ impl Renderer {
             debug_view: settings.debug_view.code(),
             exposure: settings.exposure,
             frame_index: self.frame_index,
-            flags: if budget_on { FRAME_BUDGET } else { 0 },
+            flags,
             znear: camera.znear,
+            sh_irradiance: sh.unwrap_or_default(),
             ..tone_uniforms(&settings.tone, self.adapt_dt)
         };
         debug_assert!(Mat4::from_cols_array(&frame.view).is_finite());

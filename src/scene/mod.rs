@@ -7,6 +7,7 @@
 
 pub mod animation;
 pub mod camera;
+pub mod env_layout;
 pub mod gltf_import;
 pub mod obj;
 pub mod primitives;
@@ -21,6 +22,7 @@ use anyhow::Result;
 use glam::{DMat4, DQuat, DVec3, Mat4, Quat, Vec3};
 
 pub use camera::Camera;
+pub use env_layout::EnvLayout;
 
 /// One vertex of the single shared vertex buffer. Position first so the
 /// acceleration-structure builds can read it in place (stride 48).

@@ -75,7 +75,7 @@ impl Viewer {
     pub(super) fn new(el: &ActiveEventLoop, opts: &ViewerOptions) -> Result<Viewer> {
         let job = &opts.job;
         let requested = validate_extent(job)?;
-        let mut scene = Scene::load(&job.scene)?;
+        let mut scene = crate::app::load_scene(job)?;
         let animation = match &job.animation {
             Some(a) => {
                 let i = crate::scene::animation::find_animation(&scene, a)?;

@@ -11,7 +11,7 @@ use toml::Spanned;
 
 use super::checks::{finite, finite3, finite3_f64, non_negative, non_negative3};
 use super::elements::{
-    check_no_shape_parameters, light_from_def, load_hdr, material_from_def, object_transform, procedural,
+    check_no_shape_parameters, light_from_def, load_env_map, material_from_def, object_transform, procedural,
 };
 use super::merge::merge;
 use super::orbit::{orbit_from_def, Orbit};
@@ -75,12 +75,16 @@ impl Builder<'_> {
         if let (Some(_), Some(hdr)) = (&env.color, &env.hdr) {
             bail!("{}: set either `color` or `hdr`, not both", self.at(hdr.span().start));
         }
+        if env.layout.is_some() && env.hdr.is_none() {
+            bail!("{}: `layout` needs an `hdr` map", context());
+        }
         if let Some(c) = env.color {
             out.color = non_negative3(c, "color").with_context(context)?;
         }
         if let Some(hdr) = env.hdr {
             let path = self.resolve(hdr.get_ref());
-            out.map = Some(load_hdr(&path).with_context(|| self.at(hdr.span().start))?);
+            let layout = env.layout.unwrap_or_default();
+            out.map = Some(load_env_map(&path, layout).with_context(|| self.at(hdr.span().start))?);
             out.map_path = Some(path);
         }
         out.intensity = non_negative(env.intensity.unwrap_or(1.0), "intensity").with_context(context)?;

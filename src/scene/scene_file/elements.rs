@@ -158,6 +158,16 @@ pub(super) fn procedural(o: &ObjectDef, kind: PrimitiveKind) -> Result<Primitive
     })
 }
 
+/// A Radiance HDR environment map in `layout`, as equirect (an angular
+/// probe is converted, `env_layout`).
+pub fn load_env_map(path: &Path, layout: crate::scene::EnvLayout) -> Result<HdrImage> {
+    let map = load_hdr(path)?;
+    match layout {
+        crate::scene::EnvLayout::Equirect => Ok(map),
+        crate::scene::EnvLayout::Angular => crate::scene::env_layout::angular_to_equirect(&map, path),
+    }
+}
+
 /// Equirectangular Radiance HDR; non-finite and negative texels (which would
 /// poison importance sampling) become 0.
 pub fn load_hdr(path: &Path) -> Result<HdrImage> {

@@ -23,7 +23,7 @@ use anyhow::{anyhow, Context, Result};
 
 use super::Scene;
 use builder::Builder;
-pub use elements::load_hdr;
+pub use elements::{load_env_map, load_hdr};
 pub use orbit::SCENE_ANIMATION;
 use schema::SceneFile;
 

@@ -27,6 +27,8 @@ pub(super) struct EnvironmentDef {
     pub(super) hdr: Option<Spanned<String>>,
     pub(super) intensity: Option<f32>,
     pub(super) rotation_deg: Option<f32>,
+    /// "equirect" (default) or "angular" (Debevec's light probe).
+    pub(super) layout: Option<crate::scene::EnvLayout>,
 }
 
 #[derive(Deserialize)]

@@ -460,6 +460,8 @@ fn semantic_errors_are_reported() {
         ("[[object]]\nname = \"s\"\nprimitive = \"sphere\"\nsize = 1\n", "a sphere takes `radius`"),
         ("[environment]\ncolor = [1, 1, 1]\nhdr = \"sky.hdr\"\n", "either `color` or `hdr`"),
         ("[environment]\nhdr = \"sky.hdr\"\n", "sky.hdr"),
+        ("[environment]\nlayout = \"angular\"\n", "[environment]: `layout` needs an `hdr` map"),
+        ("[environment]\nhdr = \"sky.hdr\"\nlayout = \"cube\"\n", "unknown variant `cube`"),
         ("[[object]]\nname = \"x\"\nprimitive = \"cube\"\nscale = 0\n", "scale must be finite and non-zero"),
     ];
     for (i, (text, expected)) in cases.iter().enumerate() {
@@ -510,7 +512,16 @@ fn default_scene_is_self_contained() {
     assert!(scene.materials.iter().any(|m| m.transmission == 1.0 && m.ior == 1.5));
     assert!(scene.materials.iter().any(|m| m.metallic == 1.0 && m.roughness <= 0.05));
     assert!((3..=4).contains(&scene.camera_path.len()));
-    assert!(scene.textures.is_empty() && scene.environment.map.is_none());
+    assert!(scene.textures.is_empty());
+    // The bundled probe (assets/potsdamer_platz_512.hdr), no other file.
+    let map = scene.environment.map.as_ref().expect("the default scene's environment map");
+    assert_eq!((map.width, map.height), (512, 256));
+    assert!(scene
+        .environment
+        .map_path
+        .as_ref()
+        .unwrap()
+        .starts_with(concat!(env!("CARGO_MANIFEST_DIR"), "/assets")));
 }
 
 #[test]

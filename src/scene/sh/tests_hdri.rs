@@ -265,25 +265,28 @@ fn venice_sunset_window_minimum() {
     assert!(mins[1].1 >= 0.0, "Hann-windowed L2 of venice_sunset goes negative: {}", mins[1].1);
 }
 
-/// Projection time of a 1024x512 map for both integrators (CPU, one thread,
-/// this build's profile; the dev profile builds this crate at opt-level 1).
+/// Projection time of each shipped 1024x512 map for both integrators (CPU,
+/// one thread, this build's profile; the dev profile builds this crate at
+/// opt-level 1); bench/results/ibl.md records them.
 #[test]
 fn projection_timings() {
-    let img = load("empty_warehouse_01_1k");
-    for bands in [3, 8] {
-        let p = raw(bands);
-        let t = Instant::now();
-        let q = project_quadrature(&img, &p).unwrap();
-        let tq = t.elapsed();
-        // 724^2 = 524k samples, as many as the map has texels.
-        let t = Instant::now();
-        let m = project_monte_carlo(&img, &p, 724, 1).unwrap();
-        let tm = t.elapsed();
-        assert!(q.coeffs()[0][0] > 0.0 && m.coeffs()[0][0] > 0.0);
-        println!(
-            "1024x512, {bands} bands: quadrature {:.0} ms, Monte-Carlo 724^2 {:.0} ms",
-            tq.as_secs_f64() * 1e3,
-            tm.as_secs_f64() * 1e3
-        );
+    for name in MAPS {
+        let img = load(name);
+        for bands in [3, 8] {
+            let p = raw(bands);
+            let t = Instant::now();
+            let q = project_quadrature(&img, &p).unwrap();
+            let tq = t.elapsed();
+            // 724^2 = 524k samples, as many as the map has texels.
+            let t = Instant::now();
+            let m = project_monte_carlo(&img, &p, 724, 1).unwrap();
+            let tm = t.elapsed();
+            assert!(q.coeffs()[0][0] > 0.0 && m.coeffs()[0][0] > 0.0);
+            println!(
+                "{name} 1024x512, {bands} bands: quadrature {:.0} ms, Monte-Carlo 724^2 {:.0} ms",
+                tq.as_secs_f64() * 1e3,
+                tm.as_secs_f64() * 1e3
+            );
+        }
     }
 }

@@ -1,0 +1,87 @@
+//! The command-line options of the environment light (image-based lighting),
+//! shared by render, bench, report and view: a map replacing the scene's,
+//! its layout, rotation and intensity, and how the ambient term uses it.
+
+use std::path::PathBuf;
+
+use anyhow::{Context as _, Result};
+use clap::Args;
+
+use crate::render::AmbientMode;
+use crate::scene::{scene_file::load_env_map, EnvLayout, Scene};
+
+/// The environment overrides (the scene file's [environment] otherwise).
+#[derive(Args, Clone, Debug, Default)]
+pub struct EnvArgs {
+    /// Radiance .hdr environment map replacing (or adding) the scene's.
+    #[arg(long, value_name = "PATH")]
+    pub env: Option<PathBuf>,
+    /// With --env: how the image maps directions (angular: Debevec's
+    /// square light probe, converted to equirect on load) [default: equirect].
+    #[arg(long, value_enum, requires = "env")]
+    pub env_layout: Option<EnvLayout>,
+    /// Rotation of the environment about +Y in degrees (finite), replacing
+    /// the scene's `rotation_deg`.
+    #[arg(long, value_name = "DEG", value_parser = parse_rotation, allow_hyphen_values = true)]
+    pub env_rotation: Option<f32>,
+    /// Environment radiance multiplier (finite, >= 0), replacing the scene's
+    /// `intensity`.
+    #[arg(long, value_name = "X", value_parser = parse_intensity, allow_hyphen_values = true)]
+    pub env_intensity: Option<f32>,
+    /// Diffuse environment light: sh (the map's irradiance, per normal, from
+    /// its spherical-harmonic projection) or constant (the map's mean
+    /// radiance for every normal) [default: sh].
+    #[arg(long, value_enum)]
+    pub ambient: Option<AmbientMode>,
+}
+
+/// What [`EnvArgs`] changes in a loaded scene.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EnvOverrides {
+    pub map: Option<(PathBuf, EnvLayout)>,
+    /// Degrees.
+    pub rotation_deg: Option<f32>,
+    pub intensity: Option<f32>,
+}
+
+impl EnvArgs {
+    pub fn overrides(&self) -> EnvOverrides {
+        EnvOverrides {
+            map: self.env.clone().map(|p| (p, self.env_layout.unwrap_or_default())),
+            rotation_deg: self.env_rotation,
+            intensity: self.env_intensity,
+        }
+    }
+}
+
+impl EnvOverrides {
+    /// Applies the overrides to `scene`; errors name the flag.
+    pub fn apply(&self, scene: &mut Scene) -> Result<()> {
+        if let Some((path, layout)) = &self.map {
+            let map = load_env_map(path, *layout).with_context(|| format!("--env {}", path.display()))?;
+            scene.environment.map = Some(map);
+            scene.environment.map_path = Some(path.clone());
+        }
+        if let Some(deg) = self.rotation_deg {
+            scene.environment.rotation = deg.to_radians();
+        }
+        if let Some(i) = self.intensity {
+            scene.environment.intensity = i;
+        }
+        Ok(())
+    }
+}
+
+fn parse_rotation(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("'{s}': expected a finite angle in degrees")),
+    }
+}
+
+fn parse_intensity(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}': expected a finite number >= 0")),
+    }
+}
