@@ -461,12 +461,8 @@ impl ViewArgs {
                 "--fov has no effect without --look-from/--look-at (scene cameras keep their own)".into(),
             );
         }
-        if self.budget.settings().is_none()
-            && (self.budget.budget_mode.is_some() || self.budget.stickiness.is_some())
-        {
-            return Some(
-                "--budget-mode and --stickiness have no effect without --budget or --budget-ms".into(),
-            );
+        if let Some(why) = self.budget.without_budget() {
+            return Some(why.into());
         }
         if self.time.is_some() && self.animation.is_none() {
             return Some("--time has no effect without --animation".into());

@@ -1,5 +1,6 @@
 //! The per-object ray-tracing budget in paper mode (render/budget): a budget
-//! of 0 renders exactly the raster-only image and an unlimited one exactly
+//! of 0 with the paper's fallback (`--fallback none`) renders exactly the
+//! raster-only image and an unlimited one exactly
 //! the full hybrid image, on every backend; a K = 0 object is never
 //! selected; stickiness keeps the selection steady over a slow pan.
 mod common;
@@ -7,7 +8,7 @@ mod common;
 use common::BACKENDS;
 use glam::Vec3;
 use hybrid_rt::metrics::diff_stats;
-use hybrid_rt::render::budget::BudgetSettings;
+use hybrid_rt::render::budget::{BudgetSettings, Fallback};
 use hybrid_rt::render::shading::Effects;
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::{Camera, Scene};
@@ -31,7 +32,8 @@ fn zero_budget_is_raster_only_and_unlimited_is_full_hybrid_on_every_backend() {
         let none = Effects { shadows: false, reflections: false, refractions: false, ..full.effects };
         let raster = common::render_scene(&scene, W, H, &RenderSettings { effects: none, ..full });
         let hybrid = common::render_scene(&scene, W, H, &full);
-        let zero = common::render_scene(&scene, W, H, &RenderSettings { budget: budget(0.0, 0.0), ..full });
+        let paper_zero = Some(BudgetSettings { fallback: Fallback::None, ..BudgetSettings::paper(0.0) });
+        let zero = common::render_scene(&scene, W, H, &RenderSettings { budget: paper_zero, ..full });
         let inf = common::render_scene(
             &scene,
             W,

@@ -43,8 +43,11 @@ shared! {
     uint EFFECT_BIT_REFRACTIONS = 2;
     uint EFFECT_COUNT = 3;
     uint EFFECT_ALL = 7;
-    // Frame.flags bits.
+    // Frame.flags bits. FRAME_FALLBACK_RASTER (with FRAME_BUDGET): an
+    // effect the budget leaves out falls back to a raster approximation
+    // (`--fallback raster`) instead of being left out (`--fallback none`).
     uint FRAME_BUDGET = 1;
+    uint FRAME_FALLBACK_RASTER = 2;
 
     // Set 1 of the passes that read the primary hit (render/passes): the
     // G-buffer targets first, then each pass's own images.

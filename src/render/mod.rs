@@ -23,7 +23,9 @@ use glam::Mat4;
 use gpu_allocator::MemoryLocation;
 
 use crate::accel::dynamic::RebuildPolicy;
-use crate::gpu::shared::{FRAME_BUDGET, RAY_COUNTER_BAD_PIXELS, RAY_COUNTER_SLOTS, RAY_COUNTER_TRUNCATED};
+use crate::gpu::shared::{
+    FRAME_BUDGET, FRAME_FALLBACK_RASTER, RAY_COUNTER_BAD_PIXELS, RAY_COUNTER_SLOTS, RAY_COUNTER_TRUNCATED,
+};
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
@@ -527,7 +529,11 @@ impl Renderer {
             debug_view: settings.debug_view.code(),
             exposure: settings.exposure,
             frame_index: self.frame_index,
-            flags: if budget_on { FRAME_BUDGET } else { 0 },
+            flags: match settings.budget.map(|b| b.fallback) {
+                _ if !budget_on => 0,
+                Some(budget::Fallback::Raster) => FRAME_BUDGET | FRAME_FALLBACK_RASTER,
+                _ => FRAME_BUDGET,
+            },
             znear: camera.znear,
             ..tone_uniforms(&settings.tone, self.adapt_dt)
         };
