@@ -12,6 +12,7 @@
 #include "lights.glsl"
 #include "offset.glsl"
 #include "trace.glsl"
+#include "shadow_map.glsl"
 
 // Specialization constants: effects the scene does not need are compiled out.
 layout(constant_id = SPEC_SHADOWS) const bool SHADOWS = false;
@@ -74,7 +75,8 @@ bool effect_shaded(uint bit) {
 }
 
 // Direct light from every punctual light; with SHADOWS, each light that
-// casts shadows is tested with a transmittance ray. `gn` is the unit
+// casts shadows is tested with a transmittance ray, or, where the budget
+// left the pixel's shadows out under the raster fallback, its shadow map. `gn` is the unit
 // geometric normal on the viewer's side.
 vec3 direct_light(Surface s, vec3 v, vec3 gn) {
     vec3 c = vec3(0.0);
@@ -93,6 +95,16 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
                 float tmax = light.type == LIGHT_DIRECTIONAL ? RAY_TMAX : ls.distance * (1.0 - 1e-4);
                 count_ray(RAY_KIND_SHADOW);
                 contrib *= trace_shadow(o, ls.l, tmax);
+            }
+        } else if (SHADOWS && raster_fallback() && light.type != LIGHT_POINT && (light.flags & LIGHT_CASTS_SHADOWS) != 0u
+                   && max3(contrib) > 0.0) {
+            // The shadow bit is off: the shadow map instead (point lights
+            // have none and stay unshadowed).
+            bool light_side = dot(gn, ls.l) > 0.0;
+            if (!light_side && s.transmission <= 0.0) {
+                contrib = vec3(0.0);
+            } else {
+                contrib *= shadow_map_visibility(i, s.position, light_side ? gn : -gn, ls.distance);
             }
         }
         c += contrib;

@@ -5,6 +5,7 @@
 
 pub mod origin;
 pub mod scene;
+pub mod shadow_map;
 pub mod shared;
 pub mod types;
 

@@ -195,6 +195,9 @@ pub struct Renderer {
     injection: Option<inject::Injection>,
     /// The per-object ray-tracing budget's selection across frames.
     budget: budget::BudgetState,
+    /// Why this frame leaves out the `shadow_map` pass it has (None: it
+    /// records), decided in `prepare` from the budget's selection.
+    shadow_map_left_out: Option<&'static str>,
     /// The passes were (re)created since the last recorded frame, and
     /// whether the last recorded frame was their first: lavapipe compiles a
     /// shader on first use, inside the GPU timestamps, so that frame's
@@ -249,6 +252,7 @@ impl Renderer {
             adapt_dt: None,
             injection: None,
             budget: budget::BudgetState::default(),
+            shadow_map_left_out: None,
             passes_new: false,
             recorded_cold: false,
         };
@@ -508,6 +512,26 @@ impl Renderer {
         if let (true, Some(b)) = (budget_on, &settings.budget) {
             self.budget.before_frame(&mut self.gpu, b, scene.objects.len())?;
         }
+        // The shadow maps render only when some visible object's shadows are
+        // left out (a per-frame choice: the pass itself exists per config).
+        let left_out = match self.config.is_some_and(|c| c.shadow_fallback) {
+            false => None,
+            true if !self.budget.shadows_left_out() => Some("every visible object's shadows are ray-traced"),
+            true => {
+                self.gpu.shadow.write_views(scene, self.gpu.origin)?;
+                None
+            }
+        };
+        if left_out != self.shadow_map_left_out {
+            match left_out {
+                Some(why) => log::debug!("frame: left out shadow_map: {why}"),
+                None if self.config.is_some_and(|c| c.shadow_fallback) => {
+                    log::debug!("frame: shadow_map records")
+                }
+                None => {}
+            }
+            self.shadow_map_left_out = left_out;
+        }
         let camera = &Camera { world: self.gpu.origin.relative(&camera.world), ..camera.clone() };
         let view = camera.view().as_mat4();
         let proj = camera.projection(aspect);
@@ -559,6 +583,9 @@ impl Renderer {
         let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
         let cx = Cx { ctx, gpu: &self.gpu, targets: &self.targets, tracer: self.tracer.as_deref() };
         for p in &self.passes {
+            if p.name == passes::shadow_map::PASS.name && self.shadow_map_left_out.is_some() {
+                continue;
+            }
             rec.pass(p.name, p.pass.stage(), &p.uses, |cmd| {
                 p.pass.record(&cx, cmd);
                 Ok(())
