@@ -10,7 +10,7 @@ mod common;
 use hybrid_rt::metrics::diff_stats;
 use hybrid_rt::render::budget::{BudgetSettings, Fallback};
 use hybrid_rt::render::shading::Effects;
-use hybrid_rt::render::RenderSettings;
+use hybrid_rt::render::{RenderSettings, Renderer};
 
 const W: u32 = 96;
 const H: u32 = 54;
@@ -235,16 +235,24 @@ intensity = 30.0"#;
 fn the_shadow_map_pass_records_only_when_a_shadow_bit_is_off() {
     let scene = common::scene_from_toml("fallback_sun_shadow", &sphere_over_ground(SUN));
     let backend = common::BACKENDS[2];
+    // Under synchronization validation: the pass's own layout transitions
+    // and the lookups in `direct` are ordered.
+    let ctx = common::sync_validated_context();
     let records = |budget: f64, fallback| {
         let settings = RenderSettings {
             backend,
             budget: zero_budget(BudgetSettings::paper(budget), fallback),
             ..Default::default()
         };
-        let frame = common::render_scene(&scene, W, H, &settings);
-        frame.timings.iter().any(|(p, _)| *p == "shadow_map")
+        let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
+        let frame = r.render(&ctx, &scene, &scene.cameras[0], &settings).unwrap();
+        let timed: Vec<_> = frame.timings.iter().map(|(n, _)| *n).filter(|n| *n != "readback").collect();
+        assert_eq!(timed, r.pass_names(), "the frame's pass list is what it timed");
+        r.destroy(&ctx);
+        timed.contains(&"shadow_map")
     };
     assert!(records(0.0, Fallback::Raster), "budget 0: the shadow map is needed and not recorded");
     assert!(!records(f64::INFINITY, Fallback::Raster), "budget inf: every shadow traced, yet a shadow map");
     assert!(!records(0.0, Fallback::None), "--fallback none rendered a shadow map");
+    common::assert_validation_clean(&ctx);
 }

@@ -153,6 +153,14 @@ struct Recorded {
     pass: Box<dyn Pass>,
 }
 
+/// Whether the current frame leaves out its pass `name`: the passes are
+/// made per configuration, but `shadow_map` records only in frames whose
+/// selection leaves some visible object's shadows out (`shadow_map_left_out`
+/// says why not).
+fn left_out_this_frame(name: &str, shadow_map_left_out: Option<&str>) -> bool {
+    name == passes::shadow_map::PASS.name && shadow_map_left_out.is_some()
+}
+
 /// The readback and the viewer's blit copy these out of the frame: its
 /// final LDR image (anti-aliased, or tone mapping's) and the radiance.
 fn outputs(config: &ShadingConfig) -> [Use; 2] {
@@ -436,7 +444,8 @@ impl Renderer {
 
     /// Names of the passes the current frame records, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
-        self.passes.iter().map(|p| p.name).collect()
+        let left_out = self.shadow_map_left_out;
+        self.passes.iter().filter(|p| !left_out_this_frame(p.name, left_out)).map(|p| p.name).collect()
     }
 
     /// Makes the frame's passes, tracer and targets match `settings`. Waits
@@ -580,10 +589,11 @@ impl Renderer {
         tail: impl FnOnce(&mut Recorder, &Targets) -> Result<()>,
     ) -> Result<()> {
         anyhow::ensure!(self.config.is_some(), "prepare() must run before record()");
+        let shadow_map_left_out = self.shadow_map_left_out;
         let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
         let cx = Cx { ctx, gpu: &self.gpu, targets: &self.targets, tracer: self.tracer.as_deref() };
         for p in &self.passes {
-            if p.name == passes::shadow_map::PASS.name && self.shadow_map_left_out.is_some() {
+            if left_out_this_frame(p.name, shadow_map_left_out) {
                 continue;
             }
             rec.pass(p.name, p.pass.stage(), &p.uses, |cmd| {
