@@ -175,10 +175,23 @@ fn iou(a: &[bool], b: &[bool]) -> f64 {
     inter as f64 / union.max(1) as f64
 }
 
+/// A spot light above and beside the sphere, its cone over the ground
+/// (the perspective shadow map).
+const SPOT: &str = r#"type = "spot"
+position = [1.0, 4.0, 0.8]
+direction = [-0.25, -1.0, -0.2]
+intensity = 40.0
+inner_cone_deg = 30.0
+outer_cone_deg = 40.0"#;
+
 #[test]
 fn a_shadow_left_out_falls_back_to_a_shadow_map_matching_the_traced_one() {
-    let scene = common::scene_from_toml("fallback_sun_shadow", &sphere_over_ground(SUN));
-    for backend in common::BACKENDS {
+    let sun = common::scene_from_toml("fallback_sun_shadow", &sphere_over_ground(SUN));
+    let spot = common::scene_from_toml("fallback_spot_shadow", &sphere_over_ground(SPOT));
+    // The spot's map on one backend: the maps do not depend on it.
+    let cases =
+        common::BACKENDS.map(|b| (b, &sun, "sun")).into_iter().chain([(common::BACKENDS[2], &spot, "spot")]);
+    for (backend, scene, light) in cases {
         let full = RenderSettings { backend, ..Default::default() };
         let with =
             |fallback| RenderSettings { budget: zero_budget(BudgetSettings::paper(0.0), fallback), ..full };
@@ -193,15 +206,18 @@ fn a_shadow_left_out_falls_back_to_a_shadow_map_matching_the_traced_one() {
         let count = |m: &[bool]| m.iter().filter(|&&d| d).count();
         let score = iou(&traced, &raster);
         eprintln!(
-            "{backend:?}: shadowed ground pixels traced {}, shadow map {}, none {}; IoU {score:.3}",
+            "{backend:?} {light}: shadowed ground pixels traced {}, shadow map {}, none {}; IoU {score:.3}",
             count(&traced),
             count(&raster),
             count(&none)
         );
         // The shadow is there to compare: ~1% of the frame (143 pixels).
-        assert!(count(&traced) > 100, "{backend:?}: the traced shadow is missing");
-        assert_eq!(count(&none), 0, "{backend:?}: --fallback none drew a shadow");
-        assert!(score >= 0.9, "{backend:?}: shadow-map shadow IoU {score:.3} < 0.9 with the traced one");
+        assert!(count(&traced) > 100, "{backend:?} {light}: the traced shadow is missing");
+        assert_eq!(count(&none), 0, "{backend:?} {light}: --fallback none drew a shadow");
+        assert!(
+            score >= 0.9,
+            "{backend:?} {light}: shadow-map shadow IoU {score:.3} < 0.9 with the traced one"
+        );
     }
 }
 
