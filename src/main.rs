@@ -171,7 +171,8 @@ enum Command {
         #[arg(long, requires = "stability", value_delimiter = ',')]
         cases: Vec<String>,
         /// The ray-tracing budget along the scene's camera path instead:
-        /// paper and effects mode at these shares of the cost of tracing
+        /// paper mode, effects mode and effects mode with the raster
+        /// fallback at these shares of the cost of tracing
         /// everything (comma-separated in [0, 1]), --frames points along
         /// the path after --warmup frames at its start; frame ms, heuristic
         /// share and ꟻLIP/PSNR against full effects per run, table + plot.
@@ -477,12 +478,8 @@ impl ViewArgs {
                 "--fov has no effect without --look-from/--look-at (scene cameras keep their own)".into(),
             );
         }
-        if self.budget.settings().is_none()
-            && (self.budget.budget_mode.is_some() || self.budget.stickiness.is_some())
-        {
-            return Some(
-                "--budget-mode and --stickiness have no effect without --budget or --budget-ms".into(),
-            );
+        if let Some(why) = self.budget.without_budget() {
+            return Some(why.into());
         }
         if self.time.is_some() && self.animation.is_none() {
             return Some("--time has no effect without --animation".into());

@@ -1,7 +1,8 @@
 //! The per-object ray-tracing budget (render/budget): in paper and effects
-//! mode a budget of 0 renders exactly the raster-only image and an
-//! unlimited one exactly the full hybrid image, on every backend; each
-//! effect's selection bit gates exactly that effect; a K = 0 object is never selected;
+//! mode a budget of 0 with the paper's fallback (`--fallback none`) renders
+//! exactly the raster-only image and an unlimited one exactly the full
+//! hybrid image, on every backend; each effect's selection bit gates
+//! exactly that effect; a K = 0 object is never selected;
 //! stickiness keeps the selection steady over a slow pan.
 mod common;
 
@@ -11,7 +12,7 @@ use hybrid_rt::gpu::shared::{
     EFFECT_ALL, EFFECT_BIT_REFLECTIONS, EFFECT_BIT_REFRACTIONS, EFFECT_BIT_SHADOWS,
 };
 use hybrid_rt::metrics::diff_stats;
-use hybrid_rt::render::budget::{BudgetMode, BudgetSettings};
+use hybrid_rt::render::budget::{BudgetMode, BudgetSettings, Fallback};
 use hybrid_rt::render::shading::Effects;
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::{Camera, Scene};
@@ -40,7 +41,7 @@ fn zero_budget_is_raster_only_and_unlimited_is_full_hybrid_on_every_backend() {
         assert!(share > 0.02, "{backend:?}: the effects barely show ({:.2}%)", share * 100.0);
         for mode in [BudgetMode::Paper, BudgetMode::Effects] {
             let with = |t: f64| RenderSettings {
-                budget: Some(BudgetSettings { mode, budget: t, stickiness: 0.0 }),
+                budget: Some(BudgetSettings { mode, budget: t, stickiness: 0.0, fallback: Fallback::None }),
                 ..full
             };
             let zero = common::render_scene(&scene, W, H, &with(0.0));
@@ -73,7 +74,7 @@ fn each_effect_bit_gates_exactly_its_effect() {
     let ctx = common::validated_context();
     let n = scene.objects.len();
     let camera = scene.cameras[0].clone();
-    let b = BudgetSettings::effects(f64::INFINITY);
+    let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::effects(f64::INFINITY) };
     let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
     let none = Effects { shadows: false, reflections: false, refractions: false, ..Effects::default() };
     let with = |effects: Effects| RenderSettings { effects, ..Default::default() };

@@ -105,6 +105,8 @@ fn options_without_effect_are_usage_errors() {
     assert_usage_error(&run("bench", &["--fps", "10"], &png), "--fps", "--fps without --animation");
     let sticky = run("render", &["--stickiness", "2"], &png);
     assert_usage_error(&sticky, "--stickiness", "--stickiness without --budget");
+    let fallback = run("render", &["--fallback", "none"], &png);
+    assert_usage_error(&fallback, "--fallback", "--fallback without --budget");
     let fps = bin()
         .args(["report", "--animation", "0", "--fps", "10", "--knobs", "max-depth", "--out"])
         .arg(tmp("noeffect").join("report"))

@@ -318,7 +318,8 @@ fn budget_knob_spans_raster_only_to_every_object_traced() {
 
 /// `report --budget-paths`: every mode and share runs along the path; the
 /// full-effects run is its own reference, share 0 renders the raster-only
-/// frames in both modes (so the same error), and the effects show.
+/// frames in the modes without fallback (so the same error), and the
+/// effects show.
 #[test]
 fn budget_paths_span_raster_only_to_full_effects_in_both_modes() {
     use hybrid_rt::report::budget_paths::{self, BudgetPathOptions, MODES};
@@ -343,7 +344,9 @@ fn budget_paths_span_raster_only_to_full_effects_in_both_modes() {
     assert!(raster.flip_mean > 0.0, "the effects show along the path");
     for m in &MODES {
         let zero = find(m.label, Some(0.0));
-        assert_eq!(zero.flip_mean, raster.flip_mean, "{}: share 0 is raster only", m.label);
+        if m.fallback == hybrid_rt::render::budget::Fallback::None {
+            assert_eq!(zero.flip_mean, raster.flip_mean, "{}: share 0 is raster only", m.label);
+        }
         assert!(zero.heuristic_ms > 0.0, "{}: the heuristic pass is timed", m.label);
     }
     let table = budget_paths::table(&opts, &ctx.caps.name, &runs);

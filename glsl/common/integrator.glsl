@@ -12,6 +12,7 @@
 #include "lights.glsl"
 #include "offset.glsl"
 #include "trace.glsl"
+#include "shadow_map.glsl"
 
 // Specialization constants: effects the scene does not need are compiled out.
 layout(constant_id = SPEC_SHADOWS) const bool SHADOWS = false;
@@ -62,8 +63,20 @@ bool effect_on(uint bit) {
     return ((g_effects >> bit) & 1u) != 0u;
 }
 
+// `--fallback raster`: an effect the budget leaves out is approximated
+// without rays instead of left out (render/budget's Fallback).
+bool raster_fallback() {
+    return (frame.flags & FRAME_FALLBACK_RASTER) != 0u;
+}
+
+// Whether `bit` is shaded at all: traced, or its raster fallback.
+bool effect_shaded(uint bit) {
+    return effect_on(bit) || raster_fallback();
+}
+
 // Direct light from every punctual light; with SHADOWS, each light that
-// casts shadows is tested with a transmittance ray. `gn` is the unit
+// casts shadows is tested with a transmittance ray, or, where the budget
+// left the pixel's shadows out under the raster fallback, its shadow map. `gn` is the unit
 // geometric normal on the viewer's side.
 vec3 direct_light(Surface s, vec3 v, vec3 gn) {
     vec3 c = vec3(0.0);
@@ -82,6 +95,16 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
                 float tmax = light.type == LIGHT_DIRECTIONAL ? RAY_TMAX : ls.distance * (1.0 - 1e-4);
                 count_ray(RAY_KIND_SHADOW);
                 contrib *= trace_shadow(o, ls.l, tmax);
+            }
+        } else if (SHADOWS && raster_fallback() && light.type != LIGHT_POINT && (light.flags & LIGHT_CASTS_SHADOWS) != 0u
+                   && max3(contrib) > 0.0) {
+            // The shadow bit is off: the shadow map instead (point lights
+            // have none and stay unshadowed).
+            bool light_side = dot(gn, ls.l) > 0.0;
+            if (!light_side && s.transmission <= 0.0) {
+                contrib = vec3(0.0);
+            } else {
+                contrib *= shadow_map_visibility(i, s.position, light_side ? gn : -gn, ls.distance);
             }
         }
         c += contrib;
@@ -105,6 +128,9 @@ struct Branch {
     uint depth;
     Cone cone;
     uint effect;  // EFFECT_BIT_* of the chain it belongs to
+    // The budget left its effect out (raster fallback): not traced, the
+    // environment in its direction stands for whatever it would have hit.
+    bool env_only;
 };
 
 Branch g_stack[BRANCH_STACK_SIZE];
@@ -117,7 +143,7 @@ void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone, uint effect) {
     // MIN_WEIGHT of their radiance are not traced.
     if (max3(w) >= MIN_WEIGHT && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
         if (g_sp < int(BRANCH_STACK_SIZE)) {
-            g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone, effect);
+            g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone, effect, !effect_on(effect));
             g_sp++;
         } else {
             g_truncated = true;
@@ -136,14 +162,15 @@ float face_viewer(inout Surface s, vec3 v) {
     return nv;
 }
 
-// Whether `s` spawns a mirror reflection at `depth`.
+// Whether `s` spawns a mirror reflection at `depth` (traced, or its
+// environment-only fallback).
 bool is_mirror(Surface s, uint depth) {
-    return REFLECTIONS && effect_on(EFFECT_BIT_REFLECTIONS) && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
+    return REFLECTIONS && effect_shaded(EFFECT_BIT_REFLECTIONS) && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
 }
 
 // Environment light on `s` (the ambient term): the irradiance at its
 // normal (env.glsl's ambient_radiance). A mirror's specular share comes from
-// its traced reflection instead.
+// its reflection branch instead (traced, or the environment in fallback).
 vec3 ambient_light(Surface s, bool mirror) {
     vec3 f0 = surface_f0(s);
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
@@ -156,7 +183,7 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
     bool can_branch = depth < MAX_DEPTH;
     float tm = s.transmission * (1.0 - s.metallic);
     bool mirror = is_mirror(s, depth);
-    bool refract_on = REFRACTIONS && effect_on(EFFECT_BIT_REFRACTIONS) && can_branch && tm > 0.0;
+    bool refract_on = REFRACTIONS && effect_shaded(EFFECT_BIT_REFRACTIONS) && can_branch && tm > 0.0;
     if (!mirror && !refract_on) return;
     // Dielectric interface for the transmissive part; Schlick for the rest.
     vec3 f0 = surface_f0(s);
@@ -206,6 +233,13 @@ vec3 trace_branches() {
         traced++;
         g_sp--;
         Branch b = g_stack[g_sp];
+        if (b.env_only) {
+            // The fallback: the same weight, no ray (the traced image where
+            // the ray would have missed everything).
+            traced--;
+            radiance += b.weight * environment(b.dir);
+            continue;
+        }
         g_ray_effect = b.effect;
         RayHit h;
         count_ray(RAY_KIND_SECONDARY);

@@ -3,7 +3,7 @@
 
 use clap::Args;
 
-use crate::render::budget::{BudgetMode, BudgetSettings};
+use crate::render::budget::{BudgetMode, BudgetSettings, Fallback};
 
 /// The per-object ray-tracing budget (render/budget).
 #[derive(Args, Clone)]
@@ -28,6 +28,12 @@ pub struct BudgetArgs {
     /// world unit) [default: 0].
     #[arg(long, value_parser = parse_stickiness, allow_hyphen_values = true)]
     pub stickiness: Option<f32>,
+    /// What an effect the budget leaves out shows instead: raster (the
+    /// environment in the mirror / refracted direction; shadow maps for
+    /// directional and spot lights, point lights unshadowed) or none (no
+    /// shadow, reflection or refraction) [default: raster].
+    #[arg(long, value_enum)]
+    pub fallback: Option<Fallback>,
 }
 
 impl BudgetArgs {
@@ -37,7 +43,20 @@ impl BudgetArgs {
             (None, Some(ms)) => (BudgetMode::Effects, ms),
             (None, None) => return None,
         };
-        Some(BudgetSettings { mode, budget, stickiness: self.stickiness.unwrap_or(0.0) })
+        Some(BudgetSettings {
+            mode,
+            budget,
+            stickiness: self.stickiness.unwrap_or(0.0),
+            fallback: self.fallback.unwrap_or_default(),
+        })
+    }
+
+    /// Budget options given without a budget (they would change nothing).
+    pub fn without_budget(&self) -> Option<&'static str> {
+        let extra = self.budget_mode.is_some() || self.stickiness.is_some() || self.fallback.is_some();
+        (self.settings().is_none() && extra).then_some(
+            "--budget-mode, --stickiness and --fallback have no effect without --budget or --budget-ms",
+        )
     }
 }
 

@@ -6,6 +6,7 @@
 pub mod env_sh;
 pub mod origin;
 pub mod scene;
+pub mod shadow_map;
 pub mod shared;
 pub mod types;
 

@@ -10,10 +10,11 @@ use gpu_allocator::MemoryLocation;
 
 use super::env_sh::project_environment;
 use super::origin::RenderOrigin;
+use super::shadow_map::ShadowMaps;
 use super::shared::{
     BUDGET_STAT_WORDS, RAY_COUNTER_SLOTS, SCENE_BUDGET_MASK, SCENE_BUDGET_STATS, SCENE_ENV_MAP,
     SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS, SCENE_MATERIALS,
-    SCENE_RAY_COUNTERS, SCENE_TEXTURES, SCENE_VERTICES,
+    SCENE_RAY_COUNTERS, SCENE_SHADOW_MAPS, SCENE_SHADOW_VIEWS, SCENE_TEXTURES, SCENE_VERTICES,
 };
 use super::types::*;
 use crate::scene::sh::ShCoeffs;
@@ -65,6 +66,8 @@ pub struct GpuScene {
     samplers: Vec<(SamplerDesc, vk::Sampler)>,
     pub env_map: Image,
     env_sampler: vk::Sampler,
+    /// The budget's raster shadow fallback (gpu/shadow_map.rs).
+    pub shadow: ShadowMaps,
     pub set: DescriptorSet,
     /// Indexed by mesh, then primitive.
     pub ranges: Vec<Vec<PrimitiveRange>>,
@@ -123,6 +126,7 @@ impl GpuScene {
             samplers: Vec::new(),
             env_map: Image::null(),
             env_sampler: vk::Sampler::null(),
+            shadow: ShadowMaps::null(),
             set: DescriptorSet::null(),
             ranges: Vec::new(),
             skinned: Vec::new(),
@@ -229,6 +233,7 @@ impl GpuScene {
         // No history yet (`valid` 0): the first measured frame converges at once.
         self.exposure.write(0, &[0u8; EXPOSURE_STATE_BYTES])?;
         (self.env_map, self.env_mean, self.env_sh) = upload_environment(ctx, scene)?;
+        self.shadow.create(ctx, scene)?;
         self.env_sampler = create_sampler(
             ctx,
             &SamplerDesc {
@@ -255,6 +260,8 @@ impl GpuScene {
             (SCENE_EXPOSURE, Binding::one(storage)),
             (SCENE_BUDGET_STATS, Binding::one(storage)),
             (SCENE_BUDGET_MASK, Binding::one(storage)),
+            (SCENE_SHADOW_MAPS, Binding::one(sampled)),
+            (SCENE_SHADOW_VIEWS, Binding::one(storage)),
             // Bindless textures: variable-count, so the last binding.
             (
                 SCENE_TEXTURES,
@@ -275,8 +282,10 @@ impl GpuScene {
         set.write_buffer(ctx, SCENE_EXPOSURE, self.exposure.raw);
         set.write_buffer(ctx, SCENE_BUDGET_STATS, self.budget_stats.raw);
         set.write_buffer(ctx, SCENE_BUDGET_MASK, self.budget_mask.raw);
+        set.write_buffer(ctx, SCENE_SHADOW_VIEWS, self.shadow.views.raw);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         set.write_image(ctx, SCENE_ENV_MAP, 0, self.env_map.view, self.env_sampler, read);
+        set.write_image(ctx, SCENE_SHADOW_MAPS, 0, self.shadow.image.view, self.shadow.sampler, read);
         for (i, (img, tex)) in self.textures.iter().zip(&scene.textures).enumerate() {
             let s = self.samplers.iter().find(|(d, _)| *d == tex.sampler).map(|(_, s)| *s).unwrap();
             set.write_image(ctx, SCENE_TEXTURES, i as u32, img.view, s, read);
@@ -322,6 +331,7 @@ impl GpuScene {
             t.destroy(ctx);
         }
         self.env_map.destroy(ctx);
+        self.shadow.destroy(ctx);
         unsafe {
             for (_, s) in &self.samplers {
                 ctx.device.destroy_sampler(*s, None);

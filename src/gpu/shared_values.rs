@@ -31,8 +31,20 @@ shared! {
     // Frame.flags has FRAME_BUDGET.
     id SCENE_BUDGET_STATS = 9;
     id SCENE_BUDGET_MASK = 10;
+    // The budget's raster shadow fallback (gpu/shadow_map.rs): a depth
+    // array with a layer per light (rendered for directional and spot
+    // lights by the `shadow_map` pass), and each light's view-projection.
+    id SCENE_SHADOW_MAPS = 11;
+    id SCENE_SHADOW_VIEWS = 12;
     // Bindless textures: variable-count, so the last binding.
-    id SCENE_TEXTURES = 11;
+    id SCENE_TEXTURES = 13;
+    // Texels per side of a light's shadow map: at 1024 a directional light
+    // fitted to a 40 m scene puts a texel at 4 cm, under a Sponza column's
+    // detail, for 4 MiB a light (2048 quadruples memory and raster time).
+    uint SHADOW_MAP_SIZE = 1024;
+    // The receiver moves this many shadow-map texels along its normal
+    // before the lookup (normal-offset bias against acne at grazing light).
+    float SHADOW_NORMAL_OFFSET = 1.5;
     uint BUDGET_STAT_WORDS = 8;
     uint BUDGET_STAT_RAYS = 5;
     // Ray-traced effects, as bits of the budget's selection: shadow rays at
@@ -43,7 +55,9 @@ shared! {
     uint EFFECT_BIT_REFRACTIONS = 2;
     uint EFFECT_COUNT = 3;
     uint EFFECT_ALL = 7;
-    // Frame.flags bits.
+    // Frame.flags bits. FRAME_FALLBACK_RASTER (with FRAME_BUDGET): an
+    // effect the budget leaves out falls back to a raster approximation
+    // (`--fallback raster`) instead of being left out (`--fallback none`).
     uint FRAME_BUDGET = 1;
     // The ambient term is the environment's SH irradiance
     // (Frame.sh_irradiance) instead of the constant Frame.env_ambient.
@@ -52,6 +66,7 @@ shared! {
     // which hold all but ~1% of a clamped-cosine convolution (Ramamoorthi &
     // Hanrahan 2001; Â_3 = 0, |Â_4| = pi/24).
     uint SH_IRRADIANCE_COEFFS = 9;
+    uint FRAME_FALLBACK_RASTER = 4;
 
     // Set 1 of the passes that read the primary hit (render/passes): the
     // G-buffer targets first, then each pass's own images.

@@ -23,7 +23,9 @@ use glam::Mat4;
 use gpu_allocator::MemoryLocation;
 
 use crate::accel::dynamic::RebuildPolicy;
-use crate::gpu::shared::{FRAME_BUDGET, RAY_COUNTER_BAD_PIXELS, RAY_COUNTER_SLOTS, RAY_COUNTER_TRUNCATED};
+use crate::gpu::shared::{
+    FRAME_BUDGET, FRAME_FALLBACK_RASTER, RAY_COUNTER_BAD_PIXELS, RAY_COUNTER_SLOTS, RAY_COUNTER_TRUNCATED,
+};
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
@@ -169,6 +171,14 @@ struct Recorded {
     pass: Box<dyn Pass>,
 }
 
+/// Whether the current frame leaves out its pass `name`: the passes are
+/// made per configuration, but `shadow_map` records only in frames whose
+/// selection leaves some visible object's shadows out (`shadow_map_left_out`
+/// says why not).
+fn left_out_this_frame(name: &str, shadow_map_left_out: Option<&str>) -> bool {
+    name == passes::shadow_map::PASS.name && shadow_map_left_out.is_some()
+}
+
 /// The readback and the viewer's blit copy these out of the frame: its
 /// final LDR image (anti-aliased, or tone mapping's) and the radiance.
 fn outputs(config: &ShadingConfig) -> [Use; 2] {
@@ -211,6 +221,9 @@ pub struct Renderer {
     injection: Option<inject::Injection>,
     /// The per-object ray-tracing budget's selection across frames.
     budget: budget::BudgetState,
+    /// Why this frame leaves out the `shadow_map` pass it has (None: it
+    /// records), decided in `prepare` from the budget's selection.
+    shadow_map_left_out: Option<&'static str>,
     /// The passes were (re)created since the last recorded frame, and
     /// whether the last recorded frame was their first: lavapipe compiles a
     /// shader on first use, inside the GPU timestamps, so that frame's
@@ -265,6 +278,7 @@ impl Renderer {
             adapt_dt: None,
             injection: None,
             budget: budget::BudgetState::default(),
+            shadow_map_left_out: None,
             passes_new: false,
             recorded_cold: false,
         };
@@ -448,7 +462,8 @@ impl Renderer {
 
     /// Names of the passes the current frame records, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
-        self.passes.iter().map(|p| p.name).collect()
+        let left_out = self.shadow_map_left_out;
+        self.passes.iter().filter(|p| !left_out_this_frame(p.name, left_out)).map(|p| p.name).collect()
     }
 
     /// Makes the frame's passes, tracer and targets match `settings`. Waits
@@ -530,6 +545,26 @@ impl Renderer {
         if let (true, Some(b)) = (budget_on, &settings.budget) {
             self.budget.before_frame(&mut self.gpu, b, scene.objects.len())?;
         }
+        // The shadow maps render only when some visible object's shadows are
+        // left out (a per-frame choice: the pass itself exists per config).
+        let left_out = match self.config.is_some_and(|c| c.shadow_fallback) {
+            false => None,
+            true if !self.budget.shadows_left_out() => Some("every visible object's shadows are ray-traced"),
+            true => {
+                self.gpu.shadow.write_views(scene, self.gpu.origin)?;
+                None
+            }
+        };
+        if left_out != self.shadow_map_left_out {
+            match left_out {
+                Some(why) => log::debug!("frame: left out shadow_map: {why}"),
+                None if self.config.is_some_and(|c| c.shadow_fallback) => {
+                    log::debug!("frame: shadow_map records")
+                }
+                None => {}
+            }
+            self.shadow_map_left_out = left_out;
+        }
         let camera = &Camera { world: self.gpu.origin.relative(&camera.world), ..camera.clone() };
         let view = camera.view().as_mat4();
         let proj = camera.projection(aspect);
@@ -541,7 +576,11 @@ impl Renderer {
             (AmbientMode::Sh, Some(sh)) => Some(crate::gpu::env_sh::irradiance_uniform(sh, env)),
             _ => None,
         };
-        let mut flags = if budget_on { FRAME_BUDGET } else { 0 };
+        let mut flags = match settings.budget.map(|b| b.fallback) {
+            _ if !budget_on => 0,
+            Some(budget::Fallback::Raster) => FRAME_BUDGET | FRAME_FALLBACK_RASTER,
+            _ => FRAME_BUDGET,
+        };
         if sh.is_some() {
             flags |= crate::gpu::shared::FRAME_AMBIENT_SH;
         }
@@ -585,9 +624,13 @@ impl Renderer {
         tail: impl FnOnce(&mut Recorder, &Targets) -> Result<()>,
     ) -> Result<()> {
         anyhow::ensure!(self.config.is_some(), "prepare() must run before record()");
+        let shadow_map_left_out = self.shadow_map_left_out;
         let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
         let cx = Cx { ctx, gpu: &self.gpu, targets: &self.targets, tracer: self.tracer.as_deref() };
         for p in &self.passes {
+            if left_out_this_frame(p.name, shadow_map_left_out) {
+                continue;
+            }
             rec.pass(p.name, p.pass.stage(), &p.uses, |cmd| {
                 p.pass.record(&cx, cmd);
                 Ok(())

@@ -108,6 +108,9 @@ pub struct SceneNeeds {
     pub shadows: bool,
     pub reflections: bool,
     pub refractions: bool,
+    /// A directional or spot light casts shadows (the budget's raster
+    /// fallback renders shadow maps for them).
+    pub shadow_maps: bool,
     /// Triangles of the largest primitive (one BLAS each) and the instance
     /// count (TLAS entries), checked against the driver's limits.
     pub largest_primitive_triangles: u64,
@@ -128,6 +131,8 @@ impl SceneNeeds {
                 let mat = &scene.materials[m];
                 mat.transmission > 0.0 && mat.metallic < 1.0
             }),
+            shadow_maps: any_occluder
+                && scene.lights.iter().any(|l| crate::gpu::shadow_map::mapped(l) && light_is_on(l)),
             largest_primitive_triangles: scene
                 .instances
                 .iter()
@@ -228,6 +233,9 @@ pub struct ShadingConfig {
     /// effects: the `heuristic` pass runs and the ray passes honour the
     /// selection (only when something is traced, or its debug view shows).
     pub budget: bool,
+    /// The budget's raster fallback for shadows: the `shadow_map` pass
+    /// exists (it records only in frames where a shadow bit is off).
+    pub shadow_fallback: bool,
     /// Anti-aliasing after tone mapping (left out in debug views).
     pub aa: AaMode,
 }
@@ -262,7 +270,22 @@ impl ShadingConfig {
         let secondary = backend.is_some() && (effects.shadows || effects.reflections || effects.refractions);
         let budget = settings.budget.is_some()
             && (secondary || settings.debug_view == crate::render::DebugView::Selection);
-        Ok(ShadingConfig { mode, effects, backend, debug_view, needs, luminance, budget, aa: settings.aa })
+        let shadow_fallback = budget
+            && backend.is_some()
+            && effects.shadows
+            && needs.shadow_maps
+            && settings.budget.is_some_and(|b| b.fallback == crate::render::budget::Fallback::Raster);
+        Ok(ShadingConfig {
+            mode,
+            effects,
+            backend,
+            debug_view,
+            needs,
+            luminance,
+            budget,
+            shadow_fallback,
+            aa: settings.aa,
+        })
     }
 
     /// Why this backend (for the log).
@@ -326,6 +349,7 @@ mod tests {
             shadows: true,
             reflections: false,
             refractions: false,
+            shadow_maps: false,
             largest_primitive_triangles: triangles,
             instances,
         }

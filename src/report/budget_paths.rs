@@ -1,5 +1,6 @@
 //! `report --budget-paths`: the per-object ray-tracing budget's image error
 //! against run time along the scene's camera path. For each budget mode
+//! (paper; effects; effects with the raster fallback)
 //! and each share of the full cost, one renderer (so the selection, its
 //! stickiness and effects mode's cost model carry from frame to frame, as
 //! in the viewer) renders `warmup` frames at the path's start and then
@@ -20,7 +21,7 @@ use anyhow::{bail, Context as _, Result};
 use super::measure::median_p95;
 use super::metrics::{flip, psnr_hdr, HdrImage, LdrImage};
 use crate::app::{load_posed, with_context, GpuOptions, RenderJob};
-use crate::render::budget::{BudgetMode, BudgetSettings};
+use crate::render::budget::{BudgetMode, BudgetSettings, Fallback};
 use crate::render::shading::Effects;
 use crate::render::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{camera, Camera, Scene};
@@ -37,15 +38,18 @@ pub struct BudgetPathOptions {
     pub shares: Vec<f64>,
 }
 
-/// The budget modes compared; a mode's label and its settings for `t`.
+/// The budget modes compared: the paper (whole objects, no fallback),
+/// effects mode without and with the raster fallback.
 pub struct ModeRun {
     pub label: &'static str,
     pub mode: BudgetMode,
+    pub fallback: Fallback,
 }
 
-pub const MODES: [ModeRun; 2] = [
-    ModeRun { label: "paper", mode: BudgetMode::Paper },
-    ModeRun { label: "effects", mode: BudgetMode::Effects },
+pub const MODES: [ModeRun; 3] = [
+    ModeRun { label: "paper", mode: BudgetMode::Paper, fallback: Fallback::None },
+    ModeRun { label: "effects", mode: BudgetMode::Effects, fallback: Fallback::None },
+    ModeRun { label: "effects+fallback", mode: BudgetMode::Effects, fallback: Fallback::Raster },
 ];
 
 /// One run along the path.
@@ -196,7 +200,12 @@ pub fn run(ctx: &Context, opts: &BudgetPathOptions) -> Result<Vec<PathRun>> {
     for (m, mode) in MODES.iter().enumerate() {
         for (k, &share) in opts.shares.iter().enumerate() {
             let all = if mode.mode == BudgetMode::Paper { paper_all } else { ray_all };
-            let b = BudgetSettings { mode: mode.mode, budget: share * all, stickiness: 0.0 };
+            let b = BudgetSettings {
+                mode: mode.mode,
+                budget: share * all,
+                stickiness: 0.0,
+                fallback: mode.fallback,
+            };
             eprintln!(
                 "report --budget-paths [{}/{total}]: {} mode, share {share} (T = {:.3})",
                 m * opts.shares.len() + k + 1,

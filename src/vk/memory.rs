@@ -179,6 +179,33 @@ impl Image {
         mip_levels: u32,
         usage: vk::ImageUsageFlags,
     ) -> Result<Image> {
+        Image::create(ctx, name, format, extent, mip_levels, None, usage)
+    }
+
+    /// A 2D array of `layers` layers, one mip level, viewed whole as a
+    /// 2D array.
+    pub fn new_2d_array(
+        ctx: &Context,
+        name: &str,
+        format: vk::Format,
+        extent: vk::Extent2D,
+        layers: u32,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Image> {
+        Image::create(ctx, name, format, extent, 1, Some(layers), usage)
+    }
+
+    /// `array`: Some(layers) for a 2D-array view, None for a plain 2D image.
+    fn create(
+        ctx: &Context,
+        name: &str,
+        format: vk::Format,
+        extent: vk::Extent2D,
+        mip_levels: u32,
+        array: Option<u32>,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Image> {
+        let layers = array.unwrap_or(1).max(1);
         let aspect = match format {
             vk::Format::D32_SFLOAT | vk::Format::D16_UNORM => vk::ImageAspectFlags::DEPTH,
             _ => vk::ImageAspectFlags::COLOR,
@@ -188,7 +215,7 @@ impl Image {
             .format(format)
             .extent(vk::Extent3D { width: extent.width.max(1), height: extent.height.max(1), depth: 1 })
             .mip_levels(mip_levels)
-            .array_layers(1)
+            .array_layers(layers)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
@@ -223,13 +250,17 @@ impl Image {
         let view = unsafe { ctx.device.bind_image_memory(raw, a.memory(), a.offset()) }.and_then(|()| {
             let info = vk::ImageViewCreateInfo::default()
                 .image(raw)
-                .view_type(vk::ImageViewType::TYPE_2D)
+                .view_type(if array.is_some() {
+                    vk::ImageViewType::TYPE_2D_ARRAY
+                } else {
+                    vk::ImageViewType::TYPE_2D
+                })
                 .format(format)
                 .subresource_range(
                     vk::ImageSubresourceRange::default()
                         .aspect_mask(aspect)
                         .level_count(mip_levels)
-                        .layer_count(1),
+                        .layer_count(layers),
                 );
             unsafe { ctx.device.create_image_view(&info, None) }
         });

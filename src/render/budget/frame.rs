@@ -10,7 +10,9 @@ use anyhow::Result;
 
 use super::paper::{self, ObjectStats, Params, Screen, Selection};
 use super::{effects, BudgetMode, BudgetSettings};
-use crate::gpu::shared::{BUDGET_STAT_RAYS, BUDGET_STAT_WORDS, EFFECT_ALL, MIRROR_ROUGHNESS};
+use crate::gpu::shared::{
+    BUDGET_STAT_RAYS, BUDGET_STAT_WORDS, EFFECT_ALL, EFFECT_BIT_SHADOWS, MIRROR_ROUGHNESS,
+};
 use crate::gpu::GpuScene;
 use crate::scene::{Aabb, Camera, Scene};
 
@@ -96,6 +98,15 @@ impl BudgetState {
     /// honour any selection, and to replay one.
     pub fn set_selection(&mut self, settings: &BudgetSettings, bits: Vec<u32>) {
         self.mask = Some((*settings, bits));
+    }
+
+    /// Whether the frame in flight (after `before_frame`) leaves out the
+    /// shadows of an object with pixels: visible in the last statistics,
+    /// or any object before there are any.
+    pub fn shadows_left_out(&self) -> bool {
+        let visible =
+            |o: usize| self.last.as_ref().is_none_or(|r| r.objects.get(o).is_none_or(|s| s.pixels > 0));
+        self.in_flight.iter().enumerate().any(|(o, bits)| (bits >> EFFECT_BIT_SHADOWS) & 1 == 0 && visible(o))
     }
 
     /// Effects mode's cost model.

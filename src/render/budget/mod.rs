@@ -35,9 +35,10 @@
 //! arithmetic, and the host reads the statistics anyway, so no GPU sort);
 //! the next frame's `direct`, `specular` and `composite` passes honour the
 //! selection per pixel and effect (EFFECT_* bits; paper mode selects all
-//! or none): an effect left out traces no ray — exactly the raster-only
-//! shading of it (the paper's fallback). The passes also count the rays
-//! each object traced per effect, which effects mode's cost model reads.
+//! or none): an effect left out traces no ray. What it shows instead is the
+//! [`Fallback`]: the paper's (no shadow, reflection or refraction at all)
+//! or a raster approximation. The passes also count the rays each object
+//! traced per effect, which effects mode's cost model reads.
 
 pub mod effects;
 pub mod frame;
@@ -60,6 +61,21 @@ pub enum BudgetMode {
     Paper,
 }
 
+/// What an effect the budget leaves out shows instead (no ray is traced
+/// either way).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Fallback {
+    /// Reflections and refractions at the primary hit: the environment in
+    /// the mirror / refracted direction, weighted like the traced branch;
+    /// shadows of directional and spot lights: a shadow map (pass
+    /// `shadow_map`). Point lights are unshadowed.
+    #[default]
+    Raster,
+    /// The paper's fallback: raster-only shading, no shadow, reflection or
+    /// refraction at all.
+    None,
+}
+
 /// The per-object ray-tracing budget of a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BudgetSettings {
@@ -69,16 +85,19 @@ pub struct BudgetSettings {
     pub budget: f64,
     /// `I`, in the units of `V` (pixels per world unit).
     pub stickiness: f32,
+    /// What the effects left out show instead.
+    pub fallback: Fallback,
 }
 
 impl BudgetSettings {
-    /// Paper mode with budget `T` and no stickiness.
+    /// Paper mode with budget `T`, no stickiness, the raster fallback.
     pub fn paper(budget: f64) -> BudgetSettings {
-        BudgetSettings { mode: BudgetMode::Paper, budget, stickiness: 0.0 }
+        BudgetSettings { mode: BudgetMode::Paper, budget, stickiness: 0.0, fallback: Fallback::Raster }
     }
 
-    /// Effects mode with `ms` for the ray stages and no stickiness.
+    /// Effects mode with `ms` for the ray stages, no stickiness, the raster
+    /// fallback.
     pub fn effects(ms: f64) -> BudgetSettings {
-        BudgetSettings { mode: BudgetMode::Effects, budget: ms, stickiness: 0.0 }
+        BudgetSettings { mode: BudgetMode::Effects, budget: ms, stickiness: 0.0, fallback: Fallback::Raster }
     }
 }

@@ -13,6 +13,7 @@ pub mod gbuffer;
 pub mod heuristic;
 pub mod luminance;
 pub mod primary;
+pub mod shadow_map;
 pub mod specular;
 pub mod tonemap;
 
@@ -27,13 +28,15 @@ use crate::gpu::GpuScene;
 use crate::vk::Context;
 
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
-/// or camera rays) -> per-object statistics for the budget -> direct light -> reflection/refraction chain ->
+/// or camera rays) -> per-object statistics for the budget -> the budget's
+/// fallback shadow maps -> direct light -> reflection/refraction chain ->
 /// composite -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one technique). The scene update (skinning, refit, top level)
 /// comes before it, recorded by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
     gbuffer::PASS,
     primary::PASS,
     heuristic::PASS,
+    shadow_map::PASS,
     direct::PASS,
     specular::PASS,
     composite::PASS,

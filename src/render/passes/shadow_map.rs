@@ -1,0 +1,194 @@
+//! Pass `shadow_map`: the ray-tracing budget's raster shadow fallback
+//! (`--fallback raster`). Rasterizes depth from every shadow-casting
+//! directional light (orthographic, fitted to the scene's bounds) and spot
+//! light (perspective over its cone) into its layer of the scene's shadow
+//! maps (gpu/shadow_map.rs); `direct` samples them with PCF where a
+//! pixel's shadow bit is off. Point lights get none (unshadowed in the
+//! fallback). Created per configuration, recorded only in frames where
+//! some visible object's shadows are left out (`Renderer::record_with`).
+//!
+//! Bias: the rasterizer adds a slope-scaled depth bias of SLOPE_BIAS (in
+//! units of the depth change across a texel: a surface tilted away from
+//! the light moves back by about that many texels' worth of its slope),
+//! no constant bias (in D32_SFLOAT it would scale with depth's exponent);
+//! the lookup adds a normal offset (glsl/common/shadow_map.glsl). 2 was the
+//! smallest slope factor without acne on the test plane at 60° incidence.
+
+use anyhow::{Context as _, Result};
+use ash::vk;
+
+use super::{Cx, Init, Pass, PassDesc};
+use crate::gpu::shadow_map::DEPTH_FORMAT;
+use crate::render::frame::{Access, SharedBuffer, Use};
+use crate::render::shading::ShadingConfig;
+use crate::render::targets::Targets;
+use crate::vk::pipeline::{pipeline_layout, shader_module};
+use crate::vk::{image_barrier, Context};
+
+const SLOPE_BIAS: f32 = 2.0;
+
+fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    (!c.shadow_fallback).then_some(
+        "no shadow fallback: no --budget with --fallback raster, shadows or directional/spot shadow casters",
+    )
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "shadow_map",
+    skip,
+    // The shadow maps are the pass's own (transitions inside `record`).
+    uses: |_| vec![Use::buffer(SharedBuffer::Geometry, Access::VertexInput)],
+    create: |i: &Init| Ok(Box::new(ShadowMapPass::new(i)?)),
+};
+
+pub struct ShadowMapPass {
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+}
+
+impl ShadowMapPass {
+    fn new(i: &Init) -> Result<ShadowMapPass> {
+        let layout = pipeline_layout(i.ctx, "shadow_map layout", &[i.gpu.set.layout], 4)?;
+        let pipeline = create_pipeline(i.ctx, layout)
+            .inspect_err(|_| unsafe { i.ctx.device.destroy_pipeline_layout(layout, None) })?;
+        i.ctx.name(pipeline, "shadow_map depth");
+        Ok(ShadowMapPass { layout, pipeline })
+    }
+}
+
+impl Pass for ShadowMapPass {
+    fn stage(&self) -> vk::PipelineStageFlags2 {
+        vk::PipelineStageFlags2::VERTEX_SHADER
+    }
+
+    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
+        let (ctx, d, scene) = (cx.ctx, &cx.ctx.device, cx.gpu);
+        let maps = &scene.shadow;
+        let depth_stages =
+            vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS;
+        let depth_access = vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
+            | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE;
+        // Earlier frames' lookups are done before the layers are cleared.
+        image_barrier(
+            ctx,
+            cmd,
+            maps.image.raw,
+            vk::ImageAspectFlags::DEPTH,
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+            (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::NONE),
+            (depth_stages, depth_access),
+        );
+        let extent = vk::Extent2D { width: maps.size, height: maps.size };
+        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+        for &light in &maps.mapped {
+            let depth = vk::RenderingAttachmentInfo::default()
+                .image_view(maps.layer_views[light as usize])
+                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(vk::ClearValue {
+                    depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
+                });
+            let info = vk::RenderingInfo::default().render_area(area).layer_count(1).depth_attachment(&depth);
+            unsafe {
+                d.cmd_begin_rendering(cmd, &info);
+                let (w, h) = (extent.width as f32, extent.height as f32);
+                let viewport =
+                    vk::Viewport { x: 0.0, y: 0.0, width: w, height: h, min_depth: 0.0, max_depth: 1.0 };
+                d.cmd_set_viewport(cmd, 0, &[viewport]);
+                d.cmd_set_scissor(cmd, 0, &[area]);
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.layout,
+                    0,
+                    &[scene.set.set],
+                    &[],
+                );
+                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL, 0, &light.to_le_bytes());
+                d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
+                // Alpha-masked materials cast their whole surface's shadow
+                // here (no alpha test in a depth-only pass).
+                for draw in &scene.draws {
+                    d.cmd_draw_indexed(
+                        cmd,
+                        draw.range.index_count,
+                        1,
+                        draw.range.first_index,
+                        draw.range.vertex_offset as i32,
+                        draw.instance,
+                    );
+                }
+                d.cmd_end_rendering(cmd);
+            }
+        }
+        // For the lookups in this frame's `direct` (and later frames').
+        image_barrier(
+            ctx,
+            cmd,
+            maps.image.raw,
+            vk::ImageAspectFlags::DEPTH,
+            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            (depth_stages, vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE),
+            (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::SHADER_SAMPLED_READ),
+        );
+    }
+
+    fn bind(&self, _: &Context, _: &Targets) {}
+
+    fn destroy(&mut self, ctx: &Context) {
+        unsafe {
+            ctx.device.destroy_pipeline(self.pipeline, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}
+
+fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout) -> Result<vk::Pipeline> {
+    let vs = shader_module(ctx, "shadow_map.vert")?;
+    let stages = [vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::VERTEX)
+        .module(vs)
+        .name(c"main")];
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default(); // vertex pulling
+    let ia =
+        vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let vp = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+    // Both faces: a one-sided plane casts a shadow too.
+    let rs = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::NONE)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .depth_bias_enable(true)
+        .depth_bias_constant_factor(0.0)
+        .depth_bias_slope_factor(SLOPE_BIAS)
+        .line_width(1.0);
+    let ms =
+        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let ds = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(true)
+        .depth_write_enable(true)
+        .depth_compare_op(vk::CompareOp::LESS);
+    let cb = vk::PipelineColorBlendStateCreateInfo::default();
+    let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    let dyn_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
+    let mut rendering = vk::PipelineRenderingCreateInfo::default().depth_attachment_format(DEPTH_FORMAT);
+    let info = [vk::GraphicsPipelineCreateInfo::default()
+        .stages(&stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&ia)
+        .viewport_state(&vp)
+        .rasterization_state(&rs)
+        .multisample_state(&ms)
+        .depth_stencil_state(&ds)
+        .color_blend_state(&cb)
+        .dynamic_state(&dyn_state)
+        .layout(layout)
+        .push_next(&mut rendering)];
+    let r = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
+    unsafe { ctx.device.destroy_shader_module(vs, None) };
+    Ok(r.map_err(|(_, e)| e).context("create shadow_map pipeline")?[0])
+}
