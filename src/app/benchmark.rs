@@ -41,6 +41,11 @@ pub struct BenchReport {
     pub bad_pixels: u64,
     /// The auto exposure of the last measured frame (None: fixed).
     pub exposure: Option<crate::render::tone::ExposureState>,
+    /// Bytes per pixel of the G-buffer targets the run allocated.
+    pub gbuffer_bytes_per_pixel: u32,
+    /// G-buffer draws of the last measured frame: recorded, and left out
+    /// as outside the view frustum.
+    pub raster_draws: (usize, u32),
 }
 
 impl BenchReport {
@@ -83,6 +88,13 @@ impl BenchReport {
             ));
         }
         s.push_str(&format!("bad pixels (NaN/Inf radiance, shown magenta): {}\n", self.bad_pixels));
+        s.push_str(&format!("gbuffer bytes/pixel: {}\n", self.gbuffer_bytes_per_pixel));
+        let (drawn, culled) = self.raster_draws;
+        if drawn + culled as usize > 0 {
+            s.push_str(&format!(
+                "gbuffer draws (last frame): {drawn} recorded, {culled} outside the view frustum\n"
+            ));
+        }
         s
     }
 }
@@ -371,6 +383,8 @@ pub fn bench(
                 rays_first_frame: rays[k],
                 bad_pixels,
                 exposure,
+                gbuffer_bytes_per_pixel: crate::render::passes::gbuffer::bytes_per_pixel(renderer.targets()),
+                raster_draws: renderer.raster_draws(),
             });
         }
         Ok(())

@@ -4,6 +4,7 @@
 //! derives barriers, labels and timestamps from what each pass declares.
 
 pub mod budget;
+pub mod cull;
 pub mod frame;
 pub mod inject;
 pub mod kernel;
@@ -193,6 +194,8 @@ pub struct Renderer {
     injection: Option<inject::Injection>,
     /// The per-object ray-tracing budget's selection across frames.
     budget: budget::BudgetState,
+    /// The G-buffer draws of the prepared frame (frustum-culled).
+    draw_list: cull::DrawList,
 }
 
 fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
@@ -241,6 +244,7 @@ impl Renderer {
             adapt_dt: None,
             injection: None,
             budget: budget::BudgetState::default(),
+            draw_list: cull::DrawList::default(),
         };
         match r.create_resources(ctx, scene) {
             Ok(()) => Ok(r),
@@ -421,6 +425,12 @@ impl Renderer {
     }
 
     /// Names of the passes the current frame records, in order.
+    /// The G-buffer draws of the last prepared frame: (recorded, left out
+    /// as outside the view frustum). (0, 0) in pure ray-traced mode.
+    pub fn raster_draws(&self) -> (usize, u32) {
+        (self.draw_list.draws.len(), self.draw_list.culled)
+    }
+
     pub fn pass_names(&self) -> Vec<&'static str> {
         self.passes.iter().map(|p| p.name).collect()
     }
@@ -501,6 +511,12 @@ impl Renderer {
         let view = camera.view().as_mat4();
         let proj = camera.projection(aspect);
         let view_proj = proj * view;
+        // Only the raster pass draws; pure RT mode finds hits by tracing.
+        self.draw_list = if self.config.is_some_and(|c| c.mode == Mode::Hybrid) {
+            cull::draw_list(scene, &self.gpu, self.gpu.origin, &(proj.as_dmat4() * camera.view()))
+        } else {
+            cull::DrawList::default()
+        };
         let env = &scene.environment;
         let frame = GpuFrame {
             view: view.to_cols_array(),
@@ -542,7 +558,13 @@ impl Renderer {
     ) -> Result<()> {
         anyhow::ensure!(self.config.is_some(), "prepare() must run before record()");
         let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
-        let cx = Cx { ctx, gpu: &self.gpu, targets: &self.targets, tracer: self.tracer.as_deref() };
+        let cx = Cx {
+            ctx,
+            gpu: &self.gpu,
+            targets: &self.targets,
+            tracer: self.tracer.as_deref(),
+            draws: &self.draw_list,
+        };
         for p in &self.passes {
             rec.pass(p.name, p.pass.stage(), &p.uses, |cmd| {
                 p.pass.record(&cx, cmd);
