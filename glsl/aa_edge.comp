@@ -17,9 +17,10 @@
 // neighbours, in linear display values like a supersampled pixel.
 #include "common/primary_hit.glsl"
 #include "common/srgb.glsl"
+#include "common/gbuffer_pack.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(set = SET_PASS, binding = GB_NORMAL) uniform sampler2D gb_normal;
+layout(set = SET_PASS, binding = GB_NORMAL) uniform usampler2D gb_normal;
 layout(set = SET_PASS, binding = GB_HIT) uniform usampler2D gb_hit;
 layout(set = SET_PASS, binding = AA_IN, rgba8) uniform readonly image2D ldr_in;
 layout(set = SET_PASS, binding = AA_OUT, rgba8) uniform writeonly image2D ldr_out;
@@ -162,6 +163,12 @@ float neighbour_coverage(ivec2 p, ivec2 q) {
     return w;
 }
 
+// The primary hit's shading normal; 0 where the camera ray missed.
+vec3 hit_normal(ivec2 px) {
+    if (texelFetch(gb_hit, px, 0).x == 0u) return vec3(0.0);
+    return oct_decode(texelFetch(gb_normal, px, 0).x);
+}
+
 bool inside(ivec2 p) {
     return all(greaterThanEqual(p, ivec2(0))) && all(lessThan(uvec2(p), frame.resolution));
 }
@@ -171,7 +178,7 @@ void main() {
     if (!inside(px)) return;
     vec4 centre = imageLoad(ldr_in, px);
     float dc = hit_depth(px);
-    vec3 nc = texelFetch(gb_normal, px, 0).xyz;  // 0 where the ray missed
+    vec3 nc = hit_normal(px);
     float depth[8];
     bool in_frame[8];
     float normal_sum = 0.0;
@@ -179,7 +186,7 @@ void main() {
         ivec2 q = px + NEIGHBOURS[k];
         in_frame[k] = inside(q);
         depth[k] = in_frame[k] ? hit_depth(q) : dc;
-        vec3 dn = in_frame[k] ? texelFetch(gb_normal, q, 0).xyz - nc : vec3(0.0);
+        vec3 dn = in_frame[k] ? hit_normal(q) - nc : vec3(0.0);
         normal_sum += dot(dn, dn);
     }
     // Depth: a slanted plane changes depth by the same step every pixel,

@@ -5,6 +5,7 @@
 #define MAT_SAMPLE(index, uv, fallback) sample_tex(index, uv, fallback)
 #include "common/material.glsl"
 #include "common/srgb.glsl"
+#include "common/gbuffer_pack.glsl"
 
 layout(constant_id = SPEC_ALPHA_TEST) const bool ALPHA_TEST = false;
 
@@ -14,10 +15,10 @@ layout(location = 2) in vec2 v_uv;
 layout(location = 3) flat in uint v_instance;
 
 layout(location = 0) out vec4 o_albedo;    // rgb base colour (sRGB-encoded), a occlusion
-layout(location = 1) out vec4 o_normal;    // xyz world shading normal, w roughness
-layout(location = 2) out vec4 o_material;  // r metallic, g transmission, b (ior-1)/2
-layout(location = 3) out vec4 o_emissive;  // rgb emitted radiance
-layout(location = 4) out uvec2 o_hit;      // instance + 1, primitive
+layout(location = 1) out uint o_normal;    // world shading normal, octahedral (gbuffer_pack.glsl)
+layout(location = 2) out vec4 o_material;  // r metallic, g roughness, b transmission
+layout(location = 3) out uvec2 o_hit;      // instance + 1, primitive
+// No emission target: readers look it up from the material at the hit.
 
 void main() {
     Instance inst = instances[v_instance];
@@ -34,8 +35,7 @@ void main() {
     n = apply_normal_map(m, v_uv, n, v_tangent);
 
     o_albedo = vec4(srgb_encode(s.base_color), s.occlusion);
-    o_normal = vec4(n, s.roughness);
-    o_material = vec4(s.metallic, s.transmission, clamp((s.ior - 1.0) * 0.5, 0.0, 1.0), 0.0);
-    o_emissive = vec4(s.emissive, 0.0);
+    o_normal = oct_encode(n);
+    o_material = vec4(s.metallic, s.roughness, s.transmission, 0.0);
     o_hit = uvec2(v_instance + 1u, uint(gl_PrimitiveID));
 }

@@ -196,9 +196,9 @@ fn a_shadow_left_out_falls_back_to_a_shadow_map_matching_the_traced_one() {
         let with =
             |fallback| RenderSettings { budget: zero_budget(BudgetSettings::paper(0.0), fallback), ..full };
         let flat = RenderSettings { effects: Effects { shadows: false, ..full.effects }, ..full };
-        let unshadowed = common::render_scene(&scene, SW, SH, &flat);
+        let unshadowed = common::render_scene(scene, SW, SH, &flat);
         let mask = |s: &RenderSettings| {
-            ground_shadow_mask(&scene, &common::render_scene(&scene, SW, SH, s), &unshadowed)
+            ground_shadow_mask(scene, &common::render_scene(scene, SW, SH, s), &unshadowed)
         };
         let traced = mask(&full);
         let raster = mask(&with(Fallback::Raster));

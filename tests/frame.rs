@@ -116,3 +116,54 @@ material = "clay"
     assert!(!targets.contains(&"direct light"), "{targets:?}");
     common::assert_validation_clean(&ctx);
 }
+
+/// The G-buffer is 24 bytes a pixel with the primary-hit target and the
+/// depth buffer (albedo 4, octahedral normal 4, material 4, hit 8, depth 4;
+/// no emission target), 20 in pure ray-traced mode (no depth buffer); and a
+/// scene that needs no secondary effect allocates fewer targets in all.
+#[test]
+fn gbuffer_is_24_bytes_per_pixel_and_an_effect_free_frame_allocates_less() {
+    use hybrid_rt::render::passes::gbuffer;
+    let ctx = common::validated_context();
+    let extent = ash::vk::Extent2D { width: 48, height: 27 };
+    let frame = |scene: &Scene, s: &RenderSettings| {
+        let mut r = Renderer::new(&ctx, scene, extent).unwrap();
+        r.render(&ctx, scene, &scene.cameras[0], s).unwrap();
+        let described = r.targets().describe();
+        let bpp = gbuffer::bytes_per_pixel(r.targets());
+        r.destroy(&ctx);
+        (described, bpp)
+    };
+    let scene = Scene::load(&common::repo_path("assets/default.toml")).unwrap();
+    let hybrid = RenderSettings { backend: Backend::Compute, ..Default::default() };
+    let (targets, bpp) = frame(&scene, &hybrid);
+    let names: Vec<_> = targets.iter().map(|(n, _)| *n).collect();
+    let gbuffer: Vec<_> = targets.iter().filter(|(n, _)| n.starts_with("gbuffer ")).collect();
+    assert_eq!(
+        gbuffer.iter().map(|(n, b)| (*n, *b)).collect::<Vec<_>>(),
+        [
+            ("gbuffer albedo+occlusion", 4),
+            ("gbuffer normal (octahedral)", 4),
+            ("gbuffer metallic+roughness+transmission", 4),
+            ("gbuffer hit (instance, primitive)", 8),
+            ("gbuffer depth (reversed-Z)", 4),
+        ],
+        "{names:?}"
+    );
+    assert_eq!(bpp, 24);
+    let (_, rt_bpp) = frame(&scene, &RenderSettings { mode: Mode::Rt, ..hybrid });
+    assert_eq!(rt_bpp, 20, "pure RT: the same targets but the depth buffer");
+
+    let mut plain = hybrid;
+    plain.effects.shadows = false;
+    plain.effects.reflections = false;
+    plain.effects.refractions = false;
+    let (plain_targets, plain_bpp) = frame(&scene, &plain);
+    assert_eq!(plain_bpp, 24);
+    let all = |t: &[(&str, u32)]| t.iter().map(|(_, b)| b).sum::<u32>();
+    assert!(
+        plain_targets.len() < targets.len() && all(&plain_targets) < all(&targets),
+        "effect-free {plain_targets:?} vs {targets:?}"
+    );
+    common::assert_validation_clean(&ctx);
+}

@@ -2,19 +2,23 @@
 // G-buffer targets (set 1, bindings GB_*), with the exact hit point
 // reconstructed from the stored (instance, primitive) by intersecting the
 // camera ray with that triangle. Both modes write the same targets, so the
-// passes that read them do not know which one ran.
+// passes that read them do not know which one ran. Layout (24 bytes a
+// pixel with the depth buffer): albedo rgba8, normal octahedral r32ui
+// (gbuffer_pack.glsl), metallic/roughness/transmission rgba8, hit rg32ui.
+// Emission is not stored: it is looked up from the material at the hit.
 #ifndef GBUFFER_READ_GLSL
 #define GBUFFER_READ_GLSL
 #include "scene.glsl"
 #include "brdf.glsl"
 #include "primary_hit.glsl"
+#include "hit.glsl"
+#include "gbuffer_pack.glsl"
 #include "offset.glsl"
 #include "srgb.glsl"
 
 layout(set = SET_PASS, binding = GB_ALBEDO) uniform sampler2D gb_albedo;
-layout(set = SET_PASS, binding = GB_NORMAL) uniform sampler2D gb_normal;
+layout(set = SET_PASS, binding = GB_NORMAL) uniform usampler2D gb_normal;
 layout(set = SET_PASS, binding = GB_MATERIAL) uniform sampler2D gb_material;
-layout(set = SET_PASS, binding = GB_EMISSIVE) uniform sampler2D gb_emissive;
 layout(set = SET_PASS, binding = GB_HIT) uniform usampler2D gb_hit;
 
 struct PrimaryHit {
@@ -25,6 +29,18 @@ struct PrimaryHit {
     uint instance;
 };
 
+// The material's emission at the primary hit (barycentrics `b` on
+// (instance, primitive)), its texture filtered with the uv gradients the
+// rasterizer would use, as the G-buffer pass sampled it.
+vec3 primary_emissive(ivec2 px, uint instance, uint primitive, vec2 b) {
+    Material m = materials[instances[instance].material];
+    if (m.emissive == vec3(0.0) || m.tex_emissive < 0) return m.emissive;
+    vec2 uv = hit_uv(hit_vertices(instances[instance], primitive), b);
+    vec2 dx, dy;
+    camera_uv_gradients(instance, primitive, px, dx, dy);
+    return m.emissive * textureGrad(textures[nonuniformEXT(m.tex_emissive)], uv, dx, dy).rgb;
+}
+
 // False where the camera ray through `px` hit nothing (hit id 0).
 bool read_primary(ivec2 px, out PrimaryHit p) {
     p.dir = camera_ray_dir(vec2(px) + 0.5);
@@ -32,23 +48,23 @@ bool read_primary(ivec2 px, out PrimaryHit p) {
     if (hit.x == 0u) return false;
     p.instance = hit.x - 1u;
     vec4 albedo = texelFetch(gb_albedo, px, 0);
-    vec4 nr = texelFetch(gb_normal, px, 0);
     vec4 mat = texelFetch(gb_material, px, 0);
     TriangleWorld tri = triangle_world(p.instance, hit.y);
-    p.s.position = interpolate(tri, plane_barycentrics(tri, frame.camera_pos, p.dir));
+    vec2 b = plane_barycentrics(tri, frame.camera_pos, p.dir);
+    p.s.position = interpolate(tri, b);
     p.s.extent = triangle_extent(tri.p0, tri.p1, tri.p2);
     vec3 tn = cross(tri.p1 - tri.p0, tri.p2 - tri.p0);
     tn = dot(tn, tn) > 0.0 ? normalize(tn) : -p.dir;
     p.back_face = dot(tn, p.dir) > 0.0;
     p.gn = p.back_face ? -tn : tn;
-    p.s.normal = normalize(nr.xyz);
+    p.s.normal = oct_decode(texelFetch(gb_normal, px, 0).x);
     p.s.base_color = srgb_decode(albedo.rgb);
     p.s.occlusion = albedo.a;
-    p.s.roughness = nr.w;
     p.s.metallic = mat.r;
-    p.s.transmission = mat.g;
+    p.s.roughness = mat.g;
+    p.s.transmission = mat.b;
     p.s.ior = materials[instances[p.instance].material].ior;
-    p.s.emissive = texelFetch(gb_emissive, px, 0).rgb;
+    p.s.emissive = primary_emissive(px, p.instance, hit.y, b);
     return true;
 }
 

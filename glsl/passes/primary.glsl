@@ -7,11 +7,11 @@
 #include "../common/primary_hit.glsl"
 #include "../common/integrator.glsl"
 #include "../common/srgb.glsl"
+#include "../common/gbuffer_pack.glsl"
 
 layout(set = SET_PASS, binding = GB_ALBEDO, rgba8) uniform writeonly image2D gb_albedo;
-layout(set = SET_PASS, binding = GB_NORMAL, rgba16f) uniform writeonly image2D gb_normal;
+layout(set = SET_PASS, binding = GB_NORMAL, r32ui) uniform writeonly uimage2D gb_normal;
 layout(set = SET_PASS, binding = GB_MATERIAL, rgba8) uniform writeonly image2D gb_material;
-layout(set = SET_PASS, binding = GB_EMISSIVE, rgba16f) uniform writeonly image2D gb_emissive;
 layout(set = SET_PASS, binding = GB_HIT, rg32ui) uniform writeonly uimage2D gb_hit;
 
 
@@ -35,8 +35,7 @@ void primary_pixel(ivec2 px) {
     Surface s = hit_surface(h, frame.camera_pos, dir, pixel_spread_angle() * h.t, gn, back_face);
     g_hit_grad = false;
     imageStore(gb_albedo, px, vec4(srgb_encode(s.base_color), s.occlusion));
-    imageStore(gb_normal, px, vec4(s.normal, s.roughness));
-    imageStore(gb_material, px, vec4(s.metallic, s.transmission, clamp((s.ior - 1.0) * 0.5, 0.0, 1.0), 0.0));
-    imageStore(gb_emissive, px, vec4(s.emissive, 0.0));
+    imageStore(gb_normal, px, uvec4(oct_encode(s.normal)));
+    imageStore(gb_material, px, vec4(s.metallic, s.roughness, s.transmission, 0.0));
     imageStore(gb_hit, px, uvec4(h.instance + 1u, h.primitive, 0u, 0u));
 }

@@ -10,6 +10,7 @@
 #include "../common/offset.glsl"
 #include "../common/tonemap.glsl"
 #include "../common/exposure.glsl"
+#include "../common/gbuffer_pack.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -67,6 +68,10 @@ void main() {
             o.x = adapt_log_average(o.x, k.b, k.c);
             o.y = adapt_histogram(o.y, k.b, k.c, k.p.x, k.p.y);
         }
+    } else if (k.op == PROBE_OCTAHEDRAL) {
+        // The G-buffer's normal round trip; w the raw bits (as a float).
+        uint bits = oct_encode(k.p.xyz);
+        o = vec4(oct_decode(bits), uintBitsToFloat(bits));
     } else if (k.op == PROBE_REFRACT) {
         o.xyz = refract_dir(k.p.xyz, k.q.xyz, k.a);
     }

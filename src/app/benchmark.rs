@@ -44,6 +44,11 @@ pub struct BenchReport {
     /// Effects mode's budget: T and, per measured frame, the ray stages'
     /// predicted and measured ms.
     pub budget: Option<(f64, Vec<[f64; 2]>)>,
+    /// Bytes per pixel of the G-buffer targets the run allocated.
+    pub gbuffer_bytes_per_pixel: u32,
+    /// G-buffer draws of the last measured frame: recorded, and left out
+    /// as outside the view frustum.
+    pub raster_draws: (usize, u32),
 }
 
 impl BenchReport {
@@ -86,6 +91,13 @@ impl BenchReport {
             ));
         }
         s.push_str(&format!("bad pixels (NaN/Inf radiance, shown magenta): {}\n", self.bad_pixels));
+        s.push_str(&format!("gbuffer bytes/pixel: {}\n", self.gbuffer_bytes_per_pixel));
+        let (drawn, culled) = self.raster_draws;
+        if drawn + culled as usize > 0 {
+            s.push_str(&format!(
+                "gbuffer draws (last frame): {drawn} recorded, {culled} outside the view frustum\n"
+            ));
+        }
         if let Some((t, frames)) = &self.budget {
             s.push_str(&budget_table(*t, frames));
         }
@@ -416,6 +428,8 @@ pub fn bench(
                         b.mode == crate::render::budget::BudgetMode::Effects && !budget_frames.is_empty()
                     })
                     .map(|b| (b.budget, budget_frames)),
+                gbuffer_bytes_per_pixel: crate::render::passes::gbuffer::bytes_per_pixel(renderer.targets()),
+                raster_draws: renderer.raster_draws(),
             });
         }
         Ok(())

@@ -452,17 +452,17 @@ fn tex_index(t: &Option<TextureRef>) -> i32 {
     t.map(|t| t.texture as i32).unwrap_or(-1)
 }
 
-/// Emitted radiance is limited to half's range: the primary hit's emissive
-/// G-buffer target is RGBA16F, where more would become Inf, while secondary
-/// hits read this buffer; clamping here, where every material passes, makes
-/// both modes and every bounce shade the same value.
+/// Emitted radiance is limited to half's range (where the primary hit's
+/// emission was once stored; kept so scenes keep their look): primary and
+/// secondary hits both read this buffer, so clamping here, where every
+/// material passes, makes both modes and every bounce shade the same value.
 pub const MAX_EMISSIVE: f32 = HALF_MAX;
 
 fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
     let emissive = m.emissive.map(|e| e.min(MAX_EMISSIVE));
     if emissive != m.emissive {
         log::warn!(
-            "material '{}': emissive {:?} clamped to {MAX_EMISSIVE} (the G-buffer's half-float range)",
+            "material '{}': emissive {:?} clamped to {MAX_EMISSIVE} (the half-float range)",
             m.name,
             m.emissive
         );

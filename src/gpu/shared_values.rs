@@ -73,7 +73,6 @@ shared! {
     id GB_ALBEDO = 0;
     id GB_NORMAL = 1;
     id GB_MATERIAL = 2;
-    id GB_EMISSIVE = 3;
     id GB_HIT = 4;
     id DIRECT_OUT = 5;
     id SPECULAR_OUT = 5;
@@ -158,6 +157,7 @@ shared! {
     uint PROBE_GGX = 5;
     uint PROBE_TONEMAP = 6;
     uint PROBE_ADAPT = 7;
+    uint PROBE_OCTAHEDRAL = 8;
 
     // Specialization constants.
     id SPEC_ALPHA_TEST = 0;

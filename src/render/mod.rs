@@ -4,6 +4,7 @@
 //! derives barriers, labels and timestamps from what each pass declares.
 
 pub mod budget;
+pub mod cull;
 pub mod frame;
 pub mod inject;
 pub mod kernel;
@@ -230,6 +231,8 @@ pub struct Renderer {
     /// times say nothing of the passes' cost (the budget ignores them).
     passes_new: bool,
     recorded_cold: bool,
+    /// The G-buffer draws of the prepared frame (frustum-culled).
+    draw_list: cull::DrawList,
 }
 
 fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
@@ -281,6 +284,7 @@ impl Renderer {
             shadow_map_left_out: None,
             passes_new: false,
             recorded_cold: false,
+            draw_list: cull::DrawList::default(),
         };
         match r.create_resources(ctx, scene) {
             Ok(()) => Ok(r),
@@ -461,6 +465,12 @@ impl Renderer {
     }
 
     /// Names of the passes the current frame records, in order.
+    /// The G-buffer draws of the last prepared frame: (recorded, left out
+    /// as outside the view frustum). (0, 0) in pure ray-traced mode.
+    pub fn raster_draws(&self) -> (usize, u32) {
+        (self.draw_list.draws.len(), self.draw_list.culled)
+    }
+
     pub fn pass_names(&self) -> Vec<&'static str> {
         let left_out = self.shadow_map_left_out;
         self.passes.iter().filter(|p| !left_out_this_frame(p.name, left_out)).map(|p| p.name).collect()
@@ -569,6 +579,12 @@ impl Renderer {
         let view = camera.view().as_mat4();
         let proj = camera.projection(aspect);
         let view_proj = proj * view;
+        // Only the raster pass draws; pure RT mode finds hits by tracing.
+        self.draw_list = if self.config.is_some_and(|c| c.mode == Mode::Hybrid) {
+            cull::draw_list(scene, &self.gpu, self.gpu.origin, &(proj.as_dmat4() * camera.view()))
+        } else {
+            cull::DrawList::default()
+        };
         let env = &scene.environment;
         // No map: no SH (the constant colour's irradiance is pi L, exactly
         // the constant ambient).
@@ -626,7 +642,13 @@ impl Renderer {
         anyhow::ensure!(self.config.is_some(), "prepare() must run before record()");
         let shadow_map_left_out = self.shadow_map_left_out;
         let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
-        let cx = Cx { ctx, gpu: &self.gpu, targets: &self.targets, tracer: self.tracer.as_deref() };
+        let cx = Cx {
+            ctx,
+            gpu: &self.gpu,
+            targets: &self.targets,
+            tracer: self.tracer.as_deref(),
+            draws: &self.draw_list,
+        };
         for p in &self.passes {
             if left_out_this_frame(p.name, shadow_map_left_out) {
                 continue;

@@ -111,7 +111,10 @@ impl Targets {
 
 pub fn bytes_per_pixel(f: vk::Format) -> u32 {
     match f {
-        vk::Format::R8G8B8A8_SRGB | vk::Format::R8G8B8A8_UNORM | vk::Format::D32_SFLOAT => 4,
+        vk::Format::R8G8B8A8_SRGB
+        | vk::Format::R8G8B8A8_UNORM
+        | vk::Format::D32_SFLOAT
+        | vk::Format::R32_UINT => 4,
         vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_UINT => 8,
         vk::Format::R32G32B32A32_SFLOAT => 16,
         _ => 0,

@@ -97,6 +97,10 @@ impl Case {
             ..Default::default()
         }
     }
+    /// The G-buffer normal's octahedral encode + decode of `n`.
+    pub fn octahedral(n: [f32; 3]) -> Case {
+        Case { op: shared::PROBE_OCTAHEDRAL, p: [n[0], n[1], n[2], 0.0], ..Default::default() }
+    }
 }
 
 /// Evaluates every case on the GPU (validated context); one vec4 per case.

@@ -9,7 +9,7 @@ use ash::vk;
 
 use super::fullscreen::Io;
 use super::{Cx, Init, Pass, PassDesc};
-use crate::gpu::shared::{GB_ALBEDO, GB_EMISSIVE, GB_HIT, GB_MATERIAL, GB_NORMAL, SPEC_ALPHA_TEST};
+use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL, SPEC_ALPHA_TEST};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::render::targets::{TargetDesc, Targets};
@@ -20,16 +20,27 @@ use crate::vk::Context;
 /// The G-buffer targets (gbuffer.frag's outputs, in attachment order; the
 /// `primary` pass writes the same ones). Albedo holds sRGB-encoded values in
 /// a UNORM image, encoded and decoded by the shaders (glsl/common/srgb.glsl)
-/// so both modes store the same bytes.
+/// so both modes store the same bytes. The normal is octahedral-encoded
+/// into one uint (glsl/common/gbuffer_pack.glsl); emission is not stored
+/// (readers look it up from the material at the hit): 24 bytes a pixel
+/// with the depth buffer, 20 in pure ray-traced mode (no depth).
 pub static ALBEDO: TargetDesc = TargetDesc::new("gbuffer albedo+occlusion", vk::Format::R8G8B8A8_UNORM);
-pub static NORMAL: TargetDesc = TargetDesc::new("gbuffer normal+roughness", vk::Format::R16G16B16A16_SFLOAT);
+pub static NORMAL: TargetDesc = TargetDesc::new("gbuffer normal (octahedral)", vk::Format::R32_UINT);
 pub static MATERIAL: TargetDesc =
-    TargetDesc::new("gbuffer metallic+transmission+ior", vk::Format::R8G8B8A8_UNORM);
-pub static EMISSIVE: TargetDesc = TargetDesc::new("gbuffer emissive", vk::Format::R16G16B16A16_SFLOAT);
+    TargetDesc::new("gbuffer metallic+roughness+transmission", vk::Format::R8G8B8A8_UNORM);
 pub static HIT: TargetDesc = TargetDesc::new("gbuffer hit (instance, primitive)", vk::Format::R32G32_UINT);
 pub static DEPTH: TargetDesc = TargetDesc::new("gbuffer depth (reversed-Z)", vk::Format::D32_SFLOAT);
 
-const COLOR: [&TargetDesc; 5] = [&ALBEDO, &NORMAL, &MATERIAL, &EMISSIVE, &HIT];
+const COLOR: [&TargetDesc; 4] = [&ALBEDO, &NORMAL, &MATERIAL, &HIT];
+
+/// Every G-buffer target, for the bytes-per-pixel figure.
+pub const ALL: [&TargetDesc; 5] = [&ALBEDO, &NORMAL, &MATERIAL, &HIT, &DEPTH];
+
+/// Bytes per pixel of the G-buffer targets `t` holds (the primary-hit
+/// target and the depth buffer included).
+pub fn bytes_per_pixel(t: &Targets) -> u32 {
+    ALL.iter().filter_map(|d| t.get(d)).map(|t| crate::render::targets::bytes_per_pixel(t.desc.format)).sum()
+}
 
 /// The set-1 bindings through which later passes read the primary hit.
 pub fn reads() -> Vec<Io> {
@@ -38,7 +49,6 @@ pub fn reads() -> Vec<Io> {
         Io::new(GB_ALBEDO, &ALBEDO, s),
         Io::new(GB_NORMAL, &NORMAL, s),
         Io::new(GB_MATERIAL, &MATERIAL, s),
-        Io::new(GB_EMISSIVE, &EMISSIVE, s),
         Io::new(GB_HIT, &HIT, s),
     ]
 }
@@ -137,12 +147,22 @@ impl Pass for GBufferPass {
             );
             d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
             // Opaque first so masked geometry is depth-tested against it.
+            // Only the draws the frustum test kept (cx.draws); single-sided
+            // geometry is back-face culled, and a mirroring transform turns
+            // its front faces clockwise.
             for (pipeline, masked) in [(self.opaque, false), (self.masked, true)] {
                 d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-                for draw in scene.draws.iter().filter(|dr| (dr.alpha_mode != AlphaMode::Opaque) == masked) {
+                for fd in &cx.draws.draws {
+                    let draw = &scene.draws[fd.draw as usize];
+                    if (draw.alpha_mode != AlphaMode::Opaque) != masked {
+                        continue;
+                    }
                     let cull =
                         if draw.double_sided { vk::CullModeFlags::NONE } else { vk::CullModeFlags::BACK };
                     d.cmd_set_cull_mode(cmd, cull);
+                    let front =
+                        if fd.mirrored { vk::FrontFace::CLOCKWISE } else { vk::FrontFace::COUNTER_CLOCKWISE };
+                    d.cmd_set_front_face(cmd, front);
                     d.cmd_draw_indexed(
                         cmd,
                         draw.range.index_count,
@@ -206,7 +226,12 @@ fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) 
         })
         .collect();
     let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
-    let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR, vk::DynamicState::CULL_MODE];
+    let dynamic = [
+        vk::DynamicState::VIEWPORT,
+        vk::DynamicState::SCISSOR,
+        vk::DynamicState::CULL_MODE,
+        vk::DynamicState::FRONT_FACE,
+    ];
     let dyn_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
     let formats: Vec<_> = COLOR.iter().map(|t| t.format).collect();
     let mut rendering = vk::PipelineRenderingCreateInfo::default()

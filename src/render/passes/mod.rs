@@ -20,6 +20,7 @@ pub mod tonemap;
 use anyhow::Result;
 use ash::vk;
 
+use super::cull::DrawList;
 use super::frame::Use;
 use super::shading::ShadingConfig;
 use super::targets::Targets;
@@ -61,6 +62,8 @@ pub struct Cx<'a> {
     pub gpu: &'a GpuScene,
     pub targets: &'a Targets,
     pub tracer: Option<&'a dyn Tracer>,
+    /// The frame's G-buffer draws after frustum culling (render/cull.rs).
+    pub draws: &'a DrawList,
 }
 
 pub struct PassDesc {

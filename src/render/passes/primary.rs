@@ -4,7 +4,7 @@
 
 use super::fullscreen::{self, FullScreen, Io, Shader};
 use super::{gbuffer, Init, PassDesc};
-use crate::gpu::shared::{GB_ALBEDO, GB_EMISSIVE, GB_HIT, GB_MATERIAL, GB_NORMAL};
+use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
 use crate::render::frame::Access;
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::vk::pipeline::Specialization;
@@ -15,7 +15,6 @@ fn io(_: &ShadingConfig) -> Vec<Io> {
         Io::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
         Io::new(GB_NORMAL, &gbuffer::NORMAL, w),
         Io::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
-        Io::new(GB_EMISSIVE, &gbuffer::EMISSIVE, w),
         Io::new(GB_HIT, &gbuffer::HIT, w),
     ]
 }
