@@ -16,9 +16,11 @@ use crate::vk::{Context, ContextOptions, DeviceSelector, RenderDocUse};
 mod benchmark;
 mod budget_args;
 mod env_args;
+mod rays;
 pub use benchmark::*;
 pub use budget_args::BudgetArgs;
 pub use env_args::{EnvArgs, EnvOverrides};
+pub use rays::{rays_command, KindReport, RayBench};
 
 /// The bundled default scene, looked for in the working directory, next to
 /// the executable (an installed copy, or `target/<profile>/` inside the

@@ -109,6 +109,16 @@ enum Command {
         /// Also write the tables as CSV (one row per variant and pass).
         #[arg(long)]
         csv: Option<PathBuf>,
+        /// Ray microbenchmark instead of frames: primary rays (one per pixel of
+        /// --width x --height from the scene camera), shadow rays to the first light
+        /// and cosine-sampled diffuse rays from the primary hits, traced by the compute
+        /// BVH tracer and the driver's ray query; prints Mrays/s per kind, their
+        /// mismatches and the compute tracer's node and triangle tests per ray.
+        #[arg(long, conflicts_with_all = ["compare_modes", "compare_backends", "compare_accel_updates", "csv", "capture_frame"])]
+        rays: bool,
+        /// With --rays: timed repetitions per ray set (after one untimed).
+        #[arg(long, default_value_t = 5, value_parser = parse_reps, allow_hyphen_values = true, requires = "rays")]
+        ray_reps: usize,
         /// Capture frame N (0-based, in the order rendered: per variant the ray-counting
         /// frame and the warm-up, then the measured frames) with RenderDoc's in-application API
         /// (under `renderdoccmd capture`, or with librenderdoc.so loadable);
@@ -435,6 +445,10 @@ fn parse_count(s: &str) -> Result<usize, String> {
     parse_int(s, 1, i64::MAX, "a frame count of").map(|v| v as usize)
 }
 
+fn parse_reps(s: &str) -> Result<usize, String> {
+    parse_int(s, 1, 1000, "a repetition count of").map(|v| v as usize)
+}
+
 fn parse_supersample(s: &str) -> Result<u32, String> {
     parse_int(s, 1, supersample::MAX_FACTOR as i64, "samples per axis").map(|v| v as u32)
 }
@@ -622,8 +636,13 @@ fn run(cli: Cli) -> Result<()> {
             accel_update,
             compare_accel_updates,
             csv,
+            rays,
+            ray_reps,
             capture_frame,
         }) => {
+            if rays {
+                return app::rays_command(&gpu, &view.job()?, ray_reps);
+            }
             gpu.capture_frame = capture_frame;
             let modes = if compare_modes { vec![Mode::Hybrid, Mode::Rt] } else { vec![view.mode] };
             let backends = if compare_backends {

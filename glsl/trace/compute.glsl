@@ -34,6 +34,20 @@ layout(set = SET_TRACE, binding = BVH_INSTANCES, scalar) readonly buffer BvhInst
 
 #define BVH_STACK 32
 
+// Traversal statistics (TRACE_STATS variants only, e.g. rays_compute_stats
+// of `bench --rays`): nodes visited and triangles tested by the current ray,
+// top and bottom level together. Without TRACE_STATS the macros are empty,
+// so the normal tracing passes pay nothing.
+#ifdef TRACE_STATS
+uint g_stat_nodes = 0u;
+uint g_stat_tris = 0u;
+#define STAT_NODE() (g_stat_nodes++)
+#define STAT_TRI() (g_stat_tris++)
+#else
+#define STAT_NODE()
+#define STAT_TRI()
+#endif
+
 // Slab test; inv_d may hold +-inf for zero direction components. A NaN
 // (0 * inf: origin on a slab plane, ray parallel to it) puts no constraint
 // on that axis; GLSL's min/max make no promise about NaN, so it is replaced
@@ -146,12 +160,14 @@ bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, 
     bool found = false;
     if (ray_box(o, inv_d, tmax, blas_nodes[bi.node_offset].bmin, blas_nodes[bi.node_offset].bmax) > 1e37) return false;
     while (true) {
+        STAT_NODE();
         BvhNode n = blas_nodes[bi.node_offset + node];
         if (n.count > 0u) {
             for (uint i = 0u; i < n.count; ++i) {
                 uint prim = blas_prims[bi.prim_offset + n.left_or_first + i];
                 vec3 p0, p1, p2;
                 object_triangle(inst, prim, p0, p1, p2);
+                STAT_TRI();
                 vec2 b;
                 float t = watertight_hit(wr, p0, p1, p2, tmax, b);
                 if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
@@ -189,6 +205,7 @@ bool trace_bvh(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit hi
         return false;
     }
     while (true) {
+        STAT_NODE();
         BvhNode n = tlas_nodes[node];
         if (n.count > 0u) {
             for (uint i = 0u; i < n.count; ++i) {

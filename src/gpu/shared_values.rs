@@ -144,6 +144,16 @@ shared! {
     id TOP_FIT_BLAS_NODES = 3;
     id TOP_FIT_ORDER = 4;
 
+    // Set 1 of the ray microbenchmark (glsl/rays.comp, render/rays.rs): the
+    // rays, what each hit, and (stats variant) nodes visited and triangles
+    // tested per ray.
+    id RAYS_IN = 0;
+    id RAYS_OUT = 1;
+    id RAYS_STATS = 2;
+    // Bytes per ray and per result (scalar layout).
+    uint BENCH_RAY_STRIDE = 32;
+    uint BENCH_RESULT_STRIDE = 48;
+
     // The shading probe (glsl/probes/shading.comp): tests evaluate the
     // compiled shading functions through it. One set; PROBE_* ops.
     id SET_PROBE = 0;

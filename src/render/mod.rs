@@ -10,6 +10,7 @@ pub mod inject;
 pub mod kernel;
 pub mod output;
 pub mod passes;
+pub mod rays;
 pub mod shading;
 pub mod skinning;
 pub mod srgb;

@@ -1,0 +1,171 @@
+//! `bench --rays`: the ray microbenchmark. Fixed ray sets on the scene
+//! (render/rays/sets.rs) traced through our compute BVH tracer and through
+//! the driver's ray query on the same rays, timed with GPU timestamps,
+//! compared ray by ray.
+
+use anyhow::{bail, Context as _, Result};
+
+use super::{load_posed, with_context, GpuOptions, RenderJob};
+use crate::gpu::types::GpuFrame;
+use crate::gpu::GpuScene;
+use crate::render::rays::sets::{self, RayKind};
+use crate::render::rays::{BenchRay, RayRig, TraceRun};
+use crate::render::shading::Backend;
+use crate::render::tracer::{self, Tracer};
+use crate::scene::Scene;
+use crate::vk::Context;
+
+/// Seed of the diffuse-bounce directions (fixed: every run traces the same rays).
+pub const DIFFUSE_SEED: u32 = 1;
+
+/// One ray kind traced by both tracers.
+pub struct KindReport {
+    pub kind: RayKind,
+    pub rays: usize,
+    pub compute: TraceRun,
+    pub query: TraceRun,
+    /// Indices of the rays on which the two disagree (sets::mismatches).
+    pub mismatches: Vec<usize>,
+}
+
+impl KindReport {
+    /// `rays <kind>: compute <x> Mrays/s, query <y> Mrays/s, ratio <r>`.
+    pub fn line(&self) -> String {
+        let (c, q) = (self.compute.mrays_per_s(), self.query.mrays_per_s());
+        format!("rays {}: compute {c:.3} Mrays/s, query {q:.3} Mrays/s, ratio {:.2}", self.kind.name(), c / q)
+    }
+
+    /// Ray count, agreement and the compute tracer's traversal statistics.
+    pub fn detail(&self) -> String {
+        let (nodes, tris) = self.compute.mean_stats().unwrap_or((f64::NAN, f64::NAN));
+        format!(
+            "  {}: {} rays, {} mismatches between the tracers; compute traversal {nodes:.1} nodes, \
+             {tris:.1} triangle tests per ray",
+            self.kind.name(),
+            self.rays,
+            self.mismatches.len()
+        )
+    }
+}
+
+/// The two tracers over one uploaded scene, with their pipelines.
+pub struct RayBench {
+    pub gpu: GpuScene,
+    tracers: Vec<(Box<dyn Tracer>, RayRig)>,
+}
+
+impl RayBench {
+    pub fn new(ctx: &Context, scene: &Scene) -> Result<RayBench> {
+        if !ctx.rt.ray_query {
+            bail!(
+                "bench --rays compares with the driver's ray query, which this device {} (use a device with \
+                 VK_KHR_ray_query, without --no-rt)",
+                if ctx.caps.ray_query { "has, but --no-rt disabled" } else { "lacks" }
+            );
+        }
+        let gpu = GpuScene::upload(ctx, scene)?;
+        let mut bench = RayBench { gpu, tracers: Vec::new() };
+        let filled = (|| {
+            if !bench.gpu.skinned.is_empty() {
+                bail!(
+                    "{}: bench --rays traces static scenes only (this one has skinned meshes, which the \
+                     frame's skinning pass would have to deform first)",
+                    scene.source.display()
+                );
+            }
+            let frame = GpuFrame { light_count: bench.gpu.light_count, ..Default::default() };
+            bench.gpu.write_frame(&frame)?;
+            for backend in [Backend::Compute, Backend::Query] {
+                let mut t = tracer::create(ctx, backend, scene, &bench.gpu)?;
+                match RayRig::new(ctx, &bench.gpu, t.as_ref()) {
+                    Ok(rig) => bench.tracers.push((t, rig)),
+                    Err(e) => {
+                        t.destroy(ctx);
+                        return Err(e);
+                    }
+                }
+            }
+            Ok(())
+        })();
+        match filled {
+            Ok(()) => Ok(bench),
+            Err(e) => {
+                bench.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    fn run(
+        &self,
+        ctx: &Context,
+        backend: Backend,
+        rays: &[BenchRay],
+        kind: RayKind,
+        reps: usize,
+    ) -> Result<TraceRun> {
+        let (t, rig) = self
+            .tracers
+            .iter()
+            .find(|(_, r)| r.backend() == backend)
+            .context("tracer missing from the ray benchmark")?;
+        rig.trace(ctx, &self.gpu, t.as_ref(), rays, kind.is_shadow(), reps, backend == Backend::Compute)
+            .with_context(|| format!("trace the {} rays ({backend:?})", kind.name()))
+    }
+
+    /// Traces `rays` of `kind` through both tracers and compares them.
+    pub fn kind(&self, ctx: &Context, kind: RayKind, rays: &[BenchRay], reps: usize) -> Result<KindReport> {
+        let compute = self.run(ctx, Backend::Compute, rays, kind, reps)?;
+        let query = self.run(ctx, Backend::Query, rays, kind, reps)?;
+        let mismatches = sets::mismatches(kind, &compute.results, &query.results);
+        Ok(KindReport { kind, rays: rays.len(), compute, query, mismatches })
+    }
+
+    /// Every kind in order: primary rays from the camera, then shadow and
+    /// diffuse rays from the compute tracer's primary hits (both tracers
+    /// trace the same sets).
+    pub fn all(&self, ctx: &Context, scene: &Scene, job: &RenderJob, reps: usize) -> Result<Vec<KindReport>> {
+        let camera = job.camera.resolve(scene)?;
+        let extent = job.extent()?;
+        let primary = sets::primary_rays(&camera, &self.gpu.origin, extent.width, extent.height);
+        let p = self.kind(ctx, RayKind::Primary, &primary, reps)?;
+        let shadow = sets::shadow_rays(scene, &self.gpu.origin, &p.compute.results)?;
+        let diffuse = sets::diffuse_rays(&p.compute.results, DIFFUSE_SEED);
+        let s = self.kind(ctx, RayKind::Shadow, &shadow, reps)?;
+        let d = self.kind(ctx, RayKind::Diffuse, &diffuse, reps)?;
+        Ok(vec![p, s, d])
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        for (t, rig) in &mut self.tracers {
+            rig.destroy(ctx);
+            t.destroy(ctx);
+        }
+        self.gpu.destroy(ctx);
+    }
+}
+
+/// `bench --rays`: prints one `rays <kind>:` line per kind, then the
+/// details (ray counts, mismatches, traversal statistics).
+pub fn rays_command(gpu: &GpuOptions, job: &RenderJob, reps: usize) -> Result<()> {
+    with_context(gpu, |ctx| {
+        let (scene, _) = load_posed(job)?;
+        let mut bench = RayBench::new(ctx, &scene)?;
+        let reports = bench.all(ctx, &scene, job, reps);
+        bench.destroy(ctx);
+        let reports = reports?;
+        println!(
+            "ray microbenchmark: {} at {}x{} primary rays, median of {reps} repetitions (GPU timestamps)",
+            scene.source.display(),
+            job.width,
+            job.height
+        );
+        for r in &reports {
+            println!("{}", r.line());
+        }
+        for r in &reports {
+            println!("{}", r.detail());
+        }
+        super::check_validation(ctx)
+    })
+}

@@ -1,0 +1,291 @@
+//! Ray microbenchmark (`bench --rays`): traces fixed ray sets (sets.rs)
+//! through one tracer with glsl/rays.comp, one invocation per ray, timed with
+//! GPU timestamps, and reads back what every ray hit, so two tracers can be
+//! compared ray by ray. The compute tracer also has a statistics variant
+//! (nodes visited and triangles tested per ray).
+
+pub mod sets;
+
+use anyhow::{Context as _, Result};
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use gpu_allocator::MemoryLocation;
+
+use super::kernel::Kernel;
+use super::shading::Backend;
+use super::tracer::Tracer;
+use crate::gpu::shared::{BENCH_RAY_STRIDE, BENCH_RESULT_STRIDE, RAYS_IN, RAYS_OUT, RAYS_STATS};
+use crate::gpu::GpuScene;
+use crate::vk::pipeline::{pipeline_layout, DescriptorSet, Specialization};
+use crate::vk::{memory_barrier, Buffer, Context};
+
+/// One ray (glsl/rays.comp `BenchRay`), in render-origin-relative world space.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BenchRay {
+    pub origin: [f32; 3],
+    pub tmax: f32,
+    pub dir: [f32; 3],
+    pub pad: u32,
+}
+const _: () = assert!(std::mem::size_of::<BenchRay>() == BENCH_RAY_STRIDE as usize);
+
+/// What one ray hit (glsl/rays.comp `BenchResult`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BenchResult {
+    /// Closest-hit distance (closest-hit rays; 0 for shadow rays).
+    pub t: f32,
+    pub instance: u32,
+    pub primitive: u32,
+    /// 1: hit (closest-hit rays) or blocked (shadow rays).
+    pub hit: u32,
+    /// The hit point moved off the surface (closest-hit rays), or the
+    /// transmittance (shadow rays).
+    pub next: [f32; 3],
+    pub pad0: f32,
+    /// Geometric normal facing the ray (closest-hit rays).
+    pub normal: [f32; 3],
+    pub pad1: f32,
+}
+const _: () = assert!(std::mem::size_of::<BenchResult>() == BENCH_RESULT_STRIDE as usize);
+
+/// One ray set traced: the last repetition's results, the GPU time of each
+/// measured repetition, and the traversal statistics when asked for.
+pub struct TraceRun {
+    pub results: Vec<BenchResult>,
+    pub gpu_ms: Vec<f64>,
+    /// (nodes visited, triangles tested) per ray (compute tracer, stats variant).
+    pub stats: Option<Vec<[u32; 2]>>,
+}
+
+impl TraceRun {
+    /// Median GPU time of the measured repetitions (NaN without timestamps).
+    pub fn median_ms(&self) -> f64 {
+        let mut t = self.gpu_ms.clone();
+        t.sort_by(|a, b| a.total_cmp(b));
+        t.get(t.len() / 2).copied().unwrap_or(f64::NAN)
+    }
+
+    /// Million rays per second at the median time.
+    pub fn mrays_per_s(&self) -> f64 {
+        self.results.len() as f64 / (self.median_ms() * 1e3)
+    }
+
+    /// Mean nodes visited and triangles tested per ray.
+    pub fn mean_stats(&self) -> Option<(f64, f64)> {
+        let s = self.stats.as_ref()?;
+        let n = s.len().max(1) as f64;
+        let (a, b) = s.iter().fold((0u64, 0u64), |(a, b), v| (a + v[0] as u64, b + v[1] as u64));
+        Some((a as f64 / n, b as f64 / n))
+    }
+}
+
+/// The pipelines tracing ray sets through one tracer.
+pub struct RayRig {
+    set: DescriptorSet,
+    layout: vk::PipelineLayout,
+    kernel: Kernel,
+    /// The compute tracer's statistics variant.
+    stats: Option<Kernel>,
+    timestamps: vk::QueryPool,
+    backend: Backend,
+}
+
+impl RayRig {
+    pub fn new(ctx: &Context, gpu: &GpuScene, tracer: &dyn Tracer) -> Result<RayRig> {
+        let backend = tracer.backend();
+        let mut rig = RayRig {
+            set: DescriptorSet::null(),
+            layout: vk::PipelineLayout::null(),
+            kernel: Kernel::Compute(vk::Pipeline::null()),
+            stats: None,
+            timestamps: vk::QueryPool::null(),
+            backend,
+        };
+        match rig.fill(ctx, gpu, tracer) {
+            Ok(()) => Ok(rig),
+            Err(e) => {
+                rig.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    fn fill(&mut self, ctx: &Context, gpu: &GpuScene, tracer: &dyn Tracer) -> Result<()> {
+        use crate::vk::pipeline::Binding;
+        let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
+        self.set = DescriptorSet::numbered(ctx, "rays", &[(RAYS_IN, sb), (RAYS_OUT, sb), (RAYS_STATS, sb)])?;
+        self.layout =
+            pipeline_layout(ctx, "rays layout", &[gpu.set.layout, self.set.layout, tracer.set().layout], 8)?;
+        let spec = Specialization::new(&[]);
+        self.kernel = tracer.kernel(ctx, "rays", self.layout, &spec)?;
+        if self.backend == Backend::Compute {
+            self.stats = Some(Kernel::compute(ctx, "rays_compute_stats", self.layout, &spec)?);
+        }
+        if ctx.caps.timestamps {
+            let pool = unsafe {
+                ctx.device.create_query_pool(
+                    &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(2),
+                    None,
+                )?
+            };
+            ctx.name(pool, "rays timestamps");
+            self.timestamps = pool;
+        }
+        Ok(())
+    }
+
+    pub fn backend(&self) -> Backend {
+        self.backend
+    }
+
+    /// Traces `rays` (shadow: any-hit transmittance rays, else closest
+    /// hit) once unmeasured, then `reps` times timed; with `stats` (compute
+    /// tracer only) one more pass through the statistics variant.
+    pub fn trace(
+        &self,
+        ctx: &Context,
+        gpu: &GpuScene,
+        tracer: &dyn Tracer,
+        rays: &[BenchRay],
+        shadow: bool,
+        reps: usize,
+        stats: bool,
+    ) -> Result<TraceRun> {
+        let n = rays.len().max(1);
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let mut bufs: Vec<Buffer> = Vec::new();
+        let run = (|| {
+            bufs.push(Buffer::with_data(ctx, "bench rays", bytemuck::cast_slice(rays), storage)?);
+            let size = (n * std::mem::size_of::<BenchResult>()) as u64;
+            bufs.push(Buffer::new(ctx, "bench ray results", size, storage, MemoryLocation::GpuToCpu)?);
+            let size = (n * 8) as u64;
+            bufs.push(Buffer::new(ctx, "bench ray stats", size, storage, MemoryLocation::GpuToCpu)?);
+            self.run(ctx, gpu, tracer, rays.len(), (&bufs[0], &bufs[1], &bufs[2]), shadow, reps, stats)
+        })();
+        for b in &mut bufs {
+            b.destroy(ctx);
+        }
+        run
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &self,
+        ctx: &Context,
+        gpu: &GpuScene,
+        tracer: &dyn Tracer,
+        count: usize,
+        (input, output, counters): (&Buffer, &Buffer, &Buffer),
+        shadow: bool,
+        reps: usize,
+        stats: bool,
+    ) -> Result<TraceRun> {
+        self.set.write_buffer(ctx, RAYS_IN, input.raw);
+        self.set.write_buffer(ctx, RAYS_OUT, output.raw);
+        self.set.write_buffer(ctx, RAYS_STATS, counters.raw);
+        let mut gpu_ms = Vec::new();
+        for rep in 0..=reps {
+            let ms = self.dispatch(ctx, gpu, tracer, &self.kernel, count, shadow)?;
+            if rep > 0 {
+                gpu_ms.push(ms);
+            }
+        }
+        let read = |b: &Buffer| -> Result<Vec<u8>> { Ok(b.read()?.to_vec()) };
+        let results: Vec<BenchResult> = bytemuck::pod_collect_to_vec::<u8, BenchResult>(
+            &read(output)?[..count * std::mem::size_of::<BenchResult>()],
+        );
+        let stats = match (&self.stats, stats) {
+            (Some(k), true) => {
+                self.dispatch(ctx, gpu, tracer, k, count, shadow)?;
+                Some(bytemuck::pod_collect_to_vec::<u8, [u32; 2]>(&read(counters)?[..count * 8]))
+            }
+            _ => None,
+        };
+        Ok(TraceRun { results, gpu_ms, stats })
+    }
+
+    /// One dispatch over `count` rays, waited for; returns its GPU time in ms.
+    fn dispatch(
+        &self,
+        ctx: &Context,
+        gpu: &GpuScene,
+        tracer: &dyn Tracer,
+        kernel: &Kernel,
+        count: usize,
+        shadow: bool,
+    ) -> Result<f64> {
+        let pipeline = match kernel {
+            Kernel::Compute(p) => *p,
+            Kernel::RayTracing(_) => anyhow::bail!("the ray microbenchmark runs compute kernels only"),
+        };
+        let timed = self.timestamps != vk::QueryPool::null();
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        ctx.one_shot("trace bench rays", |cmd| {
+            let d = &ctx.device;
+            let push = [count as u32, shadow as u32];
+            unsafe {
+                if timed {
+                    d.cmd_reset_query_pool(cmd, self.timestamps, 0, 2);
+                }
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    self.layout,
+                    0,
+                    &[gpu.set.set, self.set.set, tracer.set().set],
+                    &[],
+                );
+                d.cmd_push_constants(
+                    cmd,
+                    self.layout,
+                    vk::ShaderStageFlags::ALL,
+                    0,
+                    bytemuck::cast_slice(&push),
+                );
+                if timed {
+                    d.cmd_write_timestamp2(cmd, compute, self.timestamps, 0);
+                }
+                d.cmd_dispatch(cmd, (count as u32).div_ceil(64), 1, 1);
+                if timed {
+                    d.cmd_write_timestamp2(cmd, compute, self.timestamps, 1);
+                }
+            }
+            memory_barrier(
+                ctx,
+                cmd,
+                (compute, vk::AccessFlags2::SHADER_WRITE),
+                (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+            );
+            Ok(())
+        })?;
+        if !timed {
+            return Ok(f64::NAN);
+        }
+        let mut ticks = [0u64; 2];
+        unsafe {
+            ctx.device.get_query_pool_results(
+                self.timestamps,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .context("read the ray benchmark's timestamps")?;
+        Ok(ticks[1].saturating_sub(ticks[0]) as f64 * ctx.caps.timestamp_period_ns as f64 * 1e-6)
+    }
+
+    pub fn destroy(&mut self, ctx: &Context) {
+        self.kernel.destroy(ctx);
+        if let Some(k) = &mut self.stats {
+            k.destroy(ctx);
+        }
+        unsafe {
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+            ctx.device.destroy_query_pool(self.timestamps, None);
+        }
+        self.set.destroy(ctx);
+    }
+}

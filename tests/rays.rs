@@ -1,0 +1,79 @@
+//! The ray microbenchmark's agreement check as a test: the same fixed ray
+//! sets (primary, shadow, diffuse; render/rays/sets.rs) traced by our
+//! compute BVH tracer and by the driver's ray query agree ray by ray: hit
+//! versus miss (blocked versus not for shadow rays) exactly, hit distances
+//! within sets::T_REL_BOUND (1e-3) of the distance, shadow transmittance
+//! within sets::TRANSMITTANCE_BOUND (1e-3) per channel. No timing is checked.
+//! Scenes: the default scene (every material and light type, opaque and
+//! glass) and a glass square between a point light and the ground (shadow
+//! rays through it carry a transmittance strictly between 0 and 1).
+mod common;
+
+use common::scenes::{glass_occluder, shadow_scene, Frame};
+use hybrid_rt::app::{RayBench, RenderJob};
+use hybrid_rt::render::rays::sets::RayKind;
+use hybrid_rt::scene::Scene;
+
+fn agree(scene: &Scene, w: u32, h: u32) -> Vec<hybrid_rt::app::KindReport> {
+    let ctx = common::validated_context();
+    let mut bench = RayBench::new(&ctx, scene).expect("set up both tracers");
+    let job = RenderJob::new(&scene.source, w, h);
+    let reports = bench.all(&ctx, scene, &job, 1);
+    bench.destroy(&ctx);
+    let reports = reports.expect("trace the ray sets");
+    for r in &reports {
+        eprintln!("{}\n{}", r.line(), r.detail());
+        assert!(r.rays > 0, "{}: no {} rays", scene.source.display(), r.kind.name());
+        assert_eq!(r.compute.results.len(), r.rays);
+        assert_eq!(r.query.results.len(), r.rays);
+        if let Some(&i) = r.mismatches.first() {
+            panic!(
+                "{}: {} of {} {} rays disagree; first: ray {i}, compute {:?}, query {:?}",
+                scene.source.display(),
+                r.mismatches.len(),
+                r.rays,
+                r.kind.name(),
+                r.compute.results[i],
+                r.query.results[i]
+            );
+        }
+        // Agreement is not trivially all-miss: some rays hit (or, shadow
+        // rays, lose light to glass).
+        let hits = r
+            .compute
+            .results
+            .iter()
+            .filter(|x| x.hit != 0 || (r.kind == RayKind::Shadow && x.next.iter().any(|&c| c < 1.0)))
+            .count();
+        assert!(hits > 0, "{}: no {} ray hits", scene.source.display(), r.kind.name());
+        let stats = r.compute.stats.as_ref().expect("compute statistics");
+        assert_eq!(stats.len(), r.rays);
+    }
+    common::assert_validation_clean(&ctx);
+    reports
+}
+
+#[test]
+fn compute_and_query_agree_on_the_default_scene() {
+    let scene = Scene::load(&common::repo_path("assets/default.toml")).unwrap();
+    for r in agree(&scene, 64, 36) {
+        // Both outcomes occur (sky, shadowed and lit points).
+        let hits = r.compute.results.iter().filter(|x| x.hit != 0).count();
+        assert!(hits < r.rays, "every {} ray hits", r.kind.name());
+    }
+}
+
+#[test]
+fn compute_and_query_agree_through_glass() {
+    let toml = shadow_scene(Frame::IDENTITY, &glass_occluder([0.9, 0.5, 0.2]));
+    let scene = common::scene_from_toml("rays_glass", &toml);
+    let reports = agree(&scene, 32, 18);
+    let shadow = reports.iter().find(|r| r.kind == RayKind::Shadow).unwrap();
+    let tinted = shadow
+        .query
+        .results
+        .iter()
+        .filter(|x| x.hit == 0 && x.next.iter().any(|&c| c > 0.0 && c < 1.0))
+        .count();
+    assert!(tinted > 0, "no shadow ray crossed the glass square");
+}
