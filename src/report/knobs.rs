@@ -160,7 +160,7 @@ pub const KNOBS: &[Knob] = &[
     },
     Knob {
         name: "budget",
-        about: "per-object ray-tracing budget (paper mode, no stickiness) as a share of the estimated cost of \
+        about: "per-object ray-tracing budget (paper mode and fallback, no stickiness) as a share of the estimated cost of \
                 tracing every visible object in this view (measured first): 0 = raster shading only, 1 = \
                 every object traced",
         values: &["0", "0.1", "0.25", "0.5", "0.75", "1"],

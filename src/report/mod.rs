@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _, Result};
 
 use crate::app::{load_posed, resolve_shading, with_context, GpuOptions, RenderJob};
-use crate::render::budget::BudgetSettings;
+use crate::render::budget::{BudgetSettings, Fallback};
 use crate::render::shading::{Backend, Mode};
 use crate::render::supersample::{render_supersampled, SampleFilter, Supersample};
 use crate::render::{RenderSettings, Renderer};
@@ -322,7 +322,10 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
             eprintln!("report: the budget knob's shares are of {all:.0} (every visible object traced)");
             for (v, _) in &mut variants {
                 if let Some(share) = v.budget_share {
-                    v.settings.budget = Some(BudgetSettings::paper(share * all));
+                    v.settings.budget = Some(BudgetSettings {
+                        fallback: Fallback::None,
+                        ..BudgetSettings::paper(share * all)
+                    });
                 }
             }
         }

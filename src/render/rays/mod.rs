@@ -143,6 +143,7 @@ impl RayRig {
     /// Traces `rays` (shadow: any-hit transmittance rays, else closest
     /// hit) once unmeasured, then `reps` times timed; with `stats` (compute
     /// tracer only) one more pass through the statistics variant.
+    #[allow(clippy::too_many_arguments)]
     pub fn trace(
         &self,
         ctx: &Context,
