@@ -7,7 +7,7 @@ use ash::vk;
 use super::fullscreen::{self, FullScreen, Io, Shader};
 use super::{direct, gbuffer, specular, Init, PassDesc};
 use crate::gpu::shared::{DIRECT_IN, HDR_OUT, SPECULAR_IN};
-use crate::render::frame::Access;
+use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
 use crate::render::targets::TargetDesc;
 use crate::vk::pipeline::Specialization;
@@ -40,7 +40,14 @@ fn shader(c: &ShadingConfig) -> &'static str {
 pub const PASS: PassDesc = PassDesc {
     name: "composite",
     skip: |_| None,
-    uses: |c| fullscreen::uses(&io(c), false),
+    uses: |c| {
+        // The primary hit's emission is looked up from its triangle's
+        // material (no G-buffer target): the scene geometry is read, and
+        // skinning may have just written it.
+        let mut u = fullscreen::uses(&io(c), false);
+        u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));
+        u
+    },
     create: |i: &Init| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "composite", io(i.config), Shader::Compute(shader(i.config)), &spec)
