@@ -15,6 +15,7 @@ use crate::vk::{Context, ContextOptions, DeviceSelector, RenderDocUse};
 
 mod benchmark;
 mod budget_args;
+pub mod cli_parse;
 mod env_args;
 mod rays;
 pub use benchmark::*;

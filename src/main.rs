@@ -9,9 +9,10 @@ use anyhow::{Context as _, Result};
 use clap::{error::ErrorKind, Args, CommandFactory, Parser, Subcommand};
 use glam::Vec3;
 
+use hybrid_rt::app::cli_parse::*;
 use hybrid_rt::app::{self, AccelUpdate, CameraChoice, GpuOptions, RenderJob};
 use hybrid_rt::render::shading::{AaMode, Backend, Effects, Mode};
-use hybrid_rt::render::supersample::{self, SampleFilter, Supersample};
+use hybrid_rt::render::supersample::{SampleFilter, Supersample};
 use hybrid_rt::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use hybrid_rt::render::{DebugView, RenderSettings};
 use hybrid_rt::report::{self, ReferenceSettings, ReportOptions};
@@ -378,106 +379,6 @@ impl ToneArgs {
         }
         None
     }
-}
-
-/// "A,B": two finite floats.
-fn parse_pair(s: &str, what: &str) -> Result<(f32, f32), String> {
-    let parts: Vec<&str> = s.split(',').collect();
-    let [a, b] = parts[..] else { return Err(format!("'{s}': expected {what}")) };
-    let num = |t: &str| -> Result<f32, String> {
-        t.trim()
-            .parse::<f32>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or(format!("'{t}' is not a finite number (expected {what})"))
-    };
-    Ok((num(a)?, num(b)?))
-}
-
-fn parse_percentiles(s: &str) -> Result<(f32, f32), String> {
-    let (lo, hi) = parse_pair(s, "LOW,HIGH with 0 <= LOW < HIGH <= 1")?;
-    if (0.0..1.0).contains(&lo) && lo < hi && hi <= 1.0 {
-        Ok((lo, hi))
-    } else {
-        Err(format!("{lo},{hi} is out of range (expected LOW,HIGH with 0 <= LOW < HIGH <= 1)"))
-    }
-}
-
-fn parse_speeds(s: &str) -> Result<(f32, f32), String> {
-    let (b, d) = parse_pair(s, "BRIGHTEN,DARKEN in EV per second, > 0")?;
-    if b > 0.0 && d > 0.0 {
-        Ok((b, d))
-    } else {
-        Err(format!("{b},{d} is out of range (expected BRIGHTEN,DARKEN in EV per second, > 0)"))
-    }
-}
-
-/// A finite float for `flag` that `ok` accepts; `range` says what is.
-fn parse_f32(s: &str, range: &str, ok: impl Fn(f32) -> bool) -> Result<f32, String> {
-    let v: f32 = s.trim().parse().map_err(|e| format!("{e} (expected {range})"))?;
-    if v.is_finite() && ok(v) {
-        Ok(v)
-    } else {
-        Err(format!("{v} is out of range (expected {range})"))
-    }
-}
-
-/// An integer in `lo..=hi`; parsed wide so that negative values get the
-/// range message instead of "invalid digit".
-fn parse_int(s: &str, lo: i64, hi: i64, what: &str) -> Result<i64, String> {
-    let v: i64 = s.trim().parse().map_err(|e| format!("{e} (expected {what} {lo}..={hi})"))?;
-    if (lo..=hi).contains(&v) {
-        Ok(v)
-    } else {
-        Err(format!("{v} is out of range (expected {what} {lo}..={hi})"))
-    }
-}
-
-fn parse_resolution(s: &str) -> Result<u32, String> {
-    parse_int(s, 1, 16384, "a resolution of").map(|v| v as u32)
-}
-
-fn parse_max_depth(s: &str) -> Result<u32, String> {
-    parse_int(s, 0, 64, "a depth of").map(|v| v as u32)
-}
-
-fn parse_count(s: &str) -> Result<usize, String> {
-    parse_int(s, 1, i64::MAX, "a frame count of").map(|v| v as usize)
-}
-
-fn parse_reps(s: &str) -> Result<usize, String> {
-    parse_int(s, 1, 1000, "a repetition count of").map(|v| v as usize)
-}
-
-fn parse_supersample(s: &str) -> Result<u32, String> {
-    parse_int(s, 1, supersample::MAX_FACTOR as i64, "samples per axis").map(|v| v as u32)
-}
-
-fn parse_exposure(s: &str) -> Result<f32, String> {
-    parse_f32(s, "finite, > 0", |v| v > 0.0)
-}
-
-fn parse_fov(s: &str) -> Result<f32, String> {
-    parse_f32(s, "degrees in (0, 180)", |v| v > 0.0 && v < 180.0)
-}
-
-fn parse_min_weight(s: &str) -> Result<f32, String> {
-    parse_f32(s, "finite, in [0, 1]", |v| (0.0..=1.0).contains(&v))
-}
-
-fn parse_share(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
-        _ => Err(format!("'{s}': expected a share in [0, 1]")),
-    }
-}
-
-fn parse_time(s: &str) -> Result<f32, String> {
-    parse_f32(s, "finite seconds", |_| true)
-}
-
-fn parse_fps(s: &str) -> Result<f32, String> {
-    parse_f32(s, "finite, > 0", |v| v > 0.0)
 }
 
 impl ViewArgs {

@@ -11,6 +11,7 @@ pub mod kernel;
 pub mod output;
 pub mod passes;
 pub mod rays;
+pub mod settings;
 pub mod shading;
 pub mod skinning;
 pub mod srgb;
@@ -35,86 +36,14 @@ use crate::vk::timer::GpuTimer;
 use crate::vk::{Buffer, Context};
 use frame::{Access, Recorder, SharedBuffer, Use};
 use passes::{antialias::final_ldr, composite::HDR, Cx, Init, Pass, FRAME};
-use shading::{AaMode, Backend, Effects, Mode, SceneNeeds, ShadingConfig};
+use shading::{Mode, SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;
 use tone::{ExposureState, ToneOperator, ToneSettings};
 use tracer::Tracer;
 
-/// How the ambient term lights surfaces from an environment map.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum AmbientMode {
-    /// The map's irradiance at the surface normal, from its 3-band SH
-    /// projection (gpu/env_sh.rs).
-    #[default]
-    Sh,
-    /// The map's mean radiance for every normal (the behaviour before SH).
-    Constant,
-}
-
-/// G-buffer debug views (also selectable in the viewer).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum DebugView {
-    #[default]
-    None,
-    Albedo,
-    Normal,
-    Depth,
-    Material,
-    Object,
-    /// The ray-tracing budget's selection (`--budget`): traced objects red.
-    Selection,
-}
-
-impl DebugView {
-    fn code(self) -> u32 {
-        use crate::gpu::shared::*;
-        match self {
-            DebugView::None => DEBUG_NONE,
-            DebugView::Albedo => DEBUG_ALBEDO,
-            DebugView::Normal => DEBUG_NORMAL,
-            DebugView::Depth => DEBUG_DEPTH,
-            DebugView::Material => DEBUG_MATERIAL,
-            DebugView::Object => DEBUG_OBJECT,
-            DebugView::Selection => DEBUG_SELECTION,
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RenderSettings {
-    /// The exposure with auto exposure off; with it on, a compensation
-    /// factor on the measured one.
-    pub exposure: f32,
-    pub tone: ToneSettings,
-    pub debug_view: DebugView,
-    pub mode: Mode,
-    pub effects: Effects,
-    pub backend: Backend,
-    /// Anti-aliasing after tone mapping (edge by default).
-    pub aa: AaMode,
-    /// Per-object ray-tracing budget (None: every object is traced).
-    pub budget: Option<budget::BudgetSettings>,
-    /// Diffuse environment light with a map (without one it is the
-    /// constant colour either way).
-    pub ambient: AmbientMode,
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        Self {
-            exposure: 1.0,
-            tone: ToneSettings::default(),
-            debug_view: DebugView::None,
-            mode: Mode::Hybrid,
-            effects: Effects::default(),
-            backend: Backend::Auto,
-            aa: AaMode::Edge,
-            budget: None,
-            ambient: AmbientMode::Sh,
-        }
-    }
-}
+pub use output::FrameOutput;
+pub use settings::{AmbientMode, DebugView, RenderSettings};
 
 /// The frame uniforms' tone-mapping fields.
 fn tone_uniforms(t: &ToneSettings, adapt_dt: Option<f32>) -> GpuFrame {
@@ -136,34 +65,6 @@ fn tone_uniforms(t: &ToneSettings, adapt_dt: Option<f32>) -> GpuFrame {
         speed_darken: t.speed_darken,
         ..bytemuck::Zeroable::zeroed()
     }
-}
-
-/// What a headless frame gives back.
-pub struct FrameOutput {
-    pub width: u32,
-    pub height: u32,
-    /// The final displayable image (tone-mapped, anti-aliased unless
-    /// `--aa none`), sRGB, RGBA8, row-major, top row first.
-    pub ldr: Vec<u8>,
-    /// Linear radiance, RGBA32F.
-    pub hdr: Vec<f32>,
-    /// GPU milliseconds per pass.
-    pub timings: Vec<(&'static str, f64)>,
-    /// Rays traced by kind (camera, shadow, secondary) when
-    /// `Effects::count_rays` is on, else zeros.
-    pub ray_counts: [u32; 3],
-    /// Pixels whose reflection/refraction tree was cut by the per-pixel ray
-    /// budget or a full branch stack (`RAY_BUDGET_PER_PIXEL`,
-    /// `BRANCH_STACK_SIZE`); always counted.
-    pub truncated_pixels: u32,
-    /// Pixels whose radiance reached tone mapping as NaN or Inf (shown
-    /// magenta); always counted.
-    pub bad_pixels: u32,
-    /// What auto exposure measured and applied (None: fixed exposure).
-    pub exposure: Option<ExposureState>,
-    /// The first frame of its passes: a driver that compiles shaders on
-    /// first use (lavapipe) did so inside `timings`.
-    pub cold: bool,
 }
 
 /// A pass of the current frame with what it declared.
