@@ -258,8 +258,7 @@ fn bench_frame_inner(
     if i == warmup {
         log_frame_health(&out);
     }
-    let ray_ms =
-        out.timings.iter().filter(|(n, _)| matches!(*n, "direct" | "specular")).map(|(_, ms)| ms).sum();
+    let ray_ms = out.ray_stage_ms();
     Ok(BenchFrame {
         update,
         timings: out.timings,

@@ -51,6 +51,22 @@ impl FrameOutput {
         }
     }
 
+    /// GPU ms of the pass `name` (0 when the frame has none).
+    pub fn pass_ms(&self, name: &str) -> f64 {
+        // (+ 0.0: an empty sum is -0.0.)
+        self.timings.iter().filter(|(n, _)| *n == name).map(|(_, ms)| ms).sum::<f64>() + 0.0
+    }
+
+    /// GPU ms of the frame's passes, the readback copy left out.
+    pub fn frame_ms(&self) -> f64 {
+        self.timings.iter().filter(|(n, _)| *n != "readback").map(|(_, ms)| ms).sum()
+    }
+
+    /// GPU ms of the ray stages the budget governs (`direct` + `specular`).
+    pub fn ray_stage_ms(&self) -> f64 {
+        self.pass_ms("direct") + self.pass_ms("specular")
+    }
+
     /// What to tell the user when reflection/refraction trees were cut.
     pub fn truncation_warning(&self) -> Option<String> {
         use crate::gpu::shared::{BRANCH_STACK_SIZE, RAY_BUDGET_PER_PIXEL};

@@ -79,16 +79,12 @@ struct Frame {
 }
 
 fn frame_of(out: &FrameOutput) -> Frame {
-    // (+ 0.0: an empty sum is -0.0.)
-    let pass =
-        |name: &str| out.timings.iter().filter(|(n, _)| *n == name).map(|(_, ms)| ms).sum::<f64>() + 0.0;
-    let ms = out.timings.iter().filter(|(n, _)| *n != "readback").map(|(_, ms)| ms).sum();
     Frame {
         ldr: LdrImage { width: out.width, height: out.height, rgb: out.rgb8().into_raw() },
         hdr: HdrImage::from_rgba(out.width, out.height, &out.hdr).0,
-        ms,
-        ray_ms: pass("direct") + pass("specular"),
-        heuristic_ms: pass("heuristic"),
+        ms: out.frame_ms(),
+        ray_ms: out.ray_stage_ms(),
+        heuristic_ms: out.pass_ms("heuristic"),
     }
 }
 

@@ -308,7 +308,7 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         let extent = ash::vk::Extent2D { width, height };
         let f = render_supersampled(ctx, &scene, &camera, extent, &base.settings, &ss)
             .context("report: the aa knob's supersampled reference")?;
-        let ms = f.timings.iter().filter(|(n, _)| *n != "readback").map(|(_, ms)| ms).sum();
+        let ms = f.frame_ms();
         Some(AaReference { supersample: ss, ldr: LdrImage { width, height, rgb: f.rgb8().into_raw() }, ms })
     } else {
         None
