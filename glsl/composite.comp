@@ -54,7 +54,7 @@ void main() {
         // Paper mode's Figure 2: red = every effect traced; per effect
         // (effects mode) red = shadows, green = reflections, blue =
         // refractions; grey = raster only.
-        uint e = budget_effects(p.instance);
+        uint e = budget_effects(p.instance, px);
         vec3 bits = vec3(e & 1u, (e >> 1u) & 1u, (e >> 2u) & 1u);
         if (e == EFFECT_ALL) bits = vec3(1.0, 0.0, 0.0);
         color = e == 0u ? vec3(0.5 * grey + 0.1) : mix(vec3(0.1), vec3(0.25 + 0.75 * grey), bits);
@@ -62,7 +62,7 @@ void main() {
     }
     }
 #else
-    g_effects = budget_effects(p.instance);
+    g_effects = budget_effects(p.instance, px);
     color = s.emissive + imageLoad(direct_in, px).rgb + ambient_light(s, is_mirror(s, 0u));
 #ifdef HAS_SPECULAR
     color += imageLoad(specular_in, px).rgb;

@@ -2,8 +2,9 @@
 //! mode a budget of 0 with the paper's fallback (`--fallback none`) renders
 //! exactly the raster-only image and an unlimited one exactly the full
 //! hybrid image, on every backend; each effect's selection bit gates
-//! exactly that effect; a K = 0 object is never selected;
-//! stickiness keeps the selection steady over a slow pan.
+//! exactly that effect; a partial effect traces its share of an object's
+//! pixels, in tiles that nest as the share grows; a K = 0 object is never
+//! selected; stickiness keeps the selection steady over a slow pan.
 mod common;
 
 use common::BACKENDS;
@@ -12,8 +13,9 @@ use hybrid_rt::gpu::shared::{
     EFFECT_ALL, EFFECT_BIT_REFLECTIONS, EFFECT_BIT_REFRACTIONS, EFFECT_BIT_SHADOWS,
 };
 use hybrid_rt::metrics::diff_stats;
+use hybrid_rt::render::budget::effects::{selection_word, traced_fraction};
 use hybrid_rt::render::budget::{BudgetMode, BudgetSettings, Fallback};
-use hybrid_rt::render::shading::Effects;
+use hybrid_rt::render::shading::{AaMode, Effects};
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::{Camera, Scene};
 
@@ -104,6 +106,60 @@ fn each_effect_bit_gates_exactly_its_effect() {
         assert!(shows > 0.005, "{name}: the default scene does not show the effect");
         assert_eq!(max_on, 0, "{name}: its bit alone does not render the traced effect");
         assert_eq!(max_off, 0, "{name}: the other bits render some of it");
+    }
+    r.destroy(&ctx);
+}
+
+/// A partial effect (effects mode's leftover budget) traces its share of
+/// every pixel tile hash, so of an object's shadow rays; the tiles traced at
+/// a share are traced at every larger one, so a growing budget only adds
+/// shadows. Paper mode's settings carry the override (its report counts the
+/// rays of every frame, calibrated or not).
+#[test]
+fn a_partial_effect_traces_its_share_of_the_pixels_in_nested_tiles() {
+    let scene = default_scene();
+    let ctx = common::validated_context();
+    let n = scene.objects.len();
+    let camera = scene.cameras[0].clone();
+    // 40x23 tiles: enough for the share of traced rays to be near the
+    // word's (binomial spread ~2% at share 0.5 over the lit tiles).
+    let (w, h) = (320, 180);
+    let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::paper(f64::INFINITY) };
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
+    let only_shadows =
+        Effects { shadows: true, reflections: false, refractions: false, ..Effects::default() };
+    // No anti-aliasing: it blends traced and untraced neighbours at tile edges.
+    let settings =
+        RenderSettings { effects: only_shadows, budget: Some(b), aa: AaMode::None, ..Default::default() };
+    let mut shadow_rays = |word: u32| {
+        r.render(&ctx, &scene, &camera, &settings).unwrap();
+        r.set_budget_selection(&b, vec![word; n]);
+        let out = r.render(&ctx, &scene, &camera, &settings).unwrap();
+        (r.budget_report().unwrap().measured_rays[0], out.rgb8())
+    };
+    let (all_rays, traced) = shadow_rays(1 << EFFECT_BIT_SHADOWS);
+    let (no_rays, untraced) = shadow_rays(0);
+    assert!(all_rays > 10_000.0 && no_rays == 0.0, "shadow rays: all {all_rays}, none {no_rays}");
+    let mut last: Option<image::RgbImage> = None;
+    for share in [0.25, 0.5, 0.75] {
+        let word = selection_word(0, 1 << EFFECT_BIT_SHADOWS, share);
+        let (rays, img) = shadow_rays(word);
+        let got = rays / all_rays;
+        eprintln!("share {share}: {got:.3} of the shadow rays");
+        assert!((got - traced_fraction(word, 0)).abs() < 0.08, "share {share}: traced {got:.3} of the rays");
+        // Each pixel is the traced or the untraced one; what a smaller
+        // share traced stays traced.
+        let shadowed = |img: &image::RgbImage, x, y| img.get_pixel(x, y) != untraced.get_pixel(x, y);
+        for (x, y, p) in img.enumerate_pixels() {
+            assert!(
+                p == traced.get_pixel(x, y) || p == untraced.get_pixel(x, y),
+                "pixel ({x}, {y}) is mixed"
+            );
+            if let Some(prev) = &last {
+                assert!(!shadowed(prev, x, y) || shadowed(&img, x, y), "share {share} dropped ({x}, {y})");
+            }
+        }
+        last = Some(img);
     }
     r.destroy(&ctx);
 }

@@ -21,10 +21,29 @@ layout(set = SET_SCENE, binding = SCENE_RAY_COUNTERS) buffer RayCounters { uint 
 layout(set = SET_SCENE, binding = SCENE_BUDGET_STATS) buffer BudgetStats { uint budget_stats[]; };
 layout(set = SET_SCENE, binding = SCENE_BUDGET_MASK) readonly buffer BudgetMask { uint budget_mask[]; };
 
-// The ray-traced effects (EFFECT_* bits) the pixels of `instance` get: all
-// without a budget, else those the budget selected for its object.
-uint budget_effects(uint instance) {
-    return (frame.flags & FRAME_BUDGET) == 0u ? EFFECT_ALL : budget_mask[instances[instance].object_id];
+// A 32-bit integer hash (Jarzynski & Olano 2020's PCG hash): uniform bits
+// from a pixel tile's index, for the budget's partial effects.
+uint pcg_hash(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The ray-traced effects (EFFECT_* bits) pixel `px` of `instance` gets: all
+// without a budget, else those the budget selected for its object, plus
+// its partial effects where px's tile falls within their share. The hash
+// ignores the share, so a larger share keeps every tile a smaller one had.
+uint budget_effects(uint instance, ivec2 px) {
+    if ((frame.flags & FRAME_BUDGET) == 0u) return EFFECT_ALL;
+    uint word = budget_mask[instances[instance].object_id];
+    uint bits = word & EFFECT_ALL;
+    uint partial = (word >> EFFECT_PARTIAL_SHIFT) & EFFECT_ALL;
+    if (partial != 0u) {
+        uvec2 tile = uvec2(px) / BUDGET_TILE;
+        uint h = pcg_hash(tile.x ^ pcg_hash(tile.y)) & 0xFFFFu;
+        if (h < (word >> EFFECT_FRACTION_SHIFT)) bits |= partial;
+    }
+    return bits;
 }
 
 vec4 sample_tex(int index, vec2 uv, vec4 fallback) {

@@ -11,7 +11,7 @@ void direct_pixel(ivec2 px) {
     if (outside_frame(px) || !read_primary(px, p)) return;
     vec3 v = -p.dir;
     face_viewer(p.s, v);
-    g_effects = budget_effects(p.instance);
+    g_effects = budget_effects(p.instance, px);
     imageStore(direct_out, px, vec4(direct_light(p.s, v, p.gn), 1.0));
     budget_count_rays(p.instance);
 }

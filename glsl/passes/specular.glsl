@@ -13,7 +13,7 @@ void specular_pixel(ivec2 px) {
     if (outside_frame(px) || !read_primary(px, p)) return;
     vec3 v = -p.dir;
     float nv = face_viewer(p.s, v);
-    g_effects = budget_effects(p.instance);
+    g_effects = budget_effects(p.instance, px);
     // The pixel's cone at the primary hit.
     float spread = pixel_spread_angle();
     Cone cone = Cone(spread * distance(frame.camera_pos, p.s.position), spread);

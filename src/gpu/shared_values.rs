@@ -55,6 +55,16 @@ shared! {
     uint EFFECT_BIT_REFRACTIONS = 2;
     uint EFFECT_COUNT = 3;
     uint EFFECT_ALL = 7;
+    // The selection word's partial effects (effects mode meets its budget
+    // continuously): bits EFFECT_PARTIAL_SHIFT + EFFECT_BIT_* are effects
+    // traced on a fraction of the object's pixels, whole tiles of
+    // BUDGET_TILE² pixels whose hash (16 bits) is below the fraction in the
+    // word's top 16 bits (EFFECT_FRACTION_SHIFT). Tiles rather than single
+    // pixels keep neighbouring invocations coherent, and a fixed hash makes
+    // a growing fraction add tiles without dropping traced ones.
+    uint EFFECT_PARTIAL_SHIFT = 4;
+    uint EFFECT_FRACTION_SHIFT = 16;
+    uint BUDGET_TILE = 8;
     // Frame.flags bits. FRAME_FALLBACK_RASTER (with FRAME_BUDGET): an
     // effect the budget leaves out falls back to a raster approximation
     // (`--fallback raster`) instead of being left out (`--fallback none`).

@@ -12,7 +12,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use super::camera_controller::{self, digit};
 use super::session::Viewer;
 use super::{Flow, DEBUG_VIEWS};
-use crate::render::budget::{BudgetMode, BudgetSettings};
+use crate::render::budget::{BudgetMode, BudgetSettings, Fallback};
 use crate::render::shading::{AaMode, Mode};
 use crate::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use crate::render::DebugView;
@@ -136,14 +136,30 @@ impl Viewer {
             KeyCode::F7 => toggle("refractions", &mut self.settings.effects.refractions),
             KeyCode::F8 => {
                 // Off -> effects mode -> paper mode -> off, each starting at
-                // every visible object; [ and ] then halve / double it.
+                // every visible object; [ and ] then halve / double it. The
+                // stickiness and fallback carry over (from the command line
+                // at first).
+                if let Some(b) = self.settings.budget {
+                    self.budget_keys = b;
+                }
+                let keep = |mode| Some(BudgetSettings { mode, budget: f64::INFINITY, ..self.budget_keys });
                 self.settings.budget = match self.settings.budget.map(|b| b.mode) {
-                    None => Some(BudgetSettings::effects(f64::INFINITY)),
-                    Some(BudgetMode::Effects) => Some(BudgetSettings::paper(f64::INFINITY)),
+                    None => keep(BudgetMode::Effects),
+                    Some(BudgetMode::Effects) => keep(BudgetMode::Paper),
                     Some(BudgetMode::Paper) => None,
                 };
                 self.log_budget();
             }
+            KeyCode::KeyB => match &mut self.settings.budget {
+                Some(b) => {
+                    b.fallback = match b.fallback {
+                        Fallback::Raster => Fallback::None,
+                        Fallback::None => Fallback::Raster,
+                    };
+                    self.log_budget();
+                }
+                None => log::info!("B: F8 turns the ray-tracing budget on first"),
+            },
             KeyCode::BracketLeft | KeyCode::BracketRight => {
                 let up = code == KeyCode::BracketRight;
                 // From "everything", the cost of everything the last frame
@@ -243,7 +259,13 @@ impl Viewer {
     fn log_budget(&mut self) {
         match &self.settings.budget {
             Some(b) => {
-                log::info!("ray-tracing budget {} ({:?} mode, stickiness {})", b.budget, b.mode, b.stickiness)
+                log::info!(
+                    "ray-tracing budget {} ({:?} mode, stickiness {}, fallback {:?})",
+                    b.budget,
+                    b.mode,
+                    b.stickiness,
+                    b.fallback
+                )
             }
             None => log::info!("ray-tracing budget off: every object traced"),
         }

@@ -20,6 +20,7 @@ use super::stats::FrameStats;
 use super::swapchain::Presenter;
 use super::{NoDisplay, ViewerOptions, FRAMES_IN_FLIGHT};
 use crate::app::{CameraChoice, RenderJob};
+use crate::render::budget::BudgetSettings;
 use crate::render::{RenderSettings, Renderer};
 use crate::scene::Scene;
 use crate::vk::{Context, ContextOptions, RenderDocUse};
@@ -41,6 +42,9 @@ pub(super) struct Viewer {
     pub(super) scene_dirty: bool,
     pub(super) controller: CameraController,
     pub(super) settings: RenderSettings,
+    /// The stickiness and fallback F8 turns the budget on with: the
+    /// command line's, then whatever the keys last set.
+    pub(super) budget_keys: BudgetSettings,
     pub(super) stats: FrameStats,
     /// The renderer's timestamps hold a submitted frame not yet read.
     pub(super) gpu_pending: bool,
@@ -142,6 +146,7 @@ impl Viewer {
             scene_dirty: false,
             controller,
             settings: job.settings,
+            budget_keys: job.settings.budget.unwrap_or(BudgetSettings::effects(f64::INFINITY)),
             stats: FrameStats::new(now),
             gpu_pending: false,
             needs_recreate: true,

@@ -23,9 +23,19 @@
 //! iteration `rays → T/(ms per ray)` has the budget as its fixed point as
 //! long as the stages' base fits in it. `E` (the designer's cost factor)
 //! is not used: the cost is measured.
+//!
+//! What the greedy rule leaves of the budget goes to a partial pair: the
+//! most relevant pair that did not fit is traced on the fraction
+//! `left / cost` of its object's pixels (whole tiles picked by a hash, see
+//! EFFECT_PARTIAL_SHIFT). Without it the budget is met only in steps of
+//! whole objects, and a scene whose cost sits in one large object (Sponza's
+//! building) can only take all of it or none.
 
 use super::paper::{self, ObjectStats, Scored, Screen};
-use crate::gpu::shared::{EFFECT_BIT_REFLECTIONS, EFFECT_BIT_REFRACTIONS, EFFECT_BIT_SHADOWS, EFFECT_COUNT};
+use crate::gpu::shared::{
+    BUDGET_TILE, EFFECT_ALL, EFFECT_BIT_REFLECTIONS, EFFECT_BIT_REFRACTIONS, EFFECT_BIT_SHADOWS,
+    EFFECT_COUNT, EFFECT_FRACTION_SHIFT, EFFECT_PARTIAL_SHIFT,
+};
 
 pub const EFFECTS: usize = EFFECT_COUNT as usize;
 
@@ -34,7 +44,7 @@ pub const EFFECT_NAMES: [&str; EFFECTS] = ["shadows", "reflections", "refraction
 
 /// The ray stages, the pass that traces each, and each effect's stage.
 pub const STAGES: [&str; 2] = ["direct", "specular"];
-const fn stage_of(effect: usize) -> usize {
+pub const fn stage_of(effect: usize) -> usize {
     if effect == EFFECT_BIT_SHADOWS as usize {
         0
     } else {
@@ -44,6 +54,10 @@ const fn stage_of(effect: usize) -> usize {
 
 /// Weight of a new frame in the moving averages.
 const SMOOTHING: f64 = 0.3;
+/// A frame's time per ray counts as at most this factor off the estimate
+/// (so one frame moves `k` by at most 30% up or 15% down with SMOOTHING
+/// 0.3).
+const OUTLIER: f64 = 2.0;
 
 /// One ray stage's `ms = base + k · rays`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -74,8 +88,13 @@ impl StageFit {
             self.base_ms = Some(b);
             return;
         }
-        let excess = (ms - self.base_ms.unwrap_or(0.0)).max(0.0);
+        let mut excess = (ms - self.base_ms.unwrap_or(0.0)).max(0.0);
         if self.rays > 0.0 {
+            // One frame moves the estimate by a bounded step: a spike (on
+            // lavapipe, another process taking the CPU mid-pass; on a GPU, a
+            // clock change) would otherwise swing the next selections.
+            let expected = self.ms_per_ray() * rays;
+            excess = excess.clamp(expected / OUTLIER, expected * OUTLIER);
             self.excess_ms += SMOOTHING * (excess - self.excess_ms);
             self.rays += SMOOTHING * (rays - self.rays);
         } else {
@@ -89,12 +108,39 @@ impl StageFit {
     }
 }
 
+/// Pixels a partial pair must have traced for its rays per pixel to be
+/// measured from it (fewer tiles make the hashed share of pixels noisy).
+const MIN_PARTIAL_PIXELS: f64 = 4.0 * (BUDGET_TILE * BUDGET_TILE) as f64;
+
+/// A selection word (the budget mask's per-object word): `full` effects
+/// on every pixel, `partial` ones on `fraction` of them.
+pub fn selection_word(full: u32, partial: u32, fraction: f64) -> u32 {
+    let q = ((fraction.clamp(0.0, 1.0) * 65536.0).floor() as u32).min(0xFFFF);
+    if partial == 0 || q == 0 {
+        return full & EFFECT_ALL;
+    }
+    (full & EFFECT_ALL) | ((partial & EFFECT_ALL) << EFFECT_PARTIAL_SHIFT) | (q << EFFECT_FRACTION_SHIFT)
+}
+
+/// The share of its pixels on which `word` traces `effect` (the tiles'
+/// hash is uniform, so the expected share): 1, the word's fraction, or 0.
+pub fn traced_fraction(word: u32, effect: usize) -> f64 {
+    if (word >> effect) & 1 == 1 {
+        1.0
+    } else if (word >> (EFFECT_PARTIAL_SHIFT as usize + effect)) & 1 == 1 {
+        (word >> EFFECT_FRACTION_SHIFT) as f64 / 65536.0
+    } else {
+        0.0
+    }
+}
+
 /// What one finished frame showed the model.
 pub struct Observation<'a> {
     /// Per object: the statistics words' pixels and rays per effect.
     pub pixels: &'a [u32],
     pub rays: &'a [[u32; EFFECTS]],
-    /// The effect bits each object traced in that frame.
+    /// The selection words each object traced in that frame (full and
+    /// partial effect bits, see [`selection_word`]).
     pub traced: &'a [u32],
     /// GPU ms of the `direct` and `specular` passes (0 when left out;
     /// None when the frame's times are not representative, e.g. a shader
@@ -140,10 +186,13 @@ impl CostModel {
             let rays = o.rays.get(i).copied().unwrap_or([0; EFFECTS]);
             for e in 0..EFFECTS {
                 stage_rays[stage_of(e)] += rays[e] as f64;
-                if (traced >> e) & 1 == 0 {
+                let share = traced_fraction(traced, e);
+                if share < 1.0 {
                     all_traced &= pixels == 0;
-                } else if pixels > 0 {
-                    self.rays_per_pixel[i][e] = Some(rays[e] as f64 / pixels as f64);
+                }
+                let traced_pixels = share * pixels as f64;
+                if share >= 1.0 && pixels > 0 || traced_pixels >= MIN_PARTIAL_PIXELS {
+                    self.rays_per_pixel[i][e] = Some(rays[e] as f64 / traced_pixels);
                 }
             }
         }
@@ -180,8 +229,13 @@ pub fn estimated_rays(o: &ObjectStats, shadow_lights: u32, lights: u32) -> [f64;
 /// What effects mode chose.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EffectsSelection {
-    /// Per object, the EFFECT_* bits traced.
+    /// Per object, the selection word: EFFECT_* bits traced on every pixel,
+    /// and the partial pair's bit and fraction ([`selection_word`]).
     pub bits: Vec<u32>,
+    /// The partial pair: object, effect, fraction of its pixels.
+    pub partial: Option<(usize, usize, f64)>,
+    /// Predicted rays of each ray stage (`direct`, `specular`).
+    pub predicted_rays: [f64; 2],
     /// Predicted ms of the ray stages with this selection (bases included).
     pub predicted_ms: f64,
     /// The bases alone (what any selection costs).
@@ -202,7 +256,9 @@ pub fn select(
     let scored = paper::score(objects, screen, params);
     let stickiness = if params.stickiness.is_finite() { params.stickiness as f64 } else { 0.0 };
     let k = [0usize, 1].map(|s| model.stages[s].ms_per_ray());
+    // Per pair: its score, and the rays it would trace (all its pixels).
     let mut pairs = Vec::new();
+    let mut pair_rays = Vec::new();
     for (o, (stats, s)) in objects.iter().zip(&scored).enumerate() {
         let q = estimated_rays(stats, params.shadow_lights, params.lights);
         let relevance_factor = if stats.relevance.is_finite() { stats.relevance as f64 } else { 0.0 };
@@ -220,15 +276,42 @@ pub fn select(
                 cost: s.pixels as f64 * rays * k[stage_of(e)],
                 relevance,
             });
+            pair_rays.push(s.pixels as f64 * rays);
         }
     }
     let base_ms: f64 = model.stages.iter().map(|s| s.base_ms.unwrap_or(0.0)).sum();
     let chosen = paper::select(&pairs, budget_ms - base_ms);
     let mut bits = vec![0u32; objects.len()];
-    for id in &chosen.selected {
-        bits[id / EFFECTS] |= 1 << (id % EFFECTS);
+    let mut predicted_rays = [0.0; 2];
+    let mut spent = 0.0;
+    let mut take = |i: usize, word: &mut u32, share: f64| {
+        let e = pairs[i].object % EFFECTS;
+        *word = if share >= 1.0 { *word | 1 << e } else { selection_word(*word, 1 << e, share) };
+        let share = traced_fraction(*word, e);
+        predicted_rays[stage_of(e)] += share * pair_rays[i];
+        spent += share * pairs[i].cost;
+    };
+    for (i, p) in pairs.iter().enumerate() {
+        if chosen.mask.get(p.object).copied().unwrap_or(false) {
+            take(i, &mut bits[p.object / EFFECTS], 1.0);
+        }
     }
-    EffectsSelection { bits, predicted_ms: base_ms + chosen.spent, base_ms }
+    // What the greedy rule left goes to the most relevant pair that did
+    // not fit, on that share of its pixels.
+    let left = budget_ms - base_ms - chosen.spent;
+    let partial = (0..pairs.len())
+        .filter(|&i| {
+            let p = &pairs[i];
+            paper::candidate(p) && p.cost > 0.0 && !chosen.mask.get(p.object).copied().unwrap_or(false)
+        })
+        .min_by(|&a, &b| paper::rank(&pairs[a], &pairs[b]))
+        .filter(|_| left.is_finite() && left > 0.0)
+        .map(|i| (i, (left / pairs[i].cost).min(1.0)));
+    if let Some((i, share)) = partial {
+        take(i, &mut bits[pairs[i].object / EFFECTS], share);
+    }
+    let partial = partial.map(|(i, share)| (pairs[i].object / EFFECTS, pairs[i].object % EFFECTS, share));
+    EffectsSelection { bits, partial, predicted_rays, predicted_ms: base_ms + spent, base_ms }
 }
 
 #[cfg(test)]
@@ -291,6 +374,31 @@ mod tests {
     }
 
     #[test]
+    fn one_spiking_frame_moves_the_time_per_ray_a_bounded_step() {
+        let mut m = model(&[2]);
+        let k = m.stages[1].ms_per_ray();
+        // 100 times the usual time for the same rays.
+        m.observe(&Observation {
+            pixels: &[100],
+            rays: &[[100, 200, 0]],
+            traced: &[EFFECT_ALL],
+            stage_ms: Some([2.1, 2.0 + 200.0 * k * 100.0]),
+        });
+        let ratio = m.stages[1].ms_per_ray() / k;
+        assert!(ratio > 1.2 && ratio <= 1.0 + SMOOTHING * (OUTLIER - 1.0) + 1e-9, "k moved by {ratio}");
+        // Frames at the usual time bring it back.
+        for _ in 0..30 {
+            m.observe(&Observation {
+                pixels: &[100],
+                rays: &[[100, 200, 0]],
+                traced: &[EFFECT_ALL],
+                stage_ms: Some([2.1, 2.0 + 200.0 * k]),
+            });
+        }
+        assert!((m.stages[1].ms_per_ray() / k - 1.0).abs() < 1e-3);
+    }
+
+    #[test]
     fn selection_is_per_effect_and_fits_the_budget() {
         // Costs: shadows 0.1 ms, reflections 2 ms per object (of 100 px).
         let objects = [obj(100, 1.0, true), obj(100, 2.0, true), obj(100, 4.0, false)];
@@ -298,13 +406,71 @@ mod tests {
         // Bases 4 ms; 2.35 ms left, in order of relevance: the nearest
         // object's shadows and reflections (2.1 ms), the second's shadows,
         // not its reflections (2 ms more), the third's shadows.
+        // The 0.05 ms left go to the best pair that did not fit, the second
+        // object's reflections, on 0.05 / 2 of its pixels.
         let s = select(&objects, SCREEN, &params(0.0), &m, 6.35, None);
-        assert_eq!(s.bits, vec![0b011, 0b001, 0b001]);
-        assert!((s.predicted_ms - (4.0 + 2.0 + 0.3)).abs() < 1e-9, "{}", s.predicted_ms);
+        assert_eq!(s.bits.iter().map(|b| b & EFFECT_ALL).collect::<Vec<_>>(), vec![0b011, 0b001, 0b001]);
+        let (o, e, share) = s.partial.expect("a partial pair");
+        assert_eq!((o, e), (1, EFFECT_BIT_REFLECTIONS as usize));
+        assert!((share - 0.025).abs() < 1e-12, "{share}");
+        assert!((traced_fraction(s.bits[1], e) - 0.025).abs() < 2.0 / 65536.0);
+        assert!((s.predicted_ms - 6.35).abs() < 2.0 * 2.0 / 65536.0, "{}", s.predicted_ms);
+        // Rays: 3 objects' shadows (100 each), 2 reflections per pixel of
+        // the first object and of 2.5% of the second's.
+        assert!((s.predicted_rays[0] - 300.0).abs() < 1e-9, "{:?}", s.predicted_rays);
+        assert!((s.predicted_rays[1] - 205.0).abs() < 0.01, "{:?}", s.predicted_rays);
         // Below the bases nothing; an unlimited budget everything possible.
         assert_eq!(select(&objects, SCREEN, &params(0.0), &m, 3.9, None).bits, vec![0; 3]);
         let all = select(&objects, SCREEN, &params(0.0), &m, f64::INFINITY, None);
         assert_eq!(all.bits, vec![0b011, 0b011, 0b001]);
+        assert_eq!(all.partial, None, "nothing is left out of an unlimited budget");
+    }
+
+    #[test]
+    fn the_budget_left_is_met_by_a_share_of_the_best_pair_that_did_not_fit() {
+        // One object holds all the cost (2.1 ms): every budget between the
+        // bases (4 ms) and everything is met, not just 4 and 6.1 ms.
+        let objects = [obj(100, 1.0, true)];
+        let m = model(&[2]);
+        for t in [4.5, 5.0, 6.0] {
+            let s = select(&objects, SCREEN, &params(0.0), &m, t, None);
+            assert!((s.predicted_ms - t).abs() < 2.0 * 2.1 / 65536.0, "T {t}: {}", s.predicted_ms);
+        }
+        // 4.5 ms: shadows (0.1 ms) fit; reflections (2 ms) get 0.4 / 2.
+        let s = select(&objects, SCREEN, &params(0.0), &m, 4.5, None);
+        assert_eq!(s.bits[0] & EFFECT_ALL, 0b001);
+        assert!((traced_fraction(s.bits[0], 1) - 0.2).abs() < 1.0 / 65536.0);
+        // K = 0 gets no share either.
+        let none = [ObjectStats { relevance: 0.0, ..objects[0] }];
+        let s = select(&none, SCREEN, &params(0.0), &m, 5.0, None);
+        assert_eq!((s.bits[0], s.partial), (0, None));
+    }
+
+    #[test]
+    fn selection_words_round_trip_and_partial_pairs_are_measured_per_traced_pixel() {
+        let w = selection_word(0b001, 0b100, 0.5);
+        assert_eq!(w & EFFECT_ALL, 0b001);
+        assert_eq!(traced_fraction(w, 0), 1.0);
+        assert_eq!(traced_fraction(w, 1), 0.0);
+        assert!((traced_fraction(w, 2) - 0.5).abs() < 1.0 / 65536.0);
+        assert_eq!(selection_word(0b010, 0b001, 0.0), 0b010, "a zero share is no partial pair");
+        assert_eq!(selection_word(0b010, 0, 0.7), 0b010);
+        // Reflections traced on a quarter of 1000 pixels, 500 rays: 2 per
+        // traced pixel (not 0.5 per pixel of the object).
+        let mut m = model(&[2]);
+        let word = selection_word(0b001, 0b010, 0.25);
+        let share = traced_fraction(word, 1);
+        m.observe(&Observation {
+            pixels: &[1000],
+            rays: &[[1000, (500.0 * share / 0.25).round() as u32, 0]],
+            traced: &[word],
+            stage_ms: Some([3.0, 7.0]),
+        });
+        assert!((m.rays_per_pixel(0, 1, 99.0) - 2.0).abs() < 1e-3, "{}", m.rays_per_pixel(0, 1, 99.0));
+        // A share of too few pixels leaves the last measurement alone.
+        let tiny = selection_word(0, 0b010, 0.01);
+        m.observe(&Observation { pixels: &[1000], rays: &[[0, 7, 0]], traced: &[tiny], stage_ms: None });
+        assert!((m.rays_per_pixel(0, 1, 99.0) - 2.0).abs() < 1e-3);
     }
 
     #[test]
@@ -314,8 +480,9 @@ mod tests {
         // Equal objects, room for one reflection: without stickiness the
         // lower id; with it, the pair selected last frame.
         let p = params(1e3);
-        assert_eq!(select(&objects, SCREEN, &p, &m, 6.25, None).bits, vec![0b011, 0b001]);
-        assert_eq!(select(&objects, SCREEN, &p, &m, 6.25, Some(&[0b001, 0b011])).bits, vec![0b001, 0b011]);
+        let full = |s: EffectsSelection| s.bits.iter().map(|b| b & EFFECT_ALL).collect::<Vec<_>>();
+        assert_eq!(full(select(&objects, SCREEN, &p, &m, 6.25, None)), vec![0b011, 0b001]);
+        assert_eq!(full(select(&objects, SCREEN, &p, &m, 6.25, Some(&[0b001, 0b011]))), vec![0b001, 0b011]);
         objects[0].relevance = 0.0;
         assert_eq!(select(&objects, SCREEN, &p, &m, f64::INFINITY, None).bits, vec![0, 0b011]);
     }

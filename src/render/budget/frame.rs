@@ -33,6 +33,11 @@ pub struct BudgetReport {
     /// what the frame measured them at (`direct` + `specular`).
     pub predicted_ms: Option<f64>,
     pub measured_ms: f64,
+    /// Effects mode: the rays per ray stage (`direct`, `specular`) the
+    /// selection is predicted to trace, and what the frame traced: they
+    /// tell a wrong ray estimate from a wrong ms per ray.
+    pub predicted_rays: Option<[f64; 2]>,
+    pub measured_rays: [f64; 2],
 }
 
 impl BudgetReport {
@@ -177,13 +182,19 @@ impl BudgetState {
         let shadow_lights = scene.lights.iter().filter(|l| l.casts_shadows).count() as u32;
         let params =
             Params { budget: settings.budget, stickiness: settings.stickiness, shadow_lights, lights };
-        let (bits, predicted_ms, selection) = match settings.mode {
+        let mut measured_rays = [0.0; 2];
+        for r in &rays {
+            for (e, &n) in r.iter().enumerate() {
+                measured_rays[effects::stage_of(e)] += n as f64;
+            }
+        }
+        let (bits, predicted_ms, predicted_rays, selection) = match settings.mode {
             BudgetMode::Paper => {
                 let selection = paper::select(&paper::score(&objects, screen, &params), settings.budget);
                 let mut bits: Vec<u32> =
                     selection.mask.iter().map(|&m| if m { EFFECT_ALL } else { 0 }).collect();
                 bits.resize(n, 0);
-                (bits, None, selection)
+                (bits, None, None, selection)
             }
             BudgetMode::Effects => {
                 if !self.model.calibrated() {
@@ -201,7 +212,8 @@ impl BudgetState {
                 let selected: Vec<usize> = (0..n).filter(|&o| chosen.bits[o] != 0).collect();
                 let spent = chosen.predicted_ms - chosen.base_ms;
                 let mask = chosen.bits.iter().map(|&b| b != 0).collect();
-                (chosen.bits, Some(chosen.predicted_ms), Selection { selected, spent, mask })
+                let predicted = (Some(chosen.predicted_ms), Some(chosen.predicted_rays));
+                (chosen.bits, predicted.0, predicted.1, Selection { selected, spent, mask })
             }
         };
         self.mask = Some((*settings, bits.clone()));
@@ -212,6 +224,8 @@ impl BudgetState {
             effects: bits,
             predicted_ms,
             measured_ms,
+            predicted_rays,
+            measured_rays,
         };
         log::debug!("{}", report.summary());
         self.last = Some(report);

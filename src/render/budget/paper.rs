@@ -168,7 +168,7 @@ pub fn score(objects: &[ObjectStats], screen: Screen, params: &Params) -> Vec<Sc
 
 /// Whether `s` can be selected at all: visible (`A > 0`), relevant
 /// (`R > 0`, so `K = 0` never is) and of a finite cost >= 0. NaN fails.
-fn candidate(s: &Scored) -> bool {
+pub(super) fn candidate(s: &Scored) -> bool {
     s.pixels > 0 && s.relevance > 0.0 && s.cost.is_finite() && s.cost >= 0.0
 }
 
@@ -176,7 +176,7 @@ fn candidate(s: &Scored) -> bool {
 /// more budget); equal both, lower object id first. A total order on
 /// candidates (finite values, distinct ids), so the result does not depend
 /// on the input order.
-fn rank(a: &Scored, b: &Scored) -> Ordering {
+pub(super) fn rank(a: &Scored, b: &Scored) -> Ordering {
     let by = |x: f64, y: f64| x.partial_cmp(&y).unwrap_or(Ordering::Equal);
     by(b.relevance, a.relevance).then(by(a.cost, b.cost)).then(a.object.cmp(&b.object))
 }
