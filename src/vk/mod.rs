@@ -7,6 +7,7 @@ pub mod instance;
 pub mod limits;
 pub mod memory;
 pub mod pipeline;
+pub mod raster;
 pub mod reflect;
 pub mod renderdoc;
 pub mod rt_pipeline;

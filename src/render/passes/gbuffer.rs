@@ -4,7 +4,7 @@
 //! hit. Alpha-masked materials use a pipeline variant with the alpha test
 //! specialised in; opaque ones keep early depth testing.
 
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 use ash::vk;
 
 use super::fullscreen::Io;
@@ -14,7 +14,8 @@ use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::render::targets::{TargetDesc, Targets};
 use crate::scene::AlphaMode;
-use crate::vk::pipeline::{pipeline_layout, shader_module, Specialization};
+use crate::vk::pipeline::{pipeline_layout, Specialization};
+use crate::vk::raster::RasterPipeline;
 use crate::vk::Context;
 
 /// The G-buffer targets (gbuffer.frag's outputs, in attachment order; the
@@ -82,8 +83,6 @@ impl GBufferPass {
         let layout = pipeline_layout(ctx, "gbuffer layout", &[scene_layout], 0)?;
         let opaque = create_pipeline(ctx, layout, false)?;
         let masked = create_pipeline(ctx, layout, true)?;
-        ctx.name(opaque, "gbuffer opaque");
-        ctx.name(masked, "gbuffer alpha-masked");
         Ok(GBufferPass { layout, opaque, masked })
     }
 }
@@ -189,70 +188,19 @@ impl Pass for GBufferPass {
 }
 
 fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) -> Result<vk::Pipeline> {
-    let vs = shader_module(ctx, "gbuffer.vert")?;
-    let fs = shader_module(ctx, "gbuffer.frag")?;
     let spec = Specialization::new(&[(SPEC_ALPHA_TEST, alpha_test as u32)]);
-    let spec_info = spec.info();
-    let stages = [
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::VERTEX)
-            .module(vs)
-            .name(c"main"),
-        vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::FRAGMENT)
-            .module(fs)
-            .name(c"main")
-            .specialization_info(&spec_info),
-    ];
-    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default(); // vertex pulling
-    let ia =
-        vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-    let vp = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
-    let rs = vk::PipelineRasterizationStateCreateInfo::default()
-        .polygon_mode(vk::PolygonMode::FILL)
-        .cull_mode(vk::CullModeFlags::BACK)
-        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-        .line_width(1.0);
-    let ms =
-        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let ds = vk::PipelineDepthStencilStateCreateInfo::default()
-        .depth_test_enable(true)
-        .depth_write_enable(true)
-        .depth_compare_op(vk::CompareOp::GREATER);
-    let blend: Vec<_> = COLOR
-        .iter()
-        .map(|_| {
-            vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)
-        })
-        .collect();
-    let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
-    let dynamic = [
-        vk::DynamicState::VIEWPORT,
-        vk::DynamicState::SCISSOR,
-        vk::DynamicState::CULL_MODE,
-        vk::DynamicState::FRONT_FACE,
-    ];
-    let dyn_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
     let formats: Vec<_> = COLOR.iter().map(|t| t.format).collect();
-    let mut rendering = vk::PipelineRenderingCreateInfo::default()
-        .color_attachment_formats(&formats)
-        .depth_attachment_format(DEPTH.format);
-    let info = [vk::GraphicsPipelineCreateInfo::default()
-        .stages(&stages)
-        .vertex_input_state(&vertex_input)
-        .input_assembly_state(&ia)
-        .viewport_state(&vp)
-        .rasterization_state(&rs)
-        .multisample_state(&ms)
-        .depth_stencil_state(&ds)
-        .color_blend_state(&cb)
-        .dynamic_state(&dyn_state)
-        .layout(layout)
-        .push_next(&mut rendering)];
-    let r = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
-    unsafe {
-        ctx.device.destroy_shader_module(vs, None);
-        ctx.device.destroy_shader_module(fs, None);
+    RasterPipeline {
+        name: if alpha_test { "gbuffer alpha-masked" } else { "gbuffer opaque" },
+        vertex: "gbuffer.vert",
+        fragment: Some(("gbuffer.frag", &spec)),
+        color_formats: &formats,
+        depth_format: DEPTH.format,
+        // Reversed Z.
+        depth_compare: vk::CompareOp::GREATER,
+        // Per draw: double-sided materials and mirroring transforms.
+        cull: None,
+        slope_bias: None,
     }
-    Ok(r.map_err(|(_, e)| e).context("create gbuffer pipeline")?[0])
+    .create(ctx, layout)
 }

@@ -14,7 +14,7 @@
 //! the lookup adds a normal offset (glsl/common/shadow_map.glsl). 2 was the
 //! smallest slope factor without acne on the test plane at 60° incidence.
 
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 use ash::vk;
 
 use super::{Cx, Init, Pass, PassDesc};
@@ -22,7 +22,8 @@ use crate::gpu::shadow_map::DEPTH_FORMAT;
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
 use crate::render::targets::Targets;
-use crate::vk::pipeline::{pipeline_layout, shader_module};
+use crate::vk::pipeline::pipeline_layout;
+use crate::vk::raster::RasterPipeline;
 use crate::vk::{image_barrier, Context};
 
 const SLOPE_BIAS: f32 = 2.0;
@@ -51,7 +52,6 @@ impl ShadowMapPass {
         let layout = pipeline_layout(i.ctx, "shadow_map layout", &[i.gpu.set.layout], 4)?;
         let pipeline = create_pipeline(i.ctx, layout)
             .inspect_err(|_| unsafe { i.ctx.device.destroy_pipeline_layout(layout, None) })?;
-        i.ctx.name(pipeline, "shadow_map depth");
         Ok(ShadowMapPass { layout, pipeline })
     }
 }
@@ -148,47 +148,16 @@ impl Pass for ShadowMapPass {
 }
 
 fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout) -> Result<vk::Pipeline> {
-    let vs = shader_module(ctx, "shadow_map.vert")?;
-    let stages = [vk::PipelineShaderStageCreateInfo::default()
-        .stage(vk::ShaderStageFlags::VERTEX)
-        .module(vs)
-        .name(c"main")];
-    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default(); // vertex pulling
-    let ia =
-        vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-    let vp = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
-    // Both faces: a one-sided plane casts a shadow too.
-    let rs = vk::PipelineRasterizationStateCreateInfo::default()
-        .polygon_mode(vk::PolygonMode::FILL)
-        .cull_mode(vk::CullModeFlags::NONE)
-        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-        .depth_bias_enable(true)
-        .depth_bias_constant_factor(0.0)
-        .depth_bias_slope_factor(SLOPE_BIAS)
-        .line_width(1.0);
-    let ms =
-        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let ds = vk::PipelineDepthStencilStateCreateInfo::default()
-        .depth_test_enable(true)
-        .depth_write_enable(true)
-        .depth_compare_op(vk::CompareOp::LESS);
-    let cb = vk::PipelineColorBlendStateCreateInfo::default();
-    let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-    let dyn_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
-    let mut rendering = vk::PipelineRenderingCreateInfo::default().depth_attachment_format(DEPTH_FORMAT);
-    let info = [vk::GraphicsPipelineCreateInfo::default()
-        .stages(&stages)
-        .vertex_input_state(&vertex_input)
-        .input_assembly_state(&ia)
-        .viewport_state(&vp)
-        .rasterization_state(&rs)
-        .multisample_state(&ms)
-        .depth_stencil_state(&ds)
-        .color_blend_state(&cb)
-        .dynamic_state(&dyn_state)
-        .layout(layout)
-        .push_next(&mut rendering)];
-    let r = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
-    unsafe { ctx.device.destroy_shader_module(vs, None) };
-    Ok(r.map_err(|(_, e)| e).context("create shadow_map pipeline")?[0])
+    RasterPipeline {
+        name: "shadow_map depth",
+        vertex: "shadow_map.vert",
+        fragment: None,
+        color_formats: &[],
+        depth_format: DEPTH_FORMAT,
+        depth_compare: vk::CompareOp::LESS,
+        // Both faces: a one-sided plane casts a shadow too.
+        cull: Some(vk::CullModeFlags::NONE),
+        slope_bias: Some(SLOPE_BIAS),
+    }
+    .create(ctx, layout)
 }
