@@ -93,13 +93,63 @@ pub fn error_vs_time(report: &Report, path: &Path) -> Result<()> {
         (if decade <= hi { lo } else { 10f64.powf(lo.log10().floor()) }, hi)
     };
     let ymax = finite.iter().fold(0.0f64, |m, p| m.max(p.1)).max(1e-4) * 1.15;
+    save_png(path, |buf| draw(report, &points, (lo, hi, ymax), buf))
+}
+
+/// Draws a W x H chart into a buffer with `draw` and writes it to `path`.
+fn save_png(path: &Path, draw: impl FnOnce(&mut [u8]) -> DrawResult) -> Result<()> {
     let mut buf = vec![255u8; (W * H * 3) as usize];
-    draw(report, &points, (lo, hi, ymax), &mut buf)
-        .map_err(|e| anyhow!("drawing {}: {e}", path.display()))?;
+    draw(&mut buf).map_err(|e| anyhow!("drawing {}: {e}", path.display()))?;
     image::RgbImage::from_raw(W, H, buf)
         .context("plot buffer size")?
         .save(path)
         .with_context(|| format!("writing {}", path.display()))
+}
+
+/// One series: its line, its points and each point's label beside it, in
+/// colour `k` of the palette, named in the legend.
+fn draw_series<X, Y>(
+    chart: &mut ChartContext<'_, BitMapBackend<'_>, Cartesian2d<X, Y>>,
+    k: usize,
+    label: &str,
+    pts: &[(f64, f64, &str)],
+) -> DrawResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let (r, g, b) = SERIES_COLORS[k % SERIES_COLORS.len()];
+    let color = RGBColor(r, g, b).to_rgba();
+    chart
+        .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1)), color.stroke_width(2)))?
+        .label(label)
+        .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+    chart.draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 5, color.filled())))?;
+    chart.draw_series(pts.iter().map(|p| {
+        EmptyElement::at((p.0, p.1))
+            + Text::new(p.2.to_string(), (8, -20), ("sans-serif", 15).into_font().color(&color))
+    }))?;
+    Ok(())
+}
+
+/// The legend, top right, and the finished image.
+fn finish<'a, X, Y>(
+    root: &DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>,
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
+) -> DrawResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 15))
+        .draw()?;
+    root.present()?;
+    Ok(())
 }
 
 type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
@@ -141,8 +191,6 @@ fn draw(
         }
     }
     for (k, knob) in knobs.iter().enumerate() {
-        let (r, g, b) = SERIES_COLORS[k % SERIES_COLORS.len()];
-        let color = RGBColor(r, g, b).to_rgba();
         // (ms, error, label): the base setting, in every series, is
         // labelled once below.
         let series: Vec<(f64, f64, &str)> = report
@@ -152,16 +200,7 @@ fn draw(
             .filter(|(r, p)| r.knob == *knob && p.0.is_finite() && p.0 > 0.0)
             .map(|(r, p)| (p.0, p.1, if r.measured == report.base { "" } else { r.value.as_str() }))
             .collect();
-        chart
-            .draw_series(LineSeries::new(series.iter().map(|p| (p.0, p.1)), color.stroke_width(2)))?
-            .label(*knob)
-            .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
-        chart.draw_series(series.iter().map(|p| Circle::new((p.0, p.1), 5, color.filled())))?;
-        // Each point names its value, beside it.
-        chart.draw_series(series.iter().map(|p| {
-            EmptyElement::at((p.0, p.1))
-                + Text::new(p.2.to_string(), (8, -20), ("sans-serif", 15).into_font().color(&color))
-        }))?;
+        draw_series(&mut chart, k, knob, &series)?;
     }
     if let Some(i) = report.rows.iter().position(|r| r.measured == report.base) {
         let p = points[i];
@@ -180,15 +219,7 @@ fn draw(
         .label("Pareto front")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
     chart.draw_series(front.iter().map(|p| Circle::new(*p, 9, BLACK.stroke_width(2))))?;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 15))
-        .draw()?;
-    root.present()?;
-    Ok(())
+    finish(&root, &mut chart)
 }
 
 /// `v` with `digits` significant digits, trailing zeros dropped.
@@ -218,13 +249,7 @@ pub fn curves(path: &Path, title: &str, x_desc: &str, y_desc: &str, series: &[Se
     let all = || series.iter().flat_map(|s| &s.points).filter(|p| p.0.is_finite() && p.1.is_finite());
     let xmax = all().fold(0.0f64, |m, p| m.max(p.0)).max(1e-3) * 1.1;
     let ymax = all().fold(0.0f64, |m, p| m.max(p.1)).max(1e-4) * 1.15;
-    let mut buf = vec![255u8; (W * H * 3) as usize];
-    draw_curves(&mut buf, title, (x_desc, y_desc), (xmax, ymax), series)
-        .map_err(|e| anyhow!("drawing {}: {e}", path.display()))?;
-    image::RgbImage::from_raw(W, H, buf)
-        .context("plot buffer size")?
-        .save(path)
-        .with_context(|| format!("writing {}", path.display()))
+    save_png(path, |buf| draw_curves(buf, title, (x_desc, y_desc), (xmax, ymax), series))
 }
 
 fn draw_curves(
@@ -252,30 +277,16 @@ fn draw_curves(
         .y_label_formatter(&|v| format!("{v:.4}"))
         .draw()?;
     for (k, s) in series.iter().enumerate() {
-        let (r, g, b) = SERIES_COLORS[k % SERIES_COLORS.len()];
-        let color = RGBColor(r, g, b).to_rgba();
-        let mut pts: Vec<&(f64, f64, String)> =
-            s.points.iter().filter(|p| p.0.is_finite() && p.1.is_finite()).collect();
+        let mut pts: Vec<(f64, f64, &str)> = s
+            .points
+            .iter()
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .map(|p| (p.0, p.1, p.2.as_str()))
+            .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        chart
-            .draw_series(LineSeries::new(pts.iter().map(|p| (p.0, p.1)), color.stroke_width(2)))?
-            .label(s.label.clone())
-            .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
-        chart.draw_series(pts.iter().map(|p| Circle::new((p.0, p.1), 5, color.filled())))?;
-        chart.draw_series(pts.iter().map(|p| {
-            EmptyElement::at((p.0, p.1))
-                + Text::new(p.2.clone(), (8, -20), ("sans-serif", 15).into_font().color(&color))
-        }))?;
+        draw_series(&mut chart, k, &s.label, &pts)?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 15))
-        .draw()?;
-    root.present()?;
-    Ok(())
+    finish(&root, &mut chart)
 }
 
 #[cfg(test)]
