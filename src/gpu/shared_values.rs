@@ -45,6 +45,11 @@ shared! {
     // The receiver moves this many shadow-map texels along its normal
     // before the lookup (normal-offset bias against acne at grazing light).
     float SHADOW_NORMAL_OFFSET = 1.5;
+    // Ray-origin offset (glsl/common/offset.glsl, and the PRT precompute's
+    // visibility rays in scene/prt): ULPs of the extent the origin moves,
+    // covering the interpolation (3 terms), the instance transform (4 terms)
+    // and the traversal's own triangle test.
+    float OFFSET_ULPS = 16.0;
     uint BUDGET_STAT_WORDS = 8;
     uint BUDGET_STAT_RAYS = 5;
     // Ray-traced effects, as bits of the budget's selection: shadow rays at

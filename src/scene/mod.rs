@@ -11,6 +11,7 @@ pub mod env_layout;
 pub mod gltf_import;
 pub mod obj;
 pub mod primitives;
+pub mod prt;
 pub mod scene_file;
 pub mod sh;
 pub mod skin;
