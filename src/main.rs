@@ -444,6 +444,7 @@ impl ViewArgs {
                 },
                 budget: self.budget.settings(),
                 ambient: self.env.ambient.unwrap_or_default(),
+                prt: self.env.prt_options(),
             },
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),

@@ -14,6 +14,43 @@ pub enum AmbientMode {
     Sh,
     /// The map's mean radiance for every normal (the behaviour before SH).
     Constant,
+    /// Diffuse PRT (scene/prt) on static geometry at the primary hit:
+    /// clamped cosine only; everything else gets `Sh`.
+    PrtUnshadowed,
+    /// PRT with visibility (ambient shadowing).
+    PrtShadowed,
+    /// PRT with visibility and interreflection (`--prt-bounces`).
+    PrtInterreflected,
+}
+
+impl AmbientMode {
+    /// The PRT transfer this mode shades with, if any.
+    pub fn prt_mode(self) -> Option<crate::scene::prt::PrtMode> {
+        use crate::scene::prt::PrtMode;
+        match self {
+            AmbientMode::Sh | AmbientMode::Constant => None,
+            AmbientMode::PrtUnshadowed => Some(PrtMode::Unshadowed),
+            AmbientMode::PrtShadowed => Some(PrtMode::Shadowed),
+            AmbientMode::PrtInterreflected => Some(PrtMode::Interreflected),
+        }
+    }
+}
+
+/// The PRT precompute's parameters (`--prt-samples`, `--prt-bounces`,
+/// `--prt-bands`); used only by the prt ambient modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrtOptions {
+    /// N: N×N directions a vertex.
+    pub samples: u32,
+    pub bounces: u32,
+    pub bands: usize,
+}
+
+impl Default for PrtOptions {
+    fn default() -> Self {
+        use crate::scene::prt::{DEFAULT_BOUNCES, DEFAULT_SAMPLES};
+        Self { samples: DEFAULT_SAMPLES, bounces: DEFAULT_BOUNCES, bands: crate::scene::sh::DEFAULT_BANDS }
+    }
 }
 
 /// G-buffer debug views (also selectable in the viewer).
@@ -62,6 +99,7 @@ pub struct RenderSettings {
     /// Diffuse environment light with a map (without one it is the
     /// constant colour either way).
     pub ambient: AmbientMode,
+    pub prt: PrtOptions,
 }
 
 impl Default for RenderSettings {
@@ -76,6 +114,7 @@ impl Default for RenderSettings {
             aa: AaMode::Edge,
             budget: None,
             ambient: AmbientMode::Sh,
+            prt: PrtOptions::default(),
         }
     }
 }

@@ -27,7 +27,7 @@ use std::time::Instant;
 use anyhow::{ensure, Result};
 use glam::{DMat3, DVec3};
 
-pub use cache::{default_cache_dir, CacheOutcome, PrtCache, CACHE_DIR_ENV};
+pub use cache::{default_cache_dir, key as cache_key, CacheOutcome, PrtCache, CACHE_DIR_ENV};
 
 use super::sh::{check_bands, ShCoeffs};
 use super::Scene;
