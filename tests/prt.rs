@@ -133,12 +133,18 @@ fn prt_renders_match_sh_and_the_occluded_plane() {
     let sh = r.render(&ctx, &scene, cam, &settings(AmbientMode::Sh)).unwrap();
     let un = r.render(&ctx, &scene, cam, &settings(AmbientMode::PrtUnshadowed)).unwrap();
     let shadowed = r.render(&ctx, &scene, cam, &settings(AmbientMode::PrtShadowed)).unwrap();
+    // 5 bands: 25 coefficients a vertex in the buffer and the uniform.
+    let mut five = settings(AmbientMode::PrtUnshadowed);
+    five.prt.bands = 5;
+    let un5 = r.render(&ctx, &scene, cam, &five).unwrap();
     r.destroy(&ctx);
     drop(ctx);
 
     // Unshadowed = SH irradiance under a constant map, every pixel.
     let worst = sh.hdr.iter().zip(&un.hdr).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
     assert!(worst < 1.0 / 255.0, "prt-unshadowed vs sh: largest difference {worst}");
+    let worst = sh.hdr.iter().zip(&un5.hdr).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    assert!(worst < 1.0 / 255.0, "5-band prt-unshadowed vs sh: largest difference {worst}");
 
     // The point under the sphere, against the closed form with the CPU
     // test's tolerance (4 sigma plain MC over SAMPLES² directions, plus the
