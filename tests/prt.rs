@@ -237,3 +237,33 @@ fn bad_prt_flags_are_named() {
         assert!(e.contains("--prt-bands"), "{e}");
     }
 }
+
+/// The precompute's visibility rays start where the shaders' would:
+/// `scene::prt::offset_origin` against offset.glsl's `offset_ray` (run on
+/// the device through the shading probe), within one ULP of the result
+/// (the shader compiler may fuse the multiply-add).
+#[test]
+fn host_offset_matches_the_shaders() {
+    use common::probe::{run, Case};
+    let normals = [[0.0f32, 1.0, 0.0], [0.577_350_3, -0.577_350_3, 0.577_350_3], [-0.267, 0.802, -0.534]];
+    let points =
+        [[0.0f32, 0.0, 0.0], [1e-3, -2e-3, 1e-4], [1.0, -2.0, 3.0], [1e5, -3e4, 1e5], [-1e6, 1e6, 2e6]];
+    let extents = [0.0f32, 1e-6, 2e4];
+    let mut cases = Vec::new();
+    let mut host = Vec::new();
+    for p in points {
+        for n in normals {
+            for e in extents {
+                cases.push(Case::offset(p, n, e));
+                host.push(prt::offset_origin(Vec3::from(p), Vec3::from(n), e));
+            }
+        }
+    }
+    for ((gpu, h), c) in run(&cases).iter().zip(&host).zip(&cases) {
+        for i in 0..3 {
+            let ulp = f32::from_bits(h[i].abs().to_bits() + 1) - h[i].abs();
+            assert!((gpu[i] - h[i]).abs() <= ulp, "p {:?} n {:?}: shader {gpu:?}, host {h}", c.p, c.q);
+        }
+        assert_ne!(Vec3::new(gpu[0], gpu[1], gpu[2]), Vec3::new(c.p[0], c.p[1], c.p[2]));
+    }
+}

@@ -28,6 +28,7 @@ use anyhow::{ensure, Result};
 use glam::{DMat3, DVec3};
 
 pub use cache::{default_cache_dir, key as cache_key, CacheOutcome, PrtCache, CACHE_DIR_ENV};
+pub use transfer::offset_origin;
 
 use super::sh::{check_bands, ShCoeffs};
 use super::Scene;

@@ -256,3 +256,23 @@ fn settings_are_checked() {
     );
     assert!(e.contains("--prt-samples"), "{e}");
 }
+
+/// The shadow rays' first-hit traversal agrees with the closest hit on
+/// whether anything is hit (every vertex of the scene, every direction).
+#[test]
+fn any_hit_agrees_with_closest_hit() {
+    let scene = plane_sphere(1.0, 1.5, 0.5);
+    let statics = static_instances(&scene);
+    let (verts, first) = world_vertices(&scene, &statics);
+    let occ = transfer::Occluders::build(&scene, &statics, &first);
+    let dirs = transfer::SampleSet::new(12, 1, 7);
+    let mut hits = 0;
+    for v in &verts {
+        for d in &dirs.dirs {
+            let any = occ.occluded(v, *d);
+            assert_eq!(any, occ.trace(v, *d).is_some(), "vertex {:?} dir {d}", v.p);
+            hits += any as usize;
+        }
+    }
+    assert!(hits > 1000, "{hits} hits");
+}

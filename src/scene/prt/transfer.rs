@@ -9,7 +9,7 @@ use glam::{DVec3, Vec3};
 
 use super::WorldVertex;
 use crate::accel::bvh::Bvh;
-use crate::accel::watertight::traverse_closest;
+use crate::accel::watertight::{traverse_any, traverse_closest};
 use crate::scene::sh::{eval_basis, MAX_BANDS};
 use crate::scene::{Aabb, Scene};
 
@@ -99,6 +99,12 @@ impl Occluders {
         Self { bvh: Bvh::build(&aabbs), tris, verts, albedo }
     }
 
+    /// Whether the ray from `v` along `d` hits anything (first hit ends it).
+    pub fn occluded(&self, v: &WorldVertex, d: DVec3) -> bool {
+        let o = offset_origin(v.p.as_vec3(), v.n.as_vec3(), v.extent as f32);
+        traverse_any(&self.bvh, &self.tris, o, d.as_vec3(), f32::INFINITY)
+    }
+
     /// Closest hit from `v` along `d`: (triangle, u, v, front-facing).
     pub fn trace(&self, v: &WorldVertex, d: DVec3) -> Option<(u32, f32, f32, bool)> {
         let o = offset_origin(v.p.as_vec3(), v.n.as_vec3(), v.extent as f32);
@@ -113,7 +119,7 @@ impl Occluders {
 
 /// offset.glsl's `offset_ray` on the host: 16 ULPs of the largest of the
 /// point's coordinates and the primitive's extent, along the normal.
-pub(crate) fn offset_origin(p: Vec3, n: Vec3, extent: f32) -> Vec3 {
+pub fn offset_origin(p: Vec3, n: Vec3, extent: f32) -> Vec3 {
     let m = p.abs().max_element().max(extent).max(1e-30);
     let ulp = f32::from_bits(m.to_bits() + 1) - m;
     p + n * (OFFSET_ULPS * ulp)
@@ -139,7 +145,7 @@ pub(crate) fn direct(
             }
             if let Some(occ) = occluders {
                 traced += 1;
-                if occ.trace(wv, *d).is_some() {
+                if occ.occluded(wv, *d) {
                     continue;
                 }
             }
