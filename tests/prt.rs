@@ -267,3 +267,37 @@ fn host_offset_matches_the_shaders() {
         assert_ne!(Vec3::new(gpu[0], gpu[1], gpu[2]), Vec3::new(c.p[0], c.p[1], c.p[2]));
     }
 }
+
+/// `[environment] ambient` in a scene file selects the mode when the
+/// command line gives none (and not when it gives one); a bad name is an
+/// error naming the file, line and the accepted names.
+#[test]
+fn scene_file_selects_the_ambient_mode() {
+    cache_dir();
+    let mut scene = scene();
+    scene.environment.ambient = Some("prt-shadowed".into());
+    let ctx = common::validated_context();
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
+    let cam = &scene.cameras[0];
+    let explicit = r.render(&ctx, &scene, cam, &settings(AmbientMode::PrtShadowed)).unwrap();
+    let from_scene = r
+        .render(&ctx, &scene, cam, &RenderSettings { ambient_from_scene: true, ..settings(AmbientMode::Sh) })
+        .unwrap();
+    let cli_sh = r.render(&ctx, &scene, cam, &settings(AmbientMode::Sh)).unwrap();
+    r.destroy(&ctx);
+    drop(ctx);
+    assert_eq!(explicit.hdr, from_scene.hdr);
+    assert_ne!(explicit.hdr, cli_sh.hdr);
+
+    let toml = SCENE
+        .replace("[[camera]]", "[environment]\ncolor = [1.0, 1.0, 1.0]\nambient = \"prt-foo\"\n\n[[camera]]");
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("prt_bad_ambient.toml");
+    std::fs::write(&path, &toml).unwrap();
+    let e = format!("{:#}", Scene::load(&path).unwrap_err());
+    assert!(e.contains("prt_bad_ambient.toml") && e.contains("prt-foo") && e.contains("prt-shadowed"), "{e}");
+    let ok = toml.replace("prt-foo", "prt-interreflected");
+    std::fs::write(&path, ok).unwrap();
+    assert_eq!(Scene::load(&path).unwrap().environment.ambient.as_deref(), Some("prt-interreflected"));
+}

@@ -491,6 +491,8 @@ impl Renderer {
         } else {
             cull::DrawList::default()
         };
+        let ambient = AmbientMode::resolve(settings, &scene.environment);
+        let settings = &RenderSettings { ambient, ..*settings };
         self.prt.ensure(ctx, &mut self.gpu, scene, settings)?;
         let env = &scene.environment;
         // No map: no SH (the constant colour's irradiance is pi L, exactly

@@ -24,6 +24,15 @@ pub enum AmbientMode {
 }
 
 impl AmbientMode {
+    /// `settings.ambient`, or the scene file's where it applies.
+    pub fn resolve(settings: &RenderSettings, env: &crate::scene::Environment) -> AmbientMode {
+        use clap::ValueEnum;
+        match (&env.ambient, settings.ambient_from_scene) {
+            (Some(name), true) => AmbientMode::from_str(name, false).unwrap_or(settings.ambient),
+            _ => settings.ambient,
+        }
+    }
+
     /// The PRT transfer this mode shades with, if any.
     pub fn prt_mode(self) -> Option<crate::scene::prt::PrtMode> {
         use crate::scene::prt::PrtMode;
@@ -99,6 +108,9 @@ pub struct RenderSettings {
     /// Diffuse environment light with a map (without one it is the
     /// constant colour either way).
     pub ambient: AmbientMode,
+    /// `ambient` was not given on the command line: the scene file's
+    /// `[environment] ambient` wins where it has one.
+    pub ambient_from_scene: bool,
     pub prt: PrtOptions,
 }
 
@@ -114,7 +126,30 @@ impl Default for RenderSettings {
             aa: AaMode::Edge,
             budget: None,
             ambient: AmbientMode::Sh,
+            ambient_from_scene: false,
             prt: PrtOptions::default(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::ValueEnum;
+
+    use super::*;
+
+    /// The scene file accepts exactly the command line's names.
+    #[test]
+    fn ambient_names_match_the_scene_files() {
+        let names: Vec<String> = AmbientMode::value_variants()
+            .iter()
+            .map(|v| v.to_possible_value().unwrap().get_name().to_string())
+            .collect();
+        assert_eq!(names, crate::scene::prt::AMBIENT_NAMES);
+        let env = crate::scene::Environment { ambient: Some("prt-shadowed".into()), ..Default::default() };
+        let cli = RenderSettings { ambient: AmbientMode::Constant, ..Default::default() };
+        assert_eq!(AmbientMode::resolve(&cli, &env), AmbientMode::Constant);
+        let unset = RenderSettings { ambient_from_scene: true, ..cli };
+        assert_eq!(AmbientMode::resolve(&unset, &env), AmbientMode::PrtShadowed);
     }
 }

@@ -33,6 +33,11 @@ pub use transfer::offset_origin;
 use super::sh::{check_bands, ShCoeffs};
 use super::Scene;
 
+/// The ambient modes' names (`--ambient`, the scene file's
+/// `[environment] ambient`; render::AmbientMode checks it has the same).
+pub const AMBIENT_NAMES: [&str; 5] =
+    ["sh", "constant", "prt-unshadowed", "prt-shadowed", "prt-interreflected"];
+
 /// Bump when the computation or the file layout changes: it is part of the
 /// cache key.
 pub const FORMAT_VERSION: u32 = 1;
