@@ -6,6 +6,7 @@
 // reads neither light pass.
 #include "common/gbuffer_read.glsl"
 #include "common/integrator.glsl"
+#include "common/prt.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 #ifndef DEBUG_VIEWS
@@ -63,7 +64,11 @@ void main() {
     }
 #else
     g_effects = budget_effects(p.instance, px);
-    color = s.emissive + imageLoad(direct_in, px).rgb + ambient_light(s, is_mirror(s, 0u));
+    // Diffuse PRT on static geometry (FRAME_AMBIENT_PRT), else SH/constant.
+    vec3 prt_e;
+    bool prt = prt_irradiance(p.instance, p.primitive, p.b, prt_e);
+    vec3 ambient = prt ? ambient_light_from(s, is_mirror(s, 0u), prt_e / PI) : ambient_light(s, is_mirror(s, 0u));
+    color = s.emissive + imageLoad(direct_in, px).rgb + ambient;
 #ifdef HAS_SPECULAR
     color += imageLoad(specular_in, px).rgb;
 #endif

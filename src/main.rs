@@ -444,6 +444,8 @@ impl ViewArgs {
                 },
                 budget: self.budget.settings(),
                 ambient: self.env.ambient.unwrap_or_default(),
+                ambient_from_scene: self.env.ambient.is_none(),
+                prt: self.env.prt_options(),
             },
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),

@@ -27,6 +27,8 @@ struct PrimaryHit {
     vec3 gn;        // unit geometric normal on the viewer's side
     bool back_face;
     uint instance;
+    uint primitive;  // triangle of the instance
+    vec2 b;          // barycentrics (b1, b2) of the hit on it
 };
 
 // The material's emission at the primary hit (barycentrics `b` on
@@ -51,6 +53,8 @@ bool read_primary(ivec2 px, out PrimaryHit p) {
     vec4 mat = texelFetch(gb_material, px, 0);
     TriangleWorld tri = triangle_world(p.instance, hit.y);
     vec2 b = plane_barycentrics(tri, frame.camera_pos, p.dir);
+    p.primitive = hit.y;
+    p.b = b;
     p.s.position = interpolate(tri, b);
     p.s.extent = triangle_extent(tri.p0, tri.p1, tri.p2);
     vec3 tn = cross(tri.p1 - tri.p0, tri.p2 - tri.p0);

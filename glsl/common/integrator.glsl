@@ -168,13 +168,19 @@ bool is_mirror(Surface s, uint depth) {
     return REFLECTIONS && effect_shaded(EFFECT_BIT_REFLECTIONS) && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
 }
 
+// The ambient term of `s` lit by `radiance`, the radiance a Lambertian
+// surface of albedo 1 exits (E / pi): SH irradiance, or PRT in composite.
+vec3 ambient_light_from(Surface s, bool mirror, vec3 radiance) {
+    vec3 f0 = surface_f0(s);
+    vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
+    return radiance * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
+}
+
 // Environment light on `s` (the ambient term): the irradiance at its
 // normal (env.glsl's ambient_radiance). A mirror's specular share comes from
 // its reflection branch instead (traced, or the environment in fallback).
 vec3 ambient_light(Surface s, bool mirror) {
-    vec3 f0 = surface_f0(s);
-    vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
-    return ambient_radiance(s.normal) * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
+    return ambient_light_from(s, mirror, ambient_radiance(s.normal));
 }
 
 // Pushes the reflection and refraction branches `s` spawns (weight `w`,

@@ -11,9 +11,7 @@
 #ifndef OFFSET_GLSL
 #define OFFSET_GLSL
 
-// ULPs of the extent the origin moves: covers the interpolation (3 terms),
-// the instance transform (4 terms) and the traversal's own triangle test.
-const float OFFSET_ULPS = 16.0;
+// OFFSET_ULPS (shared_values.rs): ULPs of the extent the origin moves.
 
 // Spacing of floats at |x| (x finite, > 0).
 float ulp_at(float x) {

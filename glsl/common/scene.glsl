@@ -10,6 +10,8 @@ layout(set = SET_SCENE, binding = SCENE_MATERIALS, scalar) readonly buffer Mater
 layout(set = SET_SCENE, binding = SCENE_INSTANCES, scalar) readonly buffer Instances { Instance instances[]; };
 layout(set = SET_SCENE, binding = SCENE_LIGHTS, scalar) readonly buffer Lights { Light lights[]; };
 layout(set = SET_SCENE, binding = SCENE_ENV_MAP) uniform sampler2D env_map;
+// Diffuse PRT transfer (layout: shared_values.rs SCENE_PRT; prt.glsl).
+layout(set = SET_SCENE, binding = SCENE_PRT, scalar) readonly buffer PrtData { uint prt_data[]; };
 layout(set = SET_SCENE, binding = SCENE_TEXTURES) uniform sampler2D textures[];  // bindless: last binding
 // Ray counters for benchmarks (by kind only when COUNT_RAYS is on; the
 // truncated and bad-pixel slots always):

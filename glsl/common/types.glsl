@@ -98,6 +98,8 @@ struct Frame {
     float pad2;
     // The environment's SH irradiance E_lm (rgb), with FRAME_AMBIENT_SH.
     vec4 sh_irradiance[SH_IRRADIANCE_COEFFS];
+    // The environment's SH radiance L_lm (rgb), with FRAME_AMBIENT_PRT.
+    vec4 sh_radiance[SH_PRT_MAX_COEFFS];
 };
 
 #endif

@@ -242,6 +242,23 @@ pub fn traverse_closest(
     best
 }
 
+/// Whether any of `tris` is hit for `0 < t < tmax`: a visibility ray that
+/// stops at its first hit (the PRT precompute's shadow rays).
+pub fn traverse_any(bvh: &Bvh, tris: &[[Vec3; 3]], origin: Vec3, dir: Vec3, tmax: f32) -> bool {
+    let ray = WatertightRay::new(origin, dir);
+    let mut hit = false;
+    let mut tmax = tmax;
+    traverse(bvh, origin, dir.recip(), &mut tmax, |p, tmax| {
+        let t = &tris[p as usize];
+        if !hit && ray.intersect(t[0], t[1], t[2], *tmax).is_some() {
+            hit = true;
+            // Prunes every box the ray enters after its origin.
+            *tmax = 0.0;
+        }
+    });
+    hit
+}
+
 /// One placed BLAS of a two-level structure.
 #[derive(Clone, Copy, Debug)]
 pub struct BlasInstance<'a> {

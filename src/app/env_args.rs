@@ -29,10 +29,22 @@ pub struct EnvArgs {
     #[arg(long, value_name = "X", value_parser = parse_intensity, allow_hyphen_values = true)]
     pub env_intensity: Option<f32>,
     /// Diffuse environment light: sh (the map's irradiance, per normal, from
-    /// its spherical-harmonic projection) or constant (the map's mean
-    /// radiance for every normal) [default: sh].
+    /// its spherical-harmonic projection), constant (the map's mean
+    /// radiance for every normal), or precomputed radiance transfer on the
+    /// static geometry: prt-unshadowed, prt-shadowed, prt-interreflected
+    /// (cached on disk; animated and skinned objects get sh) [default: sh].
     #[arg(long, value_enum)]
     pub ambient: Option<AmbientMode>,
+    /// PRT directions per vertex: N gives N×N stratified jittered samples
+    /// over the sphere (1..=1024) [default: 16].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=crate::scene::prt::MAX_SAMPLES as i64))]
+    pub prt_samples: Option<u32>,
+    /// Interreflection bounces of prt-interreflected (0..=16) [default: 1].
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(0..=crate::scene::prt::MAX_BOUNCES as i64))]
+    pub prt_bounces: Option<u32>,
+    /// SH bands of the PRT transfer and environment (1..=8, bands² coefficients) [default: 3].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=crate::scene::sh::MAX_BANDS as i64))]
+    pub prt_bands: Option<u32>,
 }
 
 /// What [`EnvArgs`] changes in a loaded scene.
@@ -45,6 +57,15 @@ pub struct EnvOverrides {
 }
 
 impl EnvArgs {
+    pub fn prt_options(&self) -> crate::render::PrtOptions {
+        let d = crate::render::PrtOptions::default();
+        crate::render::PrtOptions {
+            samples: self.prt_samples.unwrap_or(d.samples),
+            bounces: self.prt_bounces.unwrap_or(d.bounces),
+            bands: self.prt_bands.map_or(d.bands, |b| b as usize),
+        }
+    }
+
     pub fn overrides(&self) -> EnvOverrides {
         EnvOverrides {
             map: self.env.clone().map(|p| (p, self.env_layout.unwrap_or_default())),

@@ -5,6 +5,7 @@
 
 pub mod env_sh;
 pub mod origin;
+pub mod prt_buffer;
 pub mod scene;
 pub mod shadow_map;
 pub mod shared;

@@ -13,7 +13,7 @@ use super::origin::RenderOrigin;
 use super::shadow_map::ShadowMaps;
 use super::shared::{
     BUDGET_STAT_WORDS, RAY_COUNTER_SLOTS, SCENE_BUDGET_MASK, SCENE_BUDGET_STATS, SCENE_ENV_MAP,
-    SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS, SCENE_MATERIALS,
+    SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS, SCENE_MATERIALS, SCENE_PRT,
     SCENE_RAY_COUNTERS, SCENE_SHADOW_MAPS, SCENE_SHADOW_VIEWS, SCENE_TEXTURES, SCENE_VERTICES,
 };
 use super::types::*;
@@ -62,6 +62,8 @@ pub struct GpuScene {
     /// BUDGET_STAT_WORDS + 1 words per object (render/budget).
     pub budget_stats: Buffer,
     pub budget_mask: Buffer,
+    /// Diffuse PRT transfer (gpu/prt_buffer.rs), or its 4-word placeholder.
+    pub prt: Buffer,
     pub textures: Vec<Image>,
     samplers: Vec<(SamplerDesc, vk::Sampler)>,
     pub env_map: Image,
@@ -122,6 +124,7 @@ impl GpuScene {
             exposure: Buffer::null(),
             budget_stats: Buffer::null(),
             budget_mask: Buffer::null(),
+            prt: Buffer::null(),
             textures: Vec::new(),
             samplers: Vec::new(),
             env_map: Image::null(),
@@ -230,6 +233,7 @@ impl GpuScene {
             vk::BufferUsageFlags::STORAGE_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
+        self.prt = super::prt_buffer::placeholder(ctx)?;
         // No history yet (`valid` 0): the first measured frame converges at once.
         self.exposure.write(0, &[0u8; EXPOSURE_STATE_BYTES])?;
         (self.env_map, self.env_mean, self.env_sh) = upload_environment(ctx, scene)?;
@@ -262,6 +266,7 @@ impl GpuScene {
             (SCENE_BUDGET_MASK, Binding::one(storage)),
             (SCENE_SHADOW_MAPS, Binding::one(sampled)),
             (SCENE_SHADOW_VIEWS, Binding::one(storage)),
+            (SCENE_PRT, Binding::one(storage)),
             // Bindless textures: variable-count, so the last binding.
             (
                 SCENE_TEXTURES,
@@ -283,6 +288,7 @@ impl GpuScene {
         set.write_buffer(ctx, SCENE_BUDGET_STATS, self.budget_stats.raw);
         set.write_buffer(ctx, SCENE_BUDGET_MASK, self.budget_mask.raw);
         set.write_buffer(ctx, SCENE_SHADOW_VIEWS, self.shadow.views.raw);
+        set.write_buffer(ctx, SCENE_PRT, self.prt.raw);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         set.write_image(ctx, SCENE_ENV_MAP, 0, self.env_map.view, self.env_sampler, read);
         set.write_image(ctx, SCENE_SHADOW_MAPS, 0, self.shadow.image.view, self.shadow.sampler, read);
@@ -312,6 +318,26 @@ impl GpuScene {
         self.frame.write(0, bytemuck::bytes_of(frame))
     }
 
+    /// Replaces the PRT buffer (`words`: gpu/prt_buffer.rs `pack`; None: the
+    /// placeholder). Waits for the device: the scene set is rewritten.
+    pub fn set_prt(&mut self, ctx: &Context, words: Option<&[u32]>) -> Result<()> {
+        unsafe { ctx.device.device_wait_idle() }
+            .context("vkDeviceWaitIdle before replacing the PRT buffer")?;
+        let new = match words {
+            Some(w) => Buffer::with_data(
+                ctx,
+                "prt transfer",
+                bytemuck::cast_slice(w),
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?,
+            None => super::prt_buffer::placeholder(ctx)?,
+        };
+        let mut old = std::mem::replace(&mut self.prt, new);
+        old.destroy(ctx);
+        self.set.write_buffer(ctx, SCENE_PRT, self.prt.raw);
+        Ok(())
+    }
+
     pub fn destroy(&mut self, ctx: &Context) {
         for b in [
             &mut self.vertices,
@@ -324,6 +350,7 @@ impl GpuScene {
             &mut self.exposure,
             &mut self.budget_stats,
             &mut self.budget_mask,
+            &mut self.prt,
         ] {
             b.destroy(ctx);
         }

@@ -36,8 +36,14 @@ shared! {
     // lights by the `shadow_map` pass), and each light's view-projection.
     id SCENE_SHADOW_MAPS = 11;
     id SCENE_SHADOW_VIEWS = 12;
+    // Diffuse PRT (gpu/prt_buffer.rs, glsl/common/prt.glsl): a header of
+    // PRT_HEADER_WORDS words (coefficients, channels, instance count, 0),
+    // per instance its first transfer vertex (PRT_NO_VERTEX: animated or
+    // skinned, SH irradiance instead), then the per-vertex transfer floats.
+    // A 4-word placeholder (instance count 0) without a prt ambient mode.
+    id SCENE_PRT = 13;
     // Bindless textures: variable-count, so the last binding.
-    id SCENE_TEXTURES = 13;
+    id SCENE_TEXTURES = 14;
     // Texels per side of a light's shadow map: at 1024 a directional light
     // fitted to a 40 m scene puts a texel at 4 cm, under a Sponza column's
     // detail, for 4 MiB a light (2048 quadruples memory and raster time).
@@ -45,6 +51,11 @@ shared! {
     // The receiver moves this many shadow-map texels along its normal
     // before the lookup (normal-offset bias against acne at grazing light).
     float SHADOW_NORMAL_OFFSET = 1.5;
+    // Ray-origin offset (glsl/common/offset.glsl, and the PRT precompute's
+    // visibility rays in scene/prt): ULPs of the extent the origin moves,
+    // covering the interpolation (3 terms), the instance transform (4 terms)
+    // and the traversal's own triangle test.
+    float OFFSET_ULPS = 16.0;
     uint BUDGET_STAT_WORDS = 8;
     uint BUDGET_STAT_RAYS = 5;
     // Ray-traced effects, as bits of the budget's selection: shadow rays at
@@ -77,6 +88,14 @@ shared! {
     // Hanrahan 2001; Â_3 = 0, |Â_4| = pi/24).
     uint SH_IRRADIANCE_COEFFS = 9;
     uint FRAME_FALLBACK_RASTER = 4;
+    // The primary hit's ambient term on a static instance is its PRT
+    // transfer dotted with Frame.sh_radiance (with FRAME_AMBIENT_SH too,
+    // for everything else).
+    uint FRAME_AMBIENT_PRT = 8;
+    // Radiance coefficients in Frame.sh_radiance: up to 8 bands.
+    uint SH_PRT_MAX_COEFFS = 64;
+    uint PRT_HEADER_WORDS = 4;
+    uint PRT_NO_VERTEX = 2147483647;
 
     // Set 1 of the passes that read the primary hit (render/passes): the
     // G-buffer targets first, then each pass's own images.

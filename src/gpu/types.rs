@@ -8,7 +8,9 @@ pub use super::shared::{
     ALPHA_BLEND, ALPHA_MASK, ALPHA_OPAQUE, INST_CASTS_SHADOWS, LIGHT_CASTS_SHADOWS, LIGHT_DIRECTIONAL,
     LIGHT_POINT, LIGHT_SPOT, MAT_CASTS_SHADOWS, MAT_DOUBLE_SIDED,
 };
-use super::shared::{INSTANCE_STRIDE, LIGHT_STRIDE, MATERIAL_STRIDE, SH_IRRADIANCE_COEFFS, VERTEX_STRIDE};
+use super::shared::{
+    INSTANCE_STRIDE, LIGHT_STRIDE, MATERIAL_STRIDE, SH_IRRADIANCE_COEFFS, SH_PRT_MAX_COEFFS, VERTEX_STRIDE,
+};
 
 const _: () = assert!(std::mem::size_of::<crate::scene::Vertex>() == VERTEX_STRIDE as usize);
 
@@ -69,7 +71,7 @@ const _: () = assert!(std::mem::size_of::<GpuLight>() == LIGHT_STRIDE as usize);
 pub const DEBUG_NONE: u32 = 0;
 
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct GpuFrame {
     pub view: [f32; 16],
     pub proj: [f32; 16],
@@ -101,8 +103,21 @@ pub struct GpuFrame {
     /// Irradiance E_lm (rgb, w unused) of the environment as shaded: rotated
     /// and scaled by its intensity; read where `flags` has FRAME_AMBIENT_SH.
     pub sh_irradiance: [[f32; 4]; SH_IRRADIANCE_COEFFS as usize],
+    /// Radiance L_lm (rgb) of the environment as shaded (rotated, scaled,
+    /// not convolved: PRT transfer holds the cosine); the first bands² are
+    /// read where `flags` has FRAME_AMBIENT_PRT.
+    pub sh_radiance: [[f32; 4]; SH_PRT_MAX_COEFFS as usize],
 }
-const _: () = assert!(std::mem::size_of::<GpuFrame>() == 384 + 16 * SH_IRRADIANCE_COEFFS as usize);
+const _: () = assert!(
+    std::mem::size_of::<GpuFrame>() == 384 + 16 * (SH_IRRADIANCE_COEFFS + SH_PRT_MAX_COEFFS) as usize
+);
+
+// [T; 64] has no Default.
+impl Default for GpuFrame {
+    fn default() -> Self {
+        bytemuck::Zeroable::zeroed()
+    }
+}
 
 /// What the luminance pass measured and the exposure it settled on (the
 /// GPU's `ExposureState`, glsl/common/exposure.glsl).

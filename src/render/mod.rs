@@ -10,6 +10,7 @@ pub mod inject;
 pub mod kernel;
 pub mod output;
 pub mod passes;
+mod prt_state;
 pub mod rays;
 pub mod settings;
 pub mod shading;
@@ -43,7 +44,7 @@ use tone::{ExposureState, ToneOperator, ToneSettings};
 use tracer::Tracer;
 
 pub use output::FrameOutput;
-pub use settings::{AmbientMode, DebugView, RenderSettings};
+pub use settings::{AmbientMode, DebugView, PrtOptions, RenderSettings};
 
 /// The frame uniforms' tone-mapping fields.
 fn tone_uniforms(t: &ToneSettings, adapt_dt: Option<f32>) -> GpuFrame {
@@ -133,6 +134,8 @@ pub struct Renderer {
     /// times say nothing of the passes' cost (the budget ignores them).
     passes_new: bool,
     recorded_cold: bool,
+    /// Diffuse PRT transfer on the GPU (prt ambient modes only).
+    prt: prt_state::PrtState,
     /// The G-buffer draws of the prepared frame (frustum-culled).
     draw_list: cull::DrawList,
 }
@@ -186,6 +189,7 @@ impl Renderer {
             shadow_map_left_out: None,
             passes_new: false,
             recorded_cold: false,
+            prt: Default::default(),
             draw_list: cull::DrawList::default(),
         };
         match r.create_resources(ctx, scene) {
@@ -487,11 +491,16 @@ impl Renderer {
         } else {
             cull::DrawList::default()
         };
+        let ambient = AmbientMode::resolve(settings, &scene.environment);
+        let settings = &RenderSettings { ambient, ..*settings };
+        self.prt.ensure(ctx, &mut self.gpu, scene, settings)?;
         let env = &scene.environment;
         // No map: no SH (the constant colour's irradiance is pi L, exactly
         // the constant ambient).
         let sh = match (settings.ambient, &self.gpu.env_sh) {
-            (AmbientMode::Sh, Some(sh)) => Some(crate::gpu::env_sh::irradiance_uniform(sh, env)),
+            (AmbientMode::Constant, _) => None,
+            // PRT shades static primary hits; the rest keep SH irradiance.
+            (_, Some(sh)) => Some(crate::gpu::env_sh::irradiance_uniform(sh, env)),
             _ => None,
         };
         let mut flags = match settings.budget.map(|b| b.fallback) {
@@ -501,6 +510,10 @@ impl Renderer {
         };
         if sh.is_some() {
             flags |= crate::gpu::shared::FRAME_AMBIENT_SH;
+        }
+        let prt = self.prt.radiance().map(|l| crate::gpu::prt_buffer::radiance_uniform(l, env));
+        if prt.is_some() {
+            flags |= crate::gpu::shared::FRAME_AMBIENT_PRT;
         }
         let frame = GpuFrame {
             view: view.to_cols_array(),
@@ -521,6 +534,7 @@ impl Renderer {
             flags,
             znear: camera.znear,
             sh_irradiance: sh.unwrap_or_default(),
+            sh_radiance: prt.unwrap_or([[0.0; 4]; crate::gpu::shared::SH_PRT_MAX_COEFFS as usize]),
             ..tone_uniforms(&settings.tone, self.adapt_dt)
         };
         debug_assert!(Mat4::from_cols_array(&frame.view).is_finite());

@@ -14,6 +14,52 @@ pub enum AmbientMode {
     Sh,
     /// The map's mean radiance for every normal (the behaviour before SH).
     Constant,
+    /// Diffuse PRT (scene/prt) on static geometry at the primary hit:
+    /// clamped cosine only; everything else gets `Sh`.
+    PrtUnshadowed,
+    /// PRT with visibility (ambient shadowing).
+    PrtShadowed,
+    /// PRT with visibility and interreflection (`--prt-bounces`).
+    PrtInterreflected,
+}
+
+impl AmbientMode {
+    /// `settings.ambient`, or the scene file's where it applies.
+    pub fn resolve(settings: &RenderSettings, env: &crate::scene::Environment) -> AmbientMode {
+        use clap::ValueEnum;
+        match (&env.ambient, settings.ambient_from_scene) {
+            (Some(name), true) => AmbientMode::from_str(name, false).unwrap_or(settings.ambient),
+            _ => settings.ambient,
+        }
+    }
+
+    /// The PRT transfer this mode shades with, if any.
+    pub fn prt_mode(self) -> Option<crate::scene::prt::PrtMode> {
+        use crate::scene::prt::PrtMode;
+        match self {
+            AmbientMode::Sh | AmbientMode::Constant => None,
+            AmbientMode::PrtUnshadowed => Some(PrtMode::Unshadowed),
+            AmbientMode::PrtShadowed => Some(PrtMode::Shadowed),
+            AmbientMode::PrtInterreflected => Some(PrtMode::Interreflected),
+        }
+    }
+}
+
+/// The PRT precompute's parameters (`--prt-samples`, `--prt-bounces`,
+/// `--prt-bands`); used only by the prt ambient modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PrtOptions {
+    /// N: N×N directions a vertex.
+    pub samples: u32,
+    pub bounces: u32,
+    pub bands: usize,
+}
+
+impl Default for PrtOptions {
+    fn default() -> Self {
+        use crate::scene::prt::{DEFAULT_BOUNCES, DEFAULT_SAMPLES};
+        Self { samples: DEFAULT_SAMPLES, bounces: DEFAULT_BOUNCES, bands: crate::scene::sh::DEFAULT_BANDS }
+    }
 }
 
 /// G-buffer debug views (also selectable in the viewer).
@@ -62,6 +108,10 @@ pub struct RenderSettings {
     /// Diffuse environment light with a map (without one it is the
     /// constant colour either way).
     pub ambient: AmbientMode,
+    /// `ambient` was not given on the command line: the scene file's
+    /// `[environment] ambient` wins where it has one.
+    pub ambient_from_scene: bool,
+    pub prt: PrtOptions,
 }
 
 impl Default for RenderSettings {
@@ -76,6 +126,30 @@ impl Default for RenderSettings {
             aa: AaMode::Edge,
             budget: None,
             ambient: AmbientMode::Sh,
+            ambient_from_scene: false,
+            prt: PrtOptions::default(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::ValueEnum;
+
+    use super::*;
+
+    /// The scene file accepts exactly the command line's names.
+    #[test]
+    fn ambient_names_match_the_scene_files() {
+        let names: Vec<String> = AmbientMode::value_variants()
+            .iter()
+            .map(|v| v.to_possible_value().unwrap().get_name().to_string())
+            .collect();
+        assert_eq!(names, crate::scene::prt::AMBIENT_NAMES);
+        let env = crate::scene::Environment { ambient: Some("prt-shadowed".into()), ..Default::default() };
+        let cli = RenderSettings { ambient: AmbientMode::Constant, ..Default::default() };
+        assert_eq!(AmbientMode::resolve(&cli, &env), AmbientMode::Constant);
+        let unset = RenderSettings { ambient_from_scene: true, ..cli };
+        assert_eq!(AmbientMode::resolve(&unset, &env), AmbientMode::PrtShadowed);
     }
 }

@@ -11,6 +11,7 @@ pub mod env_layout;
 pub mod gltf_import;
 pub mod obj;
 pub mod primitives;
+pub mod prt;
 pub mod scene_file;
 pub mod sh;
 pub mod skin;
@@ -303,11 +304,21 @@ pub struct Environment {
     pub intensity: f32,
     /// Rotation about +Y, radians.
     pub rotation: f32,
+    /// The scene file's `ambient` (one of [`prt::AMBIENT_NAMES`]), used
+    /// when the command line gives no `--ambient`.
+    pub ambient: Option<String>,
 }
 
 impl Default for Environment {
     fn default() -> Self {
-        Self { color: Vec3::splat(0.05), map: None, map_path: None, intensity: 1.0, rotation: 0.0 }
+        Self {
+            color: Vec3::splat(0.05),
+            map: None,
+            map_path: None,
+            intensity: 1.0,
+            rotation: 0.0,
+            ambient: None,
+        }
     }
 }
 

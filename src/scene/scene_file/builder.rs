@@ -87,6 +87,18 @@ impl Builder<'_> {
             out.map = Some(load_env_map(&path, layout).with_context(|| self.at(hdr.span().start))?);
             out.map_path = Some(path);
         }
+        if let Some(a) = env.ambient {
+            let names = crate::scene::prt::AMBIENT_NAMES;
+            if !names.contains(&a.get_ref().as_str()) {
+                bail!(
+                    "{}: ambient '{}': expected one of {}",
+                    self.at(a.span().start),
+                    a.get_ref(),
+                    names.join(", ")
+                );
+            }
+            out.ambient = Some(a.into_inner());
+        }
         out.intensity = non_negative(env.intensity.unwrap_or(1.0), "intensity").with_context(context)?;
         out.rotation =
             finite(env.rotation_deg.unwrap_or(0.0), "rotation_deg").with_context(context)?.to_radians();

@@ -29,6 +29,9 @@ pub(super) struct EnvironmentDef {
     pub(super) rotation_deg: Option<f32>,
     /// "equirect" (default) or "angular" (Debevec's light probe).
     pub(super) layout: Option<crate::scene::EnvLayout>,
+    /// The diffuse ambient mode (`--ambient`'s names), unless the command
+    /// line sets one.
+    pub(super) ambient: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
