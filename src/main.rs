@@ -396,6 +396,11 @@ impl ViewArgs {
         if let Some(why) = self.budget.without_budget() {
             return Some(why.into());
         }
+        if self.env.reference_samples.is_some() && self.debug_view != DebugView::None {
+            return Some(
+                "--reference-samples has no effect with --debug-view (it shows the G-buffer)".into(),
+            );
+        }
         if self.time.is_some() && self.animation.is_none() {
             return Some("--time has no effect without --animation".into());
         }
@@ -444,6 +449,7 @@ impl ViewArgs {
                 },
                 budget: self.budget.settings(),
                 ambient: self.env.ambient.unwrap_or_default(),
+                reference: self.env.reference(),
             },
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),
@@ -477,6 +483,12 @@ impl Cli {
                      accel-update knob's frames"
                         .into(),
                 )
+            }
+            Some(Command::Render { supersample: Some(k), .. }) if view.env.reference_samples.is_some() => {
+                Some(format!(
+                    "--reference-samples does not combine with --supersample {k} (render the reference at the \
+                     large size instead)"
+                ))
             }
             Some(Command::Render { supersample: Some(k), .. })
                 if view.aa.is_some_and(|a| a != AaMode::None) =>

@@ -171,10 +171,16 @@ bool is_mirror(Surface s, uint depth) {
 // Environment light on `s` (the ambient term): the irradiance at its
 // normal (env.glsl's ambient_radiance). A mirror's specular share comes from
 // its reflection branch instead (traced, or the environment in fallback).
-vec3 ambient_light(Surface s, bool mirror) {
+// ambient_light_from: the same with the radiance given (the ray-traced
+// reference, pass `reference`).
+vec3 ambient_light_from(Surface s, bool mirror, vec3 radiance) {
     vec3 f0 = surface_f0(s);
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
-    return ambient_radiance(s.normal) * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
+    return radiance * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
+}
+
+vec3 ambient_light(Surface s, bool mirror) {
+    return ambient_light_from(s, mirror, ambient_radiance(s.normal));
 }
 
 // Pushes the reflection and refraction branches `s` spawns (weight `w`,

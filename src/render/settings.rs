@@ -62,6 +62,9 @@ pub struct RenderSettings {
     /// Diffuse environment light with a map (without one it is the
     /// constant colour either way).
     pub ambient: AmbientMode,
+    /// The ray-traced reference replaces the ambient radiance at primary
+    /// hits (--reference-samples; render/reference.rs).
+    pub reference: Option<super::ReferenceSettings>,
 }
 
 impl Default for RenderSettings {
@@ -76,6 +79,7 @@ impl Default for RenderSettings {
             aa: AaMode::Edge,
             budget: None,
             ambient: AmbientMode::Sh,
+            reference: None,
         }
     }
 }
