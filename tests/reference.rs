@@ -317,6 +317,7 @@ fn reference_flags() {
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("reference_cli");
     std::fs::create_dir_all(&dir).unwrap();
     let out = dir.join("x.png");
+    let _ = std::fs::remove_file(&out); // an earlier run's
     let cases: [(&[&str], &str); 6] = [
         (&["--reference-samples", "0"], "--reference-samples"),
         (&["--reference-samples", "many"], "--reference-samples"),
@@ -342,4 +343,35 @@ fn reference_flags() {
     assert!(o.status.success(), "{err}");
     assert!(err.contains("reference: 8 samples per pixel in 2 frames"), "{err}");
     assert!(out.exists());
+}
+
+/// The accumulation is read and written every frame, across submissions:
+/// synchronization validation stays clean on every backend, hybrid and
+/// pure RT, and the pass sits between `direct` and `composite`.
+#[test]
+fn accumulation_is_clean_under_synchronization_validation() {
+    let ctx = common::sync_validated_context();
+    let scene = Scene::load(&common::repo_path("assets/default.toml")).unwrap();
+    for backend in common::BACKENDS {
+        for mode in [hybrid_rt::render::shading::Mode::Hybrid, hybrid_rt::render::shading::Mode::Rt] {
+            let settings = RenderSettings { mode, ..reference(12, 2, backend) };
+            let mut r = Renderer::new(&ctx, &scene, Extent2D { width: 32, height: 18 }).unwrap();
+            let out = hybrid_rt::render::reference::render_converged(
+                &mut r,
+                &ctx,
+                &scene,
+                &scene.cameras[0],
+                &settings,
+            )
+            .unwrap();
+            assert!(out.all_finite(), "{backend:?} {mode:?}: NaN or Inf");
+            let names = r.pass_names();
+            let at =
+                |n: &str| names.iter().position(|p| *p == n).unwrap_or_else(|| panic!("{n} in {names:?}"));
+            assert!(at("direct") < at("reference") && at("reference") < at("composite"), "{names:?}");
+            assert_eq!(r.reference_frames(), 3, "{backend:?} {mode:?}");
+            r.destroy(&ctx);
+        }
+    }
+    common::assert_validation_clean(&ctx);
 }
