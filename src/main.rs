@@ -484,6 +484,11 @@ impl Cli {
                         .into(),
                 )
             }
+            Some(Command::Report { .. }) if view.env.reference_samples.is_some() => Some(
+                "--reference-samples is not a report option: report renders one frame per variant, and the \
+                 reference needs ceil(N/4) (render it with `render --reference-samples N`, then `compare`)"
+                    .into(),
+            ),
             Some(Command::Render { supersample: Some(k), .. }) if view.env.reference_samples.is_some() => {
                 Some(format!(
                     "--reference-samples does not combine with --supersample {k} (render the reference at the \

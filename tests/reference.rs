@@ -334,6 +334,15 @@ fn reference_flags() {
         assert!(!err.contains("panicked"), "{args:?}: {err}");
         assert!(!out.exists(), "{args:?} wrote an image");
     }
+    // report renders one frame per variant: refused, not silently 4 samples.
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_hybrid-rt"))
+        .args(["report", "--reference-samples", "64", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "report: {err}");
+    assert!(err.contains("--reference-samples"), "report: {err}");
     let o = bin()
         .args(["--reference-samples", "6", "--reference-bounces", "2", "--out"])
         .arg(&out)
