@@ -385,7 +385,7 @@ impl Renderer {
         self.reference.reset();
     }
 
-    /// Frames the reference has accumulated (the viewer shows it).
+    /// Frames the reference has accumulated since it last started over.
     pub fn reference_frames(&self) -> u32 {
         self.reference.frames()
     }
