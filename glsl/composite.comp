@@ -2,7 +2,8 @@
 // Pass `composite`: the primary hit's emission + direct light (pass
 // `direct`) + ambient environment light + the traced reflection/refraction
 // chain (pass `specular`, variant HAS_SPECULAR); the environment where the
-// camera ray missed. Variant DEBUG_VIEWS shows a G-buffer view instead and
+// camera ray missed; variant REFERENCE takes the ambient radiance from the
+// `reference` pass's accumulation. Variant DEBUG_VIEWS shows a G-buffer view instead and
 // reads neither light pass.
 #include "common/gbuffer_read.glsl"
 #include "common/integrator.glsl"
@@ -14,6 +15,9 @@ layout(set = SET_PASS, binding = DIRECT_IN, rgba32f) uniform readonly image2D di
 #endif
 #ifdef HAS_SPECULAR
 layout(set = SET_PASS, binding = SPECULAR_IN, rgba32f) uniform readonly image2D specular_in;
+#endif
+#ifdef REFERENCE
+layout(set = SET_PASS, binding = REFERENCE_IN, rgba32f) uniform readonly image2D reference_in;
 #endif
 layout(set = SET_PASS, binding = HDR_OUT, rgba32f) uniform writeonly image2D hdr_out;
 
@@ -64,10 +68,16 @@ void main() {
     }
 #else
     g_effects = budget_effects(p.instance, px);
+#ifdef REFERENCE
+    // The ray-traced reference replaces the ambient radiance (pass `reference`).
+    vec4 acc = imageLoad(reference_in, px);
+    vec3 ambient = ambient_light_from(s, is_mirror(s, 0u), acc.rgb / max(acc.a, 1.0));
+#else
     // Diffuse PRT on static geometry (FRAME_AMBIENT_PRT), else SH/constant.
     vec3 prt_e;
     bool prt = prt_irradiance(p.instance, p.primitive, p.b, prt_e);
     vec3 ambient = prt ? ambient_light_from(s, is_mirror(s, 0u), prt_e / PI) : ambient_light(s, is_mirror(s, 0u));
+#endif
     color = s.emissive + imageLoad(direct_in, px).rgb + ambient;
 #ifdef HAS_SPECULAR
     color += imageLoad(specular_in, px).rgb;

@@ -224,7 +224,8 @@ pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
     let mut out = Err(anyhow!("no frame rendered"));
     for i in 0..frames {
         out = ctx.capture_frame_if(i, &format!("render frame {i}"), || {
-            renderer.render(ctx, &scene, &camera, &job.settings)
+            // (Without --reference-samples one frame.)
+            crate::render::reference::render_converged(&mut renderer, ctx, &scene, &camera, &job.settings)
         });
         if out.is_err() {
             break;

@@ -396,6 +396,11 @@ impl ViewArgs {
         if let Some(why) = self.budget.without_budget() {
             return Some(why.into());
         }
+        if self.env.reference_samples.is_some() && self.debug_view != DebugView::None {
+            return Some(
+                "--reference-samples has no effect with --debug-view (it shows the G-buffer)".into(),
+            );
+        }
         if self.time.is_some() && self.animation.is_none() {
             return Some("--time has no effect without --animation".into());
         }
@@ -446,6 +451,7 @@ impl ViewArgs {
                 ambient: self.env.ambient.unwrap_or_default(),
                 ambient_from_scene: self.env.ambient.is_none(),
                 prt: self.env.prt_options(),
+                reference: self.env.reference(),
             },
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),
@@ -479,6 +485,17 @@ impl Cli {
                      accel-update knob's frames"
                         .into(),
                 )
+            }
+            Some(Command::Report { .. }) if view.env.reference_samples.is_some() => Some(
+                "--reference-samples is not a report option: report renders one frame per variant, and the \
+                 reference needs ceil(N/4) (render it with `render --reference-samples N`, then `compare`)"
+                    .into(),
+            ),
+            Some(Command::Render { supersample: Some(k), .. }) if view.env.reference_samples.is_some() => {
+                Some(format!(
+                    "--reference-samples does not combine with --supersample {k} (render the reference at the \
+                     large size instead)"
+                ))
             }
             Some(Command::Render { supersample: Some(k), .. })
                 if view.aa.is_some_and(|a| a != AaMode::None) =>

@@ -24,7 +24,8 @@ layout(set = SET_SCENE, binding = SCENE_BUDGET_STATS) buffer BudgetStats { uint 
 layout(set = SET_SCENE, binding = SCENE_BUDGET_MASK) readonly buffer BudgetMask { uint budget_mask[]; };
 
 // A 32-bit integer hash (Jarzynski & Olano 2020's PCG hash): uniform bits
-// from a pixel tile's index, for the budget's partial effects.
+// for the budget's partial effects (from a pixel tile's index) and the
+// reference pass's random numbers.
 uint pcg_hash(uint v) {
     uint state = v * 747796405u + 2891336453u;
     uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;

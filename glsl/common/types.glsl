@@ -93,8 +93,9 @@ struct Frame {
     float hist_high;
     float speed_brighten;
     float speed_darken;
-    float pad0;
-    float pad1;
+    // The `reference` pass: frames accumulated so far, bounces (passes/reference.glsl).
+    uint reference_frame;
+    uint reference_bounces;
     float pad2;
     // The environment's SH irradiance E_lm (rgb), with FRAME_AMBIENT_SH.
     vec4 sh_irradiance[SH_IRRADIANCE_COEFFS];

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Context as _, Result};
 use clap::Args;
 
-use crate::render::AmbientMode;
+use crate::render::{AmbientMode, ReferenceSettings};
 use crate::scene::{scene_file::load_env_map, EnvLayout, Scene};
 
 /// The environment overrides (the scene file's [environment] otherwise).
@@ -45,6 +45,22 @@ pub struct EnvArgs {
     /// SH bands of the PRT transfer and environment (1..=8, bands² coefficients) [default: 3].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=crate::scene::sh::MAX_BANDS as i64))]
     pub prt_bands: Option<u32>,
+    /// Ray-traced reference for the diffuse environment light: N
+    /// cosine-weighted visibility samples per pixel at the primary hit,
+    /// accumulated over frames (render renders ceil(N/4) frames), replacing
+    /// the ambient term there.
+    #[arg(long, value_name = "N", value_parser = parse_samples, allow_hyphen_values = true)]
+    pub reference_samples: Option<u32>,
+    /// With --reference-samples: rays per path; 1 = environment light with
+    /// visibility, K > 1 adds K - 1 diffuse bounces [default: 1].
+    #[arg(
+        long,
+        value_name = "K",
+        value_parser = parse_bounces,
+        requires = "reference_samples",
+        allow_hyphen_values = true
+    )]
+    pub reference_bounces: Option<u32>,
 }
 
 /// What [`EnvArgs`] changes in a loaded scene.
@@ -64,6 +80,12 @@ impl EnvArgs {
             bounces: self.prt_bounces.unwrap_or(d.bounces),
             bands: self.prt_bands.map_or(d.bands, |b| b as usize),
         }
+    }
+
+    /// The ray-traced reference the flags ask for.
+    pub fn reference(&self) -> Option<ReferenceSettings> {
+        self.reference_samples
+            .map(|samples| ReferenceSettings { samples, bounces: self.reference_bounces.unwrap_or(1) })
     }
 
     pub fn overrides(&self) -> EnvOverrides {
@@ -104,5 +126,28 @@ fn parse_intensity(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
         _ => Err(format!("'{s}': expected a finite number >= 0")),
+    }
+}
+
+/// Most samples per pixel the reference accepts (2^20: days on lavapipe).
+const MAX_REFERENCE_SAMPLES: u32 = 1 << 20;
+/// Most rays per reference path.
+const MAX_REFERENCE_BOUNCES: u32 = 16;
+
+fn parse_samples(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(v) if (1..=MAX_REFERENCE_SAMPLES).contains(&v) => Ok(v),
+        _ => {
+            Err(format!("'{s}': expected a whole number of samples per pixel, 1 to {MAX_REFERENCE_SAMPLES}"))
+        }
+    }
+}
+
+fn parse_bounces(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(v) if (1..=MAX_REFERENCE_BOUNCES).contains(&v) => Ok(v),
+        _ => Err(format!(
+            "'{s}': expected 1 to {MAX_REFERENCE_BOUNCES} rays per path (1: visibility only, K: K - 1 bounces)"
+        )),
     }
 }

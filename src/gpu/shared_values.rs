@@ -108,6 +108,12 @@ shared! {
     id DIRECT_IN = 5;
     id SPECULAR_IN = 6;
     id HDR_OUT = 7;
+    // The ray-traced ambient reference (render/passes/reference.rs): its
+    // accumulation (rgb: radiance sum, a: samples) written by `reference`,
+    // read by `composite`; samples per pixel per frame.
+    id REFERENCE_OUT = 5;
+    id REFERENCE_IN = 8;
+    uint REFERENCE_SAMPLES_PER_FRAME = 4;
     // Set 1 of the tone-mapping pass and of the luminance reduction.
     id TONEMAP_IN = 0;
     id TONEMAP_OUT = 1;

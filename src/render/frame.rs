@@ -229,6 +229,17 @@ impl<'a> Recorder<'a> {
         r
     }
 
+    /// Where `t` stands at the start of the frame: undefined, or for a
+    /// kept target laid out by an earlier frame, its contents in GENERAL.
+    fn frame_start(&self, t: &'static TargetDesc) -> State {
+        let laid_out = t.kept && self.targets.and_then(|ts| ts.get(t)).is_some_and(|i| i.laid_out.get());
+        if laid_out {
+            State { layout: vk::ImageLayout::GENERAL, ..FRAME_START }
+        } else {
+            FRAME_START
+        }
+    }
+
     /// The barriers that make `uses` safe after everything recorded so far.
     fn barrier_list(&mut self, shader: vk::PipelineStageFlags2, uses: &[Use]) -> Result<Barriers> {
         let accel = self.ctx.rt.acceleration_structure;
@@ -250,7 +261,10 @@ impl<'a> Recorder<'a> {
         let (mut mem_src, mut mem_dst) = ((S::NONE, A::NONE), (S::NONE, A::NONE));
         for (res, first, stage, access, writes) in merged {
             let state = match res {
-                Resource::Image(t) => self.images.entry(t.name).or_insert(FRAME_START),
+                Resource::Image(t) => {
+                    let start = self.frame_start(t);
+                    self.images.entry(t.name).or_insert(start)
+                }
                 Resource::Buffer(b) => self.buffers.entry(b).or_insert(FRAME_START),
             };
             let layout = match res {
@@ -276,6 +290,7 @@ impl<'a> Recorder<'a> {
                             .and_then(|ts| ts.get(t))
                             .ok_or_else(|| anyhow::anyhow!("target '{}' used but not allocated", t.name))?;
                         let old = if first.discards() { vk::ImageLayout::UNDEFINED } else { state.layout };
+                        img.laid_out.set(t.kept && layout == vk::ImageLayout::GENERAL);
                         images.push(
                             vk::ImageMemoryBarrier2::default()
                                 .image(img.raw)

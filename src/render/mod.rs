@@ -12,6 +12,7 @@ pub mod output;
 pub mod passes;
 mod prt_state;
 pub mod rays;
+pub mod reference;
 pub mod settings;
 pub mod shading;
 pub mod skinning;
@@ -44,6 +45,7 @@ use tone::{ExposureState, ToneOperator, ToneSettings};
 use tracer::Tracer;
 
 pub use output::FrameOutput;
+pub use reference::ReferenceSettings;
 pub use settings::{AmbientMode, DebugView, PrtOptions, RenderSettings};
 
 /// The frame uniforms' tone-mapping fields.
@@ -138,6 +140,8 @@ pub struct Renderer {
     prt: prt_state::PrtState,
     /// The G-buffer draws of the prepared frame (frustum-culled).
     draw_list: cull::DrawList,
+    /// The `reference` pass's frames accumulated (--reference-samples).
+    reference: reference::Accumulation,
 }
 
 fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
@@ -191,6 +195,7 @@ impl Renderer {
             recorded_cold: false,
             prt: Default::default(),
             draw_list: cull::DrawList::default(),
+            reference: reference::Accumulation::default(),
         };
         match r.create_resources(ctx, scene) {
             Ok(()) => Ok(r),
@@ -227,6 +232,7 @@ impl Renderer {
         self.readback_hdr.destroy(ctx);
         (self.readback_ldr, self.readback_hdr) = readback_buffers(ctx, extent)?;
         self.extent = extent;
+        self.reference.reset();
         let uses: Vec<Use> = self.passes.iter().flat_map(|p| p.uses.iter().copied()).collect();
         if let Some(config) = self.config {
             self.allocate_targets(ctx, &config, &uses)?;
@@ -295,6 +301,7 @@ impl Renderer {
     /// Host work before an update is recorded: moved transforms and lights,
     /// joint matrices, and the tracer's refit / rebuild decisions.
     fn plan_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        self.reference.reset(); // the scene moved
         self.gpu.update_dynamic(scene)?;
         if let Some(s) = &mut self.skinning {
             s.write(scene, self.gpu.origin)?;
@@ -377,6 +384,16 @@ impl Renderer {
         (self.draw_list.draws.len(), self.draw_list.culled)
     }
 
+    /// Starts the reference's accumulation over at the next frame.
+    pub fn reset_reference(&mut self) {
+        self.reference.reset();
+    }
+
+    /// Frames the reference has accumulated since it last started over.
+    pub fn reference_frames(&self) -> u32 {
+        self.reference.frames()
+    }
+
     pub fn pass_names(&self) -> Vec<&'static str> {
         let left_out = self.shadow_map_left_out;
         self.passes.iter().filter(|p| !left_out_this_frame(p.name, left_out)).map(|p| p.name).collect()
@@ -394,6 +411,7 @@ impl Renderer {
             p.pass.destroy(ctx);
         }
         self.config = None;
+        self.reference.reset(); // new targets
         if self.tracer.as_ref().map(|t| t.backend()) != config.backend {
             if let Some(mut t) = self.tracer.take() {
                 t.destroy(ctx);
@@ -515,7 +533,7 @@ impl Renderer {
         if prt.is_some() {
             flags |= crate::gpu::shared::FRAME_AMBIENT_PRT;
         }
-        let frame = GpuFrame {
+        let mut frame = GpuFrame {
             view: view.to_cols_array(),
             proj: proj.to_cols_array(),
             view_proj: view_proj.to_cols_array(),
@@ -537,6 +555,10 @@ impl Renderer {
             sh_radiance: prt.unwrap_or([[0.0; 4]; crate::gpu::shared::SH_PRT_MAX_COEFFS as usize]),
             ..tone_uniforms(&settings.tone, self.adapt_dt)
         };
+        if let Some(r) = settings.reference {
+            frame.reference_bounces = r.bounces;
+            frame.reference_frame = self.reference.next(&frame);
+        }
         debug_assert!(Mat4::from_cols_array(&frame.view).is_finite());
         self.gpu.write_frame(&frame)
     }

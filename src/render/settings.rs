@@ -112,6 +112,9 @@ pub struct RenderSettings {
     /// `[environment] ambient` wins where it has one.
     pub ambient_from_scene: bool,
     pub prt: PrtOptions,
+    /// The ray-traced reference replaces the ambient radiance at primary
+    /// hits (--reference-samples; render/reference.rs).
+    pub reference: Option<super::ReferenceSettings>,
 }
 
 impl Default for RenderSettings {
@@ -128,6 +131,7 @@ impl Default for RenderSettings {
             ambient: AmbientMode::Sh,
             ambient_from_scene: false,
             prt: PrtOptions::default(),
+            reference: None,
         }
     }
 }

@@ -238,6 +238,9 @@ pub struct ShadingConfig {
     pub shadow_fallback: bool,
     /// Anti-aliasing after tone mapping (left out in debug views).
     pub aa: AaMode,
+    /// The ray-traced ambient reference runs (--reference-samples; not in
+    /// debug views): the `reference` pass exists and traces.
+    pub reference: bool,
 }
 
 impl ShadingConfig {
@@ -260,7 +263,9 @@ impl ShadingConfig {
             refractions: wanted.refractions && needs.refractions,
             ..wanted
         };
-        let traces = mode == Mode::Rt || effects.shadows || effects.reflections || effects.refractions;
+        let reference = settings.reference.is_some() && !debug_view;
+        let traces =
+            mode == Mode::Rt || reference || effects.shadows || effects.reflections || effects.refractions;
         let backend = if !traces {
             None
         } else {
@@ -285,6 +290,7 @@ impl ShadingConfig {
             budget,
             shadow_fallback,
             aa: settings.aa,
+            reference,
         })
     }
 
@@ -336,7 +342,7 @@ impl ShadingConfig {
             self.backend.map(|b| format!("{b:?}").to_lowercase()).unwrap_or_else(|| "none".into()),
             if on.is_empty() { "none".to_string() } else { on.join(", ") },
             if self.budget { " (per-object budget)" } else { "" }
-        )
+        ) + if self.reference { ", ray-traced ambient reference" } else { "" }
     }
 }
 

@@ -14,11 +14,20 @@ use crate::vk::{Context, Image};
 pub struct TargetDesc {
     pub name: &'static str,
     pub format: vk::Format,
+    /// Its contents carry over from frame to frame (an accumulation):
+    /// after its first use a frame starts from the last layout, not from
+    /// undefined contents.
+    pub kept: bool,
 }
 
 impl TargetDesc {
     pub const fn new(name: &'static str, format: vk::Format) -> TargetDesc {
-        TargetDesc { name, format }
+        TargetDesc { name, format, kept: false }
+    }
+
+    /// A target whose contents are kept across frames.
+    pub const fn kept(name: &'static str, format: vk::Format) -> TargetDesc {
+        TargetDesc { name, format, kept: true }
     }
 }
 
@@ -26,6 +35,9 @@ impl TargetDesc {
 pub struct Target {
     pub desc: &'static TargetDesc,
     pub image: Image,
+    /// A recorded frame has laid it out (GENERAL): a `kept` target's
+    /// contents are defined from then on.
+    pub laid_out: std::cell::Cell<bool>,
 }
 
 impl std::ops::Deref for Target {
@@ -42,7 +54,8 @@ impl Target {
         usage: vk::ImageUsageFlags,
         extent: vk::Extent2D,
     ) -> Result<Target> {
-        Ok(Target { desc, image: Image::new_2d(ctx, desc.name, desc.format, extent, 1, usage)? })
+        let image = Image::new_2d(ctx, desc.name, desc.format, extent, 1, usage)?;
+        Ok(Target { desc, image, laid_out: std::cell::Cell::new(false) })
     }
 }
 

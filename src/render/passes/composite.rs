@@ -5,8 +5,8 @@
 use ash::vk;
 
 use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{direct, gbuffer, specular, Init, PassDesc};
-use crate::gpu::shared::{DIRECT_IN, HDR_OUT, SPECULAR_IN};
+use super::{direct, gbuffer, reference, specular, Init, PassDesc};
+use crate::gpu::shared::{DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
 use crate::render::targets::TargetDesc;
@@ -23,17 +23,21 @@ fn io(c: &ShadingConfig) -> Vec<Io> {
     if specular::skip(c).is_none() {
         io.push(Io::new(SPECULAR_IN, &specular::SPECULAR, Access::StorageRead));
     }
+    if reference::skip(c).is_none() {
+        io.push(Io::new(REFERENCE_IN, &reference::ACCUMULATION, Access::StorageRead));
+    }
     io.push(Io::new(HDR_OUT, &HDR, Access::StorageWrite));
     io
 }
 
 fn shader(c: &ShadingConfig) -> &'static str {
-    if c.debug_view {
-        "composite_debug"
-    } else if specular::skip(c).is_none() {
-        "composite_specular"
-    } else {
-        "composite.comp"
+    let reference = reference::skip(c).is_none();
+    match (c.debug_view, specular::skip(c).is_none(), reference) {
+        (true, _, _) => "composite_debug",
+        (false, true, true) => "composite_specular_reference",
+        (false, true, false) => "composite_specular",
+        (false, false, true) => "composite_reference",
+        (false, false, false) => "composite.comp",
     }
 }
 

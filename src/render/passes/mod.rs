@@ -13,6 +13,7 @@ pub mod gbuffer;
 pub mod heuristic;
 pub mod luminance;
 pub mod primary;
+pub mod reference;
 pub mod shadow_map;
 pub mod specular;
 pub mod tonemap;
@@ -30,7 +31,8 @@ use crate::vk::Context;
 
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
 /// or camera rays) -> per-object statistics for the budget -> the budget's
-/// fallback shadow maps -> direct light -> reflection/refraction chain ->
+/// fallback shadow maps -> direct light -> the ambient reference (with
+/// --reference-samples) -> reflection/refraction chain ->
 /// composite -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one technique). The scene update (skinning, refit, top level)
 /// comes before it, recorded by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
@@ -39,6 +41,7 @@ pub const FRAME: &[PassDesc] = &[
     heuristic::PASS,
     shadow_map::PASS,
     direct::PASS,
+    reference::PASS,
     specular::PASS,
     composite::PASS,
     luminance::PASS,

@@ -1,0 +1,51 @@
+//! Pass `reference` (`--reference-samples`): the ray-traced reference for
+//! the diffuse environment light at the primary hit, accumulated over
+//! frames into its own target, which `composite` reads in place of the
+//! ambient radiance (glsl/passes/reference.glsl; render/reference.rs
+//! drives the frames). Without the flag it is left out: no image, no work.
+
+use ash::vk;
+
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::{gbuffer, Init, PassDesc};
+use crate::gpu::shared::REFERENCE_OUT;
+use crate::render::frame::{Access, Use};
+use crate::render::shading::ShadingConfig;
+use crate::render::targets::TargetDesc;
+use crate::vk::pipeline::Specialization;
+
+/// Per pixel the sum of the samples' radiance (rgb) and their count (a),
+/// kept from frame to frame.
+pub static ACCUMULATION: TargetDesc =
+    TargetDesc::kept("reference accumulation", vk::Format::R32G32B32A32_SFLOAT);
+
+fn io(_: &ShadingConfig) -> Vec<Io> {
+    let mut io = gbuffer::reads();
+    io.push(Io::new(REFERENCE_OUT, &ACCUMULATION, Access::StorageWrite));
+    io
+}
+
+pub fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    if c.debug_view {
+        Some("a debug view shows the G-buffer instead")
+    } else if !c.reference {
+        Some("no --reference-samples")
+    } else {
+        None
+    }
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "reference",
+    skip,
+    uses: |c| {
+        // Read-modify-write: the previous frames' sum is read too.
+        let mut u = fullscreen::uses(&io(c), true);
+        u.push(Use::image(&ACCUMULATION, Access::StorageRead));
+        u
+    },
+    create: |i: &Init| {
+        let spec = Specialization::new(&i.config.specialization());
+        FullScreen::create(i, "reference", io(i.config), Shader::Traced("reference"), &spec)
+    },
+};
