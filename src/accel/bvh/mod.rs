@@ -37,14 +37,21 @@
 //! and subtrees that would exceed [`MAX_DEPTH`] fall back to an object
 //! median split along the largest centroid axis.
 //!
-//! Modules: `build` (the binned-SAH builder), `refit` (refit and the
+//! Modules: `build` (the binned-SAH builder), `sbvh` (split BVH for static
+//! triangles, and the full-sweep SAH builder it contains; its trees may
+//! reference a triangle from several leaves), `refit` (refit and the
 //! bottom-up level order), `quality` (SAH cost, depth, validation).
 
 mod build;
 mod quality;
 mod refit;
+mod sbvh;
+#[cfg(test)]
+mod sbvh_tests;
 #[cfg(test)]
 mod tests;
+
+pub use sbvh::{SbvhStats, DEFAULT_ALPHA};
 
 use glam::Vec3;
 
