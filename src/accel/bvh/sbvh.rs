@@ -152,7 +152,8 @@ fn intersect(a: &Bounds, b: &Bounds) -> Bounds {
 }
 
 fn is_empty(b: &Bounds) -> bool {
-    (0..3).any(|k| !(b.min[k] <= b.max[k]))
+    // NaN bounds count as empty too.
+    (0..3).any(|k| b.min[k].partial_cmp(&b.max[k]).is_none_or(|o| o.is_gt()))
 }
 
 struct ObjectSplit {
