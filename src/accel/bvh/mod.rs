@@ -40,7 +40,8 @@
 //! Modules: `build` (the binned-SAH builder), `sbvh` (split BVH for static
 //! triangles, and the full-sweep SAH builder it contains; its trees may
 //! reference a triangle from several leaves), `refit` (refit and the
-//! bottom-up level order), `quality` (SAH cost, depth, validation).
+//! bottom-up level order), `quality` (SAH cost, depth, validation), `wide`
+//! (4-wide quantized collapse of a binary tree).
 
 mod build;
 mod quality;
@@ -50,8 +51,12 @@ mod sbvh;
 mod sbvh_tests;
 #[cfg(test)]
 mod tests;
+mod wide;
+#[cfg(test)]
+mod wide_tests;
 
 pub use sbvh::{SbvhStats, DEFAULT_ALPHA};
+pub use wide::{WideBvh, WideNode};
 
 use glam::Vec3;
 

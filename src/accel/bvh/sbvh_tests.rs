@@ -99,6 +99,8 @@ struct Quality {
     nodes: usize,
     refs: usize,
     secs: f64,
+    /// The same tree collapsed 4-wide with quantized bounds.
+    wide_bytes: usize,
 }
 
 fn report(name: &str) -> [Quality; 3] {
@@ -129,17 +131,19 @@ fn report(name: &str) -> [Quality; 3] {
             q.nodes += bvh.nodes.len();
             q.refs += bvh.prim_indices.len();
             q.bytes += bvh.nodes.len() * std::mem::size_of::<BvhNode>() + 4 * bvh.prim_indices.len();
+            q.wide_bytes += WideBvh::from_binary(&bvh).bytes();
         }
     }
     for (label, q) in ["binned SAH", "full-sweep SAH", "SBVH (alpha 1e-5)"].iter().zip(&mut q) {
         q.sah /= tris_total as f64;
         eprintln!(
-            "bvh quality {name}: {label}: {tris_total} tris, SAH cost {:.2}, {} nodes, {} refs ({:.3}x), {:.2} MiB, build {:.2} s",
+            "bvh quality {name}: {label}: {tris_total} tris, SAH cost {:.2}, {} nodes, {} refs ({:.3}x), {:.2} MiB ({:.2} MiB 4-wide), build {:.2} s",
             q.sah,
             q.nodes,
             q.refs,
             q.refs as f64 / tris_total as f64,
             q.bytes as f64 / (1 << 20) as f64,
+            q.wide_bytes as f64 / (1 << 20) as f64,
             q.secs
         );
     }
