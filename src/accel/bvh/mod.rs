@@ -1,4 +1,5 @@
-//! Binned-SAH BVH over axis-aligned boxes, flat 32-byte nodes for the GPU.
+//! Binned-SAH BVH over axis-aligned boxes, flat 32-byte nodes for the GPU
+//! (the compute tracer's static BLASes use `sbvh` + `wide` instead).
 //!
 //! Layout (read by glsl/trace/compute.glsl, keep both in sync):
 //!

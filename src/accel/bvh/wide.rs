@@ -1,5 +1,5 @@
 //! 4-wide BVH with 8-bit quantized child bounds, collapsed from a binary
-//! [`Bvh`] (meant for static BLASes; the GPU side is not wired yet).
+//! [`Bvh`]: the compute tracer's static BLASes (glsl/trace/compute_wide.glsl).
 //!
 //! Layout (64 bytes, one cache line; keep in sync with any GLSL reader):
 //!
@@ -20,9 +20,9 @@
 //!   of two), so decoding rounds once, with or without a fused multiply-add,
 //!   and the builder checks that rounding: every decoded box contains the
 //!   exact child box.
-//! * `child[i]` with bit 31 clear: interior child, index of a wide node.
-//!   With bit 31 set: a leaf over `prim_indices[first .. first + count]`,
-//!   `first = child & 0x0FFF_FFFF`, `count = ((child >> 28) & 7)` (1..=4).
+//! * `child[i]` with bit 30 clear: interior child, index of a wide node.
+//!   With bit 30 set: a leaf over `prim_indices[first .. first + count]`,
+//!   `first = child & 0x07FF_FFFF`, `count = ((child >> 27) & 7)` (1..=4).
 //! * Node 0 is the root; children come after their parents.
 //!
 //! Why this layout for a CPU device (llvmpipe runs each shader invocation
@@ -39,8 +39,10 @@ use glam::Vec3;
 
 /// Children per wide node.
 pub const WIDTH: usize = 4;
-pub const LEAF_BIT: u32 = 1 << 31;
-const FIRST_MASK: u32 = 0x0FFF_FFFF;
+pub const LEAF_BIT: u32 = crate::gpu::shared::BVH_WIDE_LEAF;
+const _: () = assert!(LEAF_BIT == 1 << 30);
+const FIRST_MASK: u32 = 0x07FF_FFFF;
+const COUNT_SHIFT: u32 = 27;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -88,7 +90,7 @@ impl WideNode {
     /// `Some((first, count))` for a leaf child.
     pub fn leaf(&self, i: usize) -> Option<(usize, usize)> {
         let c = self.child[i];
-        (c & LEAF_BIT != 0).then_some(((c & FIRST_MASK) as usize, ((c >> 28) & 7) as usize))
+        (c & LEAF_BIT != 0).then_some(((c & FIRST_MASK) as usize, ((c >> COUNT_SHIFT) & 7) as usize))
     }
 }
 
@@ -187,7 +189,7 @@ impl WideBvh {
                         "wide BVH: primitive index {} overflows",
                         b.left_or_first
                     );
-                    LEAF_BIT | (b.count << 28) | b.left_or_first
+                    LEAF_BIT | (b.count << COUNT_SHIFT) | b.left_or_first
                 } else {
                     let next = w.nodes.len();
                     w.nodes.push(WideNode::default());

@@ -89,7 +89,7 @@ fn wide_closest(w: &WideBvh, tris: &[[Vec3; 3]], o: Vec3, d: Vec3) -> (Option<(u
             continue;
         }
         if c & wide::LEAF_BIT != 0 {
-            let (first, count) = ((c & 0x0FFF_FFFF) as usize, ((c >> 28) & 7) as usize);
+            let (first, count) = ((c & 0x07FF_FFFF) as usize, ((c >> 27) & 7) as usize);
             for &p in &w.prim_indices[first..first + count] {
                 let t = &tris[p as usize];
                 if let Some((th, _, _)) = ray.intersect(t[0], t[1], t[2], tmax) {
