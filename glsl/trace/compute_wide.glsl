@@ -27,11 +27,13 @@ layout(set = SET_TRACE, binding = BVH_BLAS_NODES, scalar) readonly buffer BlasWi
 
 // Closest hit (any opaque hit for shadow rays) in the wide tree at
 // blas_wide[base...]: hit children sorted by entry distance, the nearest
-// visited next, the others pushed far to near.
+// visited next, the others pushed far to near with their entry distance, and
+// dropped when popped if a hit found since is nearer.
 bool trace_blas_wide(uint inst_index, uint base, uint prim_offset, vec3 o, vec3 inv_d, WatertightRay wr,
                      bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
     Instance inst = instances[inst_index];
     uint stack[WIDE_STACK];
+    float stack_t[WIDE_STACK];  // entry distance: skipped once a hit is nearer
     int sp = 0;
     uint cur = 0u;
     bool found = false;
@@ -83,12 +85,16 @@ bool trace_blas_wide(uint inst_index, uint base, uint prim_offset, vec3 o, vec3 
             }
             if (nh > 0u) {
                 for (uint j = nh - 1u; j > 0u; --j) {
-                    if (sp < WIDE_STACK) stack[sp++] = cs[j];
+                    if (sp < WIDE_STACK) {
+                        stack[sp] = cs[j];
+                        stack_t[sp++] = ts[j];
+                    }
                 }
                 cur = cs[0];
                 continue;
             }
         }
+        while (sp > 0 && stack_t[sp - 1] > tmax) --sp;
         if (sp == 0) break;
         cur = stack[--sp];
     }
