@@ -3,6 +3,7 @@
 //   bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit)
 //   vec3 trace_shadow(vec3 o, vec3 d, float tmax)   -> transmittance
 // Layout (src/accel/bvh/mod.rs, src/accel/compute_bvh.rs): nodes are 32 bytes;
+// static BLASes are 4-wide (compute_wide.glsl), skinned BLASes and the top level binary;
 // count == 0 marks an interior node whose children are left and left + 1;
 // count > 0 a leaf over prims[first .. first + count]. Triangles are read
 // from the one shared vertex/index copy.
@@ -147,8 +148,11 @@ uint candidate(bool shadow, uint inst, uint prim, vec2 b, float hit_t, inout vec
     return 0u;
 }
 
+#include "compute_wide.glsl"
+
 // Closest hit within one instance's BLAS (ray in object space). For shadow
-// rays it returns at the first blocking hit.
+// rays it returns at the first blocking hit. Static BLASes are 4-wide
+// (header node's count == BVH_WIDE_HEADER), skinned ones binary.
 bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
     BvhInstance bi = bvh_instances[inst_index];
     Instance inst = instances[inst_index];
@@ -158,7 +162,12 @@ bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, 
     int sp = 0;
     uint node = 0u;
     bool found = false;
-    if (ray_box(o, inv_d, tmax, blas_nodes[bi.node_offset].bmin, blas_nodes[bi.node_offset].bmax) > 1e37) return false;
+    BvhNode root = blas_nodes[bi.node_offset];
+    if (ray_box(o, inv_d, tmax, root.bmin, root.bmax) > 1e37) return false;
+    if (root.count == BVH_WIDE_HEADER) {
+        return trace_blas_wide(inst_index, (bi.node_offset + 1u) / 2u, bi.prim_offset, o, inv_d, wr, shadow, tmax, hit,
+                               tr);
+    }
     while (true) {
         STAT_NODE();
         BvhNode n = blas_nodes[bi.node_offset + node];

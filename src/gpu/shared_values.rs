@@ -277,4 +277,10 @@ shared! {
     uint LIGHT_STRIDE = 64;
     uint BVH_NODE_STRIDE = 32;
     uint BVH_INSTANCE_STRIDE = 144;
+
+    // 4-wide BLASes (src/accel/bvh/wide.rs): the `count` of the binary node
+    // at a BLAS's node offset marks a wide tree after it (the node keeps the
+    // root bounds), and bit 30 of a wide child word marks a leaf.
+    uint BVH_WIDE_HEADER = 1073741824;
+    uint BVH_WIDE_LEAF = 1073741824;
 }

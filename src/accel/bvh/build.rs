@@ -34,7 +34,7 @@ impl Bounds {
     }
 
     #[inline(always)]
-    fn grow_point(&mut self, p: &[f32; 3]) {
+    pub(super) fn grow_point(&mut self, p: &[f32; 3]) {
         for (k, &c) in p.iter().enumerate() {
             self.min[k] = self.min[k].min(c);
             self.max[k] = self.max[k].max(c);

@@ -1,4 +1,5 @@
-//! Binned-SAH BVH over axis-aligned boxes, flat 32-byte nodes for the GPU.
+//! Binned-SAH BVH over axis-aligned boxes, flat 32-byte nodes for the GPU
+//! (the compute tracer's static BLASes use `sbvh` + `wide` instead).
 //!
 //! Layout (read by glsl/trace/compute.glsl, keep both in sync):
 //!
@@ -37,14 +38,26 @@
 //! and subtrees that would exceed [`MAX_DEPTH`] fall back to an object
 //! median split along the largest centroid axis.
 //!
-//! Modules: `build` (the binned-SAH builder), `refit` (refit and the
-//! bottom-up level order), `quality` (SAH cost, depth, validation).
+//! Modules: `build` (the binned-SAH builder), `sbvh` (split BVH for static
+//! triangles, and the full-sweep SAH builder it contains; its trees may
+//! reference a triangle from several leaves), `refit` (refit and the
+//! bottom-up level order), `quality` (SAH cost, depth, validation), `wide`
+//! (4-wide quantized collapse of a binary tree).
 
 mod build;
 mod quality;
 mod refit;
+mod sbvh;
+#[cfg(test)]
+mod sbvh_tests;
 #[cfg(test)]
 mod tests;
+mod wide;
+#[cfg(test)]
+mod wide_tests;
+
+pub use sbvh::{SbvhStats, DEFAULT_ALPHA};
+pub use wide::{WideBvh, WideNode};
 
 use glam::Vec3;
 

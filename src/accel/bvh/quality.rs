@@ -3,6 +3,8 @@
 
 use super::build::Bounds;
 use super::{Bvh, INTERSECTION_COST, MAX_DEPTH, MAX_LEAF, TRAVERSAL_COST};
+use glam::Vec3;
+
 use crate::scene::Aabb;
 
 impl Bvh {
@@ -111,5 +113,95 @@ impl Bvh {
             Some(p) => Err(format!("primitive {p} referenced {} times", seen[p])),
             None => Ok(()),
         }
+    }
+
+    /// Checks a tree whose leaves may reference a triangle several times
+    /// and hold only clipped parts of it (an SBVH): the same structure
+    /// checks as [`Bvh::validate`] (ranges, child order, reachability, leaf
+    /// sizes, depth, parents containing children), every triangle
+    /// referenced, and every triangle covered: each of a grid of points on
+    /// it (vertices, edges, interior) lies in the box of some leaf that
+    /// references it.
+    pub fn validate_split(&self, tris: &[[Vec3; 3]]) -> Result<(), String> {
+        if self.nodes.is_empty() {
+            return match (tris.len(), self.prim_indices.len()) {
+                (0, 0) => Ok(()),
+                (a, p) => Err(format!("no nodes but {a} triangles and {p} primitive indices")),
+            };
+        }
+        let mut visited = vec![false; self.nodes.len()];
+        let mut leaves_of: Vec<Vec<usize>> = vec![Vec::new(); tris.len()];
+        let mut stack = vec![(0usize, 1usize)];
+        while let Some((i, depth)) = stack.pop() {
+            if std::mem::replace(&mut visited[i], true) {
+                return Err(format!("node {i} reached twice"));
+            }
+            if depth > MAX_DEPTH {
+                return Err(format!("node {i} at depth {depth} > {MAX_DEPTH}"));
+            }
+            let n = &self.nodes[i];
+            let first = n.left_or_first as usize;
+            if n.count == 0 {
+                if first <= i || first + 1 >= self.nodes.len() {
+                    return Err(format!("node {i}: children {first}, {} out of order or range", first + 1));
+                }
+                for c in [first, first + 1] {
+                    if !Bounds::of_node(n).contains(&Bounds::of_node(&self.nodes[c])) {
+                        return Err(format!("node {i} does not contain its child {c}"));
+                    }
+                    stack.push((c, depth + 1));
+                }
+            } else {
+                let end = first + n.count as usize;
+                if n.count as usize > MAX_LEAF || end > self.prim_indices.len() {
+                    return Err(format!("leaf {i}: primitives {first}..{end} too many or out of range"));
+                }
+                for &p in &self.prim_indices[first..end] {
+                    let list = leaves_of
+                        .get_mut(p as usize)
+                        .ok_or(format!("leaf {i}: triangle {p} out of range"))?;
+                    list.push(i);
+                }
+            }
+        }
+        if let Some(i) = visited.iter().position(|v| !v) {
+            return Err(format!("node {i} is unreachable"));
+        }
+        const STEPS: u32 = 8;
+        for (t, (tri, leaves)) in tris.iter().zip(&leaves_of).enumerate() {
+            if leaves.is_empty() {
+                return Err(format!("triangle {t} is in no leaf"));
+            }
+            for a in 0..=STEPS {
+                for b in 0..=STEPS - a {
+                    let (u, v) = (a as f32 / STEPS as f32, b as f32 / STEPS as f32);
+                    let p = if a == 0 && b == 0 {
+                        tri[0]
+                    } else if a == STEPS {
+                        tri[1]
+                    } else if b == STEPS {
+                        tri[2]
+                    } else {
+                        tri[0] + (tri[1] - tri[0]) * u + (tri[2] - tri[0]) * v
+                    };
+                    // The sample point itself carries the rounding of its
+                    // interpolation: a few ulps of the vertices' magnitude.
+                    let mag = tri[0].abs().max(tri[1].abs()).max(tri[2].abs());
+                    let inside = |l: &usize| {
+                        let n = &self.nodes[*l];
+                        (0..3).all(|k| {
+                            let tol = 8.0 * f32::EPSILON * mag[k];
+                            n.min[k] - tol <= p[k] && p[k] <= n.max[k] + tol
+                        })
+                    };
+                    if !leaves.iter().any(inside) {
+                        return Err(format!(
+                            "point {p} of triangle {t} is outside all its leaves {leaves:?}"
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 }

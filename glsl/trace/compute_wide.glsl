@@ -1,0 +1,104 @@
+// 4-wide BLAS traversal for the compute tracer (included by compute.glsl,
+// which defines ray_box, watertight_hit, object_triangle and candidate).
+// Layout: src/accel/bvh/wide.rs. A static BLAS's binary node at its node
+// offset is a header (root bounds, count == BVH_WIDE_HEADER); the 64-byte
+// wide nodes follow at the next (even) 32-byte slot, so wide node j is
+// blas_wide[(node_offset + 1) / 2 + j]: the same buffer, read as 64-byte
+// records.
+#ifndef TRACE_COMPUTE_WIDE_GLSL
+#define TRACE_COMPUTE_WIDE_GLSL
+
+struct WideNode {
+    vec3 origin;     // quantization origin
+    uint meta;       // exponent byte per axis (biased by 127), child count << 24
+    uint qmin[3];    // per axis: child i's low corner byte at bits 8i..8i+7
+    uint qmax[3];
+    uint child[4];   // wide node index, or BVH_WIDE_LEAF | count << 27 | first
+    uint pad0;
+    uint pad1;
+};
+
+layout(set = SET_TRACE, binding = BVH_BLAS_NODES, scalar) readonly buffer BlasWideNodes { WideNode blas_wide[]; };
+
+// Pending children: at most 3 per wide level, and a wide tree is no deeper
+// than its binary source (MAX_DEPTH = 32 levels): 3 * 31 < 96, so no push is
+// ever dropped.
+#define WIDE_STACK 96
+
+// Closest hit (any opaque hit for shadow rays) in the wide tree at
+// blas_wide[base...]: hit children sorted by entry distance, the nearest
+// visited next, the others pushed far to near with their entry distance, and
+// dropped when popped if a hit found since is nearer.
+bool trace_blas_wide(uint inst_index, uint base, uint prim_offset, vec3 o, vec3 inv_d, WatertightRay wr,
+                     bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
+    Instance inst = instances[inst_index];
+    uint stack[WIDE_STACK];
+    float stack_t[WIDE_STACK];  // entry distance: skipped once a hit is nearer
+    int sp = 0;
+    uint cur = 0u;
+    bool found = false;
+    while (true) {
+        if ((cur & BVH_WIDE_LEAF) != 0u) {
+            uint first = cur & 0x07FFFFFFu;
+            uint count = (cur >> 27) & 7u;
+            for (uint i = 0u; i < count; ++i) {
+                uint prim = blas_prims[prim_offset + first + i];
+                vec3 p0, p1, p2;
+                object_triangle(inst, prim, p0, p1, p2);
+                STAT_TRI();
+                vec2 b;
+                float t = watertight_hit(wr, p0, p1, p2, tmax, b);
+                if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
+                    tmax = t;
+                    hit = RayHit(inst_index, prim, b, t);
+                    found = true;
+                    if (shadow) return true;
+                }
+            }
+        } else {
+            STAT_NODE();
+            WideNode n = blas_wide[base + cur];
+            // 2^(byte - 127) from its bits: exact, like the host's decode.
+            vec3 scale = vec3(uintBitsToFloat((n.meta & 0xFFu) << 23), uintBitsToFloat(((n.meta >> 8) & 0xFFu) << 23),
+                              uintBitsToFloat(((n.meta >> 16) & 0xFFu) << 23));
+            uint cnt = n.meta >> 24;
+            float ts[4];
+            uint cs[4];
+            uint nh = 0u;
+            for (uint i = 0u; i < cnt; ++i) {
+                uint sh = 8u * i;
+                vec3 qlo = vec3((n.qmin[0] >> sh) & 0xFFu, (n.qmin[1] >> sh) & 0xFFu, (n.qmin[2] >> sh) & 0xFFu);
+                vec3 qhi = vec3((n.qmax[0] >> sh) & 0xFFu, (n.qmax[1] >> sh) & 0xFFu, (n.qmax[2] >> sh) & 0xFFu);
+                float t = ray_box(o, inv_d, tmax, n.origin + qlo * scale, n.origin + qhi * scale);
+                if (t < 1e37) {
+                    // Insertion sort by entry distance.
+                    uint j = nh;
+                    while (j > 0u && ts[j - 1u] > t) {
+                        ts[j] = ts[j - 1u];
+                        cs[j] = cs[j - 1u];
+                        --j;
+                    }
+                    ts[j] = t;
+                    cs[j] = n.child[i];
+                    ++nh;
+                }
+            }
+            if (nh > 0u) {
+                for (uint j = nh - 1u; j > 0u; --j) {
+                    if (sp < WIDE_STACK) {
+                        stack[sp] = cs[j];
+                        stack_t[sp++] = ts[j];
+                    }
+                }
+                cur = cs[0];
+                continue;
+            }
+        }
+        while (sp > 0 && stack_t[sp - 1] > tmax) --sp;
+        if (sp == 0) break;
+        cur = stack[--sp];
+    }
+    return found;
+}
+
+#endif

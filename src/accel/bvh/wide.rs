@@ -1,0 +1,216 @@
+//! 4-wide BVH with 8-bit quantized child bounds, collapsed from a binary
+//! [`Bvh`]: the compute tracer's static BLASes (glsl/trace/compute_wide.glsl).
+//!
+//! Layout (64 bytes, one cache line; keep in sync with any GLSL reader):
+//!
+//! ```text
+//! struct WideNode {              // 64 bytes, std430/scalar compatible
+//!     float origin[3];           //  0: quantization origin (node min)
+//!     uint  meta;                // 12: exp x | exp y << 8 | exp z << 16 | children << 24
+//!     uint  qmin[3];             // 16: per axis, child i's byte at bits 8i..8i+7
+//!     uint  qmax[3];             // 28
+//!     uint  child[4];            // 40: see below
+//!     uint  pad[2];              // 56
+//! };
+//! ```
+//!
+//! * Child `i < children` has the box `origin + q * 2^(exp - 127)` per axis,
+//!   `q` = its `qmin` byte for the low corner and its `qmax` byte for the
+//!   high corner. The product `q * 2^e` is exact (8-bit integer times a power
+//!   of two), so decoding rounds once, with or without a fused multiply-add,
+//!   and the builder checks that rounding: every decoded box contains the
+//!   exact child box.
+//! * `child[i]` with bit 30 clear: interior child, index of a wide node.
+//!   With bit 30 set: a leaf over `prim_indices[first .. first + count]`,
+//!   `first = child & 0x07FF_FFFF`, `count = ((child >> 27) & 7)` (1..=4).
+//! * Node 0 is the root; children come after their parents.
+//!
+//! Why this layout for a CPU device (llvmpipe runs each shader invocation
+//! as one SIMD lane): a node is one 64-byte fetch instead of two 32-byte
+//! nodes per binary level, half the levels and so half the stack pushes and
+//! pops, and sorting at most 4 hit children is a short insertion sort. 8-bit
+//! quantization keeps 4 children plus origin in one cache line; 16-bit would
+//! need 80+ bytes. 8-wide (CWBVH) halves the levels again but needs 8 box
+//! tests per node and a longer sort per lane.
+
+use super::{Bvh, MAX_LEAF};
+use crate::scene::Aabb;
+use glam::Vec3;
+
+/// Children per wide node.
+pub const WIDTH: usize = 4;
+pub const LEAF_BIT: u32 = crate::gpu::shared::BVH_WIDE_LEAF;
+const _: () = assert!(LEAF_BIT == 1 << 30);
+const FIRST_MASK: u32 = 0x07FF_FFFF;
+const COUNT_SHIFT: u32 = 27;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct WideNode {
+    pub origin: [f32; 3],
+    pub meta: u32,
+    pub qmin: [u32; 3],
+    pub qmax: [u32; 3],
+    pub child: [u32; WIDTH],
+    pub pad: [u32; 2],
+}
+const _: () = assert!(std::mem::size_of::<WideNode>() == 64);
+const _: () = assert!(MAX_LEAF <= 7);
+
+#[derive(Clone, Debug, Default)]
+pub struct WideBvh {
+    pub nodes: Vec<WideNode>,
+    /// Same as the source tree's (leaves keep their primitive ranges).
+    pub prim_indices: Vec<u32>,
+    /// Per wide node and child slot: the binary node it was collapsed from
+    /// (for checks of the quantization against the exact boxes).
+    pub source: Vec<[u32; WIDTH]>,
+}
+
+impl WideNode {
+    pub fn children(&self) -> usize {
+        (self.meta >> 24) as usize
+    }
+
+    fn scale(&self, axis: usize) -> f32 {
+        exp2i(((self.meta >> (8 * axis)) & 0xFF) as i32 - 127)
+    }
+
+    /// Decoded (conservative) box of child `i`.
+    pub fn child_bounds(&self, i: usize) -> Aabb {
+        let (mut min, mut max) = (Vec3::ZERO, Vec3::ZERO);
+        for k in 0..3 {
+            let s = self.scale(k);
+            min[k] = self.origin[k] + ((self.qmin[k] >> (8 * i)) & 0xFF) as f32 * s;
+            max[k] = self.origin[k] + ((self.qmax[k] >> (8 * i)) & 0xFF) as f32 * s;
+        }
+        Aabb { min, max }
+    }
+
+    /// `Some((first, count))` for a leaf child.
+    pub fn leaf(&self, i: usize) -> Option<(usize, usize)> {
+        let c = self.child[i];
+        (c & LEAF_BIT != 0).then_some(((c & FIRST_MASK) as usize, ((c >> COUNT_SHIFT) & 7) as usize))
+    }
+}
+
+/// 2^e for e in -126..=127 (normal floats), built from the bits.
+fn exp2i(e: i32) -> f32 {
+    f32::from_bits(((e.clamp(-126, 127) + 127) as u32) << 23)
+}
+
+fn node_bounds(b: &Bvh, i: usize) -> Aabb {
+    Aabb { min: b.nodes[i].min.into(), max: b.nodes[i].max.into() }
+}
+
+/// Quantizes `boxes` relative to their union: the smallest exponent per axis
+/// whose decoded boxes all contain the exact ones.
+fn quantize(boxes: &[Aabb]) -> WideNode {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for b in boxes {
+        lo = lo.min(b.min);
+        hi = hi.max(b.max);
+    }
+    let mut n = WideNode { origin: lo.to_array(), meta: (boxes.len() as u32) << 24, ..Default::default() };
+    for k in 0..3 {
+        let ext = hi[k] - lo[k];
+        // Smallest power of two with 255 * 2^e >= ext, then up while
+        // float rounding of the decode would cut into a box.
+        let mut e = if ext > 0.0 { (ext / 255.0).log2().ceil() as i32 } else { -126 };
+        'grow: loop {
+            let s = exp2i(e);
+            let (mut qlo, mut qhi) = (0u32, 0u32);
+            for (i, b) in boxes.iter().enumerate() {
+                let mut a = ((b.min[k] - lo[k]) / s).floor().clamp(0.0, 255.0) as u32;
+                while a > 0 && lo[k] + a as f32 * s > b.min[k] {
+                    a -= 1;
+                }
+                let mut z = ((b.max[k] - lo[k]) / s).ceil().clamp(0.0, 255.0) as u32;
+                while z < 255 && lo[k] + (z as f32) * s < b.max[k] {
+                    z += 1;
+                }
+                if lo[k] + a as f32 * s > b.min[k] || lo[k] + z as f32 * s < b.max[k] {
+                    if e >= 127 {
+                        break;
+                    }
+                    e += 1;
+                    continue 'grow;
+                }
+                qlo |= a << (8 * i);
+                qhi |= z << (8 * i);
+            }
+            n.qmin[k] = qlo;
+            n.qmax[k] = qhi;
+            n.meta |= ((e.clamp(-126, 127) + 127) as u32) << (8 * k);
+            break;
+        }
+    }
+    n
+}
+
+impl WideBvh {
+    /// Collapses a binary tree: each wide node takes up to [`WIDTH`]
+    /// children by repeatedly opening its interior child of largest surface
+    /// area (what SAH says is visited most often).
+    pub fn from_binary(bvh: &Bvh) -> WideBvh {
+        let mut w = WideBvh { prim_indices: bvh.prim_indices.clone(), ..Default::default() };
+        if bvh.nodes.is_empty() {
+            return w;
+        }
+        // (wide node to fill, binary node it stands for)
+        let mut todo = vec![(0usize, 0usize)];
+        w.nodes.push(WideNode::default());
+        w.source.push([0; WIDTH]);
+        while let Some((wi, bi)) = todo.pop() {
+            let mut kids: Vec<usize> = if bvh.nodes[bi].count > 0 {
+                vec![bi] // a leaf root: one leaf child
+            } else {
+                let f = bvh.nodes[bi].left_or_first as usize;
+                vec![f, f + 1]
+            };
+            while kids.len() < WIDTH {
+                let open =
+                    kids.iter().enumerate().filter(|(_, &c)| bvh.nodes[c].count == 0).max_by(|a, b| {
+                        area(&node_bounds(bvh, *a.1)).total_cmp(&area(&node_bounds(bvh, *b.1)))
+                    });
+                let Some((slot, &c)) = open else { break };
+                let f = bvh.nodes[c].left_or_first as usize;
+                kids[slot] = f;
+                kids.push(f + 1);
+            }
+            let boxes: Vec<Aabb> = kids.iter().map(|&c| node_bounds(bvh, c)).collect();
+            let mut node = quantize(&boxes);
+            for (i, &c) in kids.iter().enumerate() {
+                let b = &bvh.nodes[c];
+                node.child[i] = if b.count > 0 {
+                    assert!(
+                        b.left_or_first <= FIRST_MASK,
+                        "wide BVH: primitive index {} overflows",
+                        b.left_or_first
+                    );
+                    LEAF_BIT | (b.count << COUNT_SHIFT) | b.left_or_first
+                } else {
+                    let next = w.nodes.len();
+                    w.nodes.push(WideNode::default());
+                    w.source.push([0; WIDTH]);
+                    todo.push((next, c));
+                    next as u32
+                };
+                w.source[wi][i] = c as u32;
+            }
+            w.nodes[wi] = node;
+        }
+        w
+    }
+
+    /// Bytes on the GPU: nodes plus primitive indices.
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<WideNode>() + 4 * self.prim_indices.len()
+    }
+}
+
+fn area(b: &Aabb) -> f32 {
+    let d = b.max - b.min;
+    2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
+}
