@@ -314,6 +314,12 @@ pub fn bench(
     let extent = job.extent()?;
     let (mut scene, anim) = load_posed(job)?;
     let base_camera = job.camera.resolve(&scene)?;
+    // An explicit --look-from/--look-at holds the camera there: the scene's
+    // path is for the default run.
+    if matches!(job.camera, crate::app::CameraChoice::LookAt { .. }) && !scene.camera_path.is_empty() {
+        log::info!("bench: --look-from holds the camera; the scene's camera path is not followed");
+        scene.camera_path.clear();
+    }
     // Every variant asked for must run: a skipped one would read as measured.
     let unavailable: Vec<String> = variants
         .iter()

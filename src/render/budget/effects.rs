@@ -52,31 +52,39 @@ pub const fn stage_of(effect: usize) -> usize {
     }
 }
 
-/// Weight of a new frame in the moving averages.
+/// Weight of a new frame in the moving average of a stage's base.
 const SMOOTHING: f64 = 0.3;
-/// A frame's time per ray counts as at most this factor off the estimate
-/// (so one frame moves `k` by at most 30% up or 15% down with SMOOTHING
-/// 0.3).
-const OUTLIER: f64 = 2.0;
+/// Frames the time per ray is the median of: a spike in up to 3 of 7
+/// frames leaves it alone, a real change shows after 4.
+const WINDOW: usize = 7;
 
 /// One ray stage's `ms = base + k · rays`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StageFit {
     /// The stage with nothing traced (None until a frame traced nothing).
     pub base_ms: Option<f64>,
-    /// EMA of `ms − base` and of the rays, over frames that traced rays.
-    excess_ms: f64,
-    rays: f64,
+    /// `(ms − base) / rays` of the last frames that traced rays (a ring).
+    recent: [f64; WINDOW],
+    /// Frames in `recent` (up to WINDOW) and the next slot to write.
+    len: usize,
+    next: usize,
 }
 
 impl StageFit {
-    /// ms per ray (0 before any frame traced a ray in this stage).
+    /// ms per ray: the lower median of the last WINDOW frames' time per
+    /// ray (0 before any frame traced a ray in this stage). A median, not a
+    /// mean: on lavapipe one frame in ten or so takes 1.5-2x as long for
+    /// the same rays (another process on the CPU mid-pass), and a mean
+    /// that follows such a spike cuts the next selections, which then
+    /// undershoot for several frames (a limit cycle around T).
     pub fn ms_per_ray(&self) -> f64 {
-        if self.rays > 0.0 {
-            self.excess_ms / self.rays
-        } else {
-            0.0
+        if self.len == 0 {
+            return 0.0;
         }
+        let mut v = self.recent;
+        let v = &mut v[..self.len];
+        v.sort_by(|a, b| a.total_cmp(b));
+        v[(self.len - 1) / 2]
     }
 
     fn observe(&mut self, ms: f64, rays: f64) {
@@ -88,18 +96,10 @@ impl StageFit {
             self.base_ms = Some(b);
             return;
         }
-        let mut excess = (ms - self.base_ms.unwrap_or(0.0)).max(0.0);
-        if self.rays > 0.0 {
-            // One frame moves the estimate by a bounded step: a spike (on
-            // lavapipe, another process taking the CPU mid-pass; on a GPU, a
-            // clock change) would otherwise swing the next selections.
-            let expected = self.ms_per_ray() * rays;
-            excess = excess.clamp(expected / OUTLIER, expected * OUTLIER);
-            self.excess_ms += SMOOTHING * (excess - self.excess_ms);
-            self.rays += SMOOTHING * (rays - self.rays);
-        } else {
-            (self.excess_ms, self.rays) = (excess, rays);
-        }
+        let excess = (ms - self.base_ms.unwrap_or(0.0)).max(0.0);
+        self.recent[self.next] = excess / rays;
+        self.next = (self.next + 1) % WINDOW;
+        self.len = (self.len + 1).min(WINDOW);
     }
 
     /// Predicted stage ms for `rays`.
@@ -374,28 +374,36 @@ mod tests {
     }
 
     #[test]
-    fn one_spiking_frame_moves_the_time_per_ray_a_bounded_step() {
+    fn spikes_leave_the_time_per_ray_alone_and_a_real_change_shows_within_the_window() {
         let mut m = model(&[2]);
         let k = m.stages[1].ms_per_ray();
-        // 100 times the usual time for the same rays.
-        m.observe(&Observation {
-            pixels: &[100],
-            rays: &[[100, 200, 0]],
-            traced: &[EFFECT_ALL],
-            stage_ms: Some([2.1, 2.0 + 200.0 * k * 100.0]),
-        });
-        let ratio = m.stages[1].ms_per_ray() / k;
-        assert!(ratio > 1.2 && ratio <= 1.0 + SMOOTHING * (OUTLIER - 1.0) + 1e-9, "k moved by {ratio}");
-        // Frames at the usual time bring it back.
-        for _ in 0..30 {
+        let frame = |m: &mut CostModel, per_ray: f64| {
             m.observe(&Observation {
                 pixels: &[100],
                 rays: &[[100, 200, 0]],
                 traced: &[EFFECT_ALL],
-                stage_ms: Some([2.1, 2.0 + 200.0 * k]),
-            });
+                stage_ms: Some([2.1, 2.0 + 200.0 * per_ray]),
+            })
+        };
+        for _ in 0..WINDOW {
+            frame(&mut m, k);
         }
-        assert!((m.stages[1].ms_per_ray() / k - 1.0).abs() < 1e-3);
+        // Three spikes of 100 times the usual time for the same rays, in a
+        // window of 7: still k.
+        for _ in 0..3 {
+            frame(&mut m, 100.0 * k);
+            assert!((m.stages[1].ms_per_ray() / k - 1.0).abs() < 1e-9, "{}", m.stages[1].ms_per_ray() / k);
+        }
+        // The cost really doubles: the estimate follows within the window.
+        let mut followed = None;
+        for i in 0..WINDOW {
+            frame(&mut m, 2.0 * k);
+            if (m.stages[1].ms_per_ray() / k - 1.0).abs() > 0.5 && followed.is_none() {
+                followed = Some(i + 1);
+            }
+        }
+        assert!(followed.is_some_and(|n| n <= 4), "k followed after {followed:?} frames");
+        assert!((m.stages[1].ms_per_ray() / (2.0 * k) - 1.0).abs() < 1e-9);
     }
 
     #[test]
