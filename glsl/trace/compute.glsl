@@ -148,6 +148,28 @@ uint candidate(bool shadow, uint inst, uint prim, vec2 b, float hit_t, inout vec
     return 0u;
 }
 
+// The triangles prims[first .. first + count) of a leaf, in object space:
+// the nearest accepted hit shortens tmax and lands in `hit`. True when a
+// shadow ray is blocked (it stops there).
+bool trace_leaf(Instance inst, uint inst_index, uint first, uint count, WatertightRay wr, bool shadow,
+                inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
+    for (uint i = 0u; i < count; ++i) {
+        uint prim = blas_prims[first + i];
+        vec3 p0, p1, p2;
+        object_triangle(inst, prim, p0, p1, p2);
+        STAT_TRI();
+        vec2 b;
+        float t = watertight_hit(wr, p0, p1, p2, tmax, b);
+        if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
+            tmax = t;
+            hit = RayHit(inst_index, prim, b, t);
+            found = true;
+            if (shadow) return true;
+        }
+    }
+    return false;
+}
+
 #include "compute_wide.glsl"
 
 // Closest hit within one instance's BLAS (ray in object space). For shadow
@@ -172,19 +194,9 @@ bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, 
         STAT_NODE();
         BvhNode n = blas_nodes[bi.node_offset + node];
         if (n.count > 0u) {
-            for (uint i = 0u; i < n.count; ++i) {
-                uint prim = blas_prims[bi.prim_offset + n.left_or_first + i];
-                vec3 p0, p1, p2;
-                object_triangle(inst, prim, p0, p1, p2);
-                STAT_TRI();
-                vec2 b;
-                float t = watertight_hit(wr, p0, p1, p2, tmax, b);
-                if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
-                    tmax = t;
-                    hit = RayHit(inst_index, prim, b, t);
-                    found = true;
-                    if (shadow) return true;
-                }
+            if (trace_leaf(inst, inst_index, bi.prim_offset + n.left_or_first, n.count, wr, shadow, tmax, hit, found,
+                           tr)) {
+                return true;
             }
         } else {
             // Ordered traversal: visit the nearer child first.

@@ -1,5 +1,5 @@
 // 4-wide BLAS traversal for the compute tracer (included by compute.glsl,
-// which defines ray_box, watertight_hit, object_triangle and candidate).
+// which defines ray_box, trace_leaf and the types).
 // Layout: src/accel/bvh/wide.rs. A static BLAS's binary node at its node
 // offset is a header (root bounds, count == BVH_WIDE_HEADER); the 64-byte
 // wide nodes follow at the next (even) 32-byte slot, so wide node j is
@@ -41,19 +41,8 @@ bool trace_blas_wide(uint inst_index, uint base, uint prim_offset, vec3 o, vec3 
         if ((cur & BVH_WIDE_LEAF) != 0u) {
             uint first = cur & 0x07FFFFFFu;
             uint count = (cur >> 27) & 7u;
-            for (uint i = 0u; i < count; ++i) {
-                uint prim = blas_prims[prim_offset + first + i];
-                vec3 p0, p1, p2;
-                object_triangle(inst, prim, p0, p1, p2);
-                STAT_TRI();
-                vec2 b;
-                float t = watertight_hit(wr, p0, p1, p2, tmax, b);
-                if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
-                    tmax = t;
-                    hit = RayHit(inst_index, prim, b, t);
-                    found = true;
-                    if (shadow) return true;
-                }
+            if (trace_leaf(inst, inst_index, prim_offset + first, count, wr, shadow, tmax, hit, found, tr)) {
+                return true;
             }
         } else {
             STAT_NODE();

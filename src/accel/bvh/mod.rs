@@ -51,6 +51,8 @@ mod sbvh;
 #[cfg(test)]
 mod sbvh_tests;
 #[cfg(test)]
+mod test_rng;
+#[cfg(test)]
 mod tests;
 mod wide;
 #[cfg(test)]

@@ -8,16 +8,7 @@ use super::*;
 use crate::accel::watertight::{traverse_closest, triangle_positions};
 use crate::scene::primitives::uv_sphere;
 
-struct Rng(u64);
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn v(&mut self) -> Vec3 {
-        Vec3::new(self.f(), self.f(), self.f())
-    }
-}
+use super::test_rng::Rng;
 
 fn tri_aabbs(tris: &[[Vec3; 3]]) -> Vec<Aabb> {
     tris.iter().map(|t| Aabb { min: t[0].min(t[1]).min(t[2]), max: t[0].max(t[1]).max(t[2]) }).collect()

@@ -6,16 +6,7 @@ use super::*;
 use crate::accel::watertight::{ray_aabb, traverse_closest, triangle_positions, WatertightRay};
 use crate::scene::primitives::uv_sphere;
 
-struct Rng(u64);
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn v(&mut self) -> Vec3 {
-        Vec3::new(self.f(), self.f(), self.f())
-    }
-}
+use super::test_rng::Rng;
 
 fn soup(n: usize, seed: u64, offset: Vec3) -> Vec<[Vec3; 3]> {
     let mut r = Rng(seed);
