@@ -12,6 +12,7 @@ pub mod accel;
 pub mod app;
 pub mod gpu;
 pub mod metrics;
+pub mod prt;
 pub mod render;
 pub mod report;
 pub mod scene;

@@ -1,4 +1,4 @@
-//! Diffuse PRT end to end (scene/prt, gpu/prt_buffer.rs, glsl/common/prt.glsl):
+//! Diffuse PRT end to end (src/prt, gpu/prt_buffer.rs, glsl/common/prt.glsl):
 //! - a constant environment: `--ambient prt-unshadowed` renders the same
 //!   image as `--ambient sh` within 1/255 (they are the same integral);
 //! - a plane under a sphere of radius r at height d, constant radiance L:
@@ -15,8 +15,8 @@ use std::process::Command;
 
 use glam::{Vec3, Vec4};
 use hybrid_rt::app::EnvOverrides;
+use hybrid_rt::prt::{self, CacheOutcome, PrtCache, PrtMode, PrtSettings};
 use hybrid_rt::render::{AmbientMode, FrameOutput, PrtOptions, ReferenceSettings, RenderSettings, Renderer};
-use hybrid_rt::scene::prt::{self, CacheOutcome, PrtCache, PrtMode, PrtSettings};
 use hybrid_rt::scene::sh::ShCoeffs;
 use hybrid_rt::scene::{Aabb, Camera, EnvLayout, Scene};
 
@@ -280,7 +280,7 @@ fn bad_prt_flags_are_named() {
 }
 
 /// The precompute's visibility rays start where the shaders' would:
-/// `scene::prt::offset_origin` against offset.glsl's `offset_ray` (run on
+/// `prt::offset_origin` against offset.glsl's `offset_ray` (run on
 /// the device through the shading probe), within one ULP of the result
 /// (the shader compiler may fuse the multiply-add).
 #[test]

@@ -37,10 +37,10 @@ pub struct EnvArgs {
     pub ambient: Option<AmbientMode>,
     /// PRT directions per vertex: N gives N×N stratified jittered samples
     /// over the sphere (1..=1024) [default: 16].
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=crate::scene::prt::MAX_SAMPLES as i64))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=crate::prt::MAX_SAMPLES as i64))]
     pub prt_samples: Option<u32>,
     /// Interreflection bounces of prt-interreflected (0..=16) [default: 1].
-    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(0..=crate::scene::prt::MAX_BOUNCES as i64))]
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(0..=crate::prt::MAX_BOUNCES as i64))]
     pub prt_bounces: Option<u32>,
     /// SH bands of the PRT transfer and environment (1..=8, bands² coefficients) [default: 3].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=crate::scene::sh::MAX_BANDS as i64))]

@@ -1,4 +1,4 @@
-//! Diffuse PRT on the GPU: the per-vertex transfer of scene/prt packed into
+//! Diffuse PRT on the GPU: the per-vertex transfer of src/prt packed into
 //! one storage buffer (layout: shared_values.rs SCENE_PRT), and the
 //! environment's radiance coefficients as the frame uniform holds them.
 
@@ -6,7 +6,7 @@ use anyhow::Result;
 use ash::vk;
 
 use super::shared::{PRT_HEADER_WORDS, PRT_NO_VERTEX, SH_PRT_MAX_COEFFS};
-use crate::scene::prt::PrtTransfer;
+use crate::prt::PrtTransfer;
 use crate::scene::sh::ShCoeffs;
 use crate::scene::Environment;
 use crate::vk::memory::Buffer;
@@ -51,7 +51,7 @@ pub fn radiance_uniform(radiance: &ShCoeffs, env: &Environment) -> [[f32; 4]; SH
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::prt::{PrtMode, PrtSettings};
+    use crate::prt::{PrtMode, PrtSettings};
 
     #[test]
     fn pack_layout() {

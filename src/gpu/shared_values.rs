@@ -52,7 +52,7 @@ shared! {
     // before the lookup (normal-offset bias against acne at grazing light).
     float SHADOW_NORMAL_OFFSET = 1.5;
     // Ray-origin offset (glsl/common/offset.glsl, and the PRT precompute's
-    // visibility rays in scene/prt): ULPs of the extent the origin moves,
+    // visibility rays in src/prt): ULPs of the extent the origin moves,
     // covering the interpolation (3 terms), the instance transform (4 terms)
     // and the traversal's own triangle test.
     float OFFSET_ULPS = 16.0;

@@ -8,7 +8,7 @@ use anyhow::{Context as _, Result};
 
 use super::RenderSettings;
 use crate::gpu::scene::GpuScene;
-use crate::scene::prt::{default_cache_dir, PrtCache, PrtSettings};
+use crate::prt::{default_cache_dir, PrtCache, PrtSettings};
 use crate::scene::sh::{project_quadrature, Projection, ShCoeffs};
 use crate::scene::Scene;
 use crate::vk::Context;

@@ -14,7 +14,7 @@ pub enum AmbientMode {
     Sh,
     /// The map's mean radiance for every normal (the behaviour before SH).
     Constant,
-    /// Diffuse PRT (scene/prt) on static geometry at the primary hit:
+    /// Diffuse PRT (src/prt) on static geometry at the primary hit:
     /// clamped cosine only; everything else gets `Sh`.
     PrtUnshadowed,
     /// PRT with visibility (ambient shadowing).
@@ -34,8 +34,8 @@ impl AmbientMode {
     }
 
     /// The PRT transfer this mode shades with, if any.
-    pub fn prt_mode(self) -> Option<crate::scene::prt::PrtMode> {
-        use crate::scene::prt::PrtMode;
+    pub fn prt_mode(self) -> Option<crate::prt::PrtMode> {
+        use crate::prt::PrtMode;
         match self {
             AmbientMode::Sh | AmbientMode::Constant => None,
             AmbientMode::PrtUnshadowed => Some(PrtMode::Unshadowed),
@@ -57,7 +57,7 @@ pub struct PrtOptions {
 
 impl Default for PrtOptions {
     fn default() -> Self {
-        use crate::scene::prt::{DEFAULT_BOUNCES, DEFAULT_SAMPLES};
+        use crate::prt::{DEFAULT_BOUNCES, DEFAULT_SAMPLES};
         Self { samples: DEFAULT_SAMPLES, bounces: DEFAULT_BOUNCES, bands: crate::scene::sh::DEFAULT_BANDS }
     }
 }
@@ -149,7 +149,7 @@ mod tests {
             .iter()
             .map(|v| v.to_possible_value().unwrap().get_name().to_string())
             .collect();
-        assert_eq!(names, crate::scene::prt::AMBIENT_NAMES);
+        assert_eq!(names, crate::scene::AMBIENT_NAMES);
         let env = crate::scene::Environment { ambient: Some("prt-shadowed".into()), ..Default::default() };
         let cli = RenderSettings { ambient: AmbientMode::Constant, ..Default::default() };
         assert_eq!(AmbientMode::resolve(&cli, &env), AmbientMode::Constant);

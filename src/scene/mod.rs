@@ -11,11 +11,15 @@ pub mod env_layout;
 pub mod gltf_import;
 pub mod obj;
 pub mod primitives;
-pub mod prt;
 pub mod scene_file;
 pub mod sh;
 pub mod skin;
 pub mod tangents;
+
+/// The ambient modes' names (`--ambient`, the scene file's
+/// `[environment] ambient`; render::AmbientMode checks it has the same).
+pub const AMBIENT_NAMES: [&str; 5] =
+    ["sh", "constant", "prt-unshadowed", "prt-shadowed", "prt-interreflected"];
 
 use std::path::{Path, PathBuf};
 
@@ -304,7 +308,7 @@ pub struct Environment {
     pub intensity: f32,
     /// Rotation about +Y, radians.
     pub rotation: f32,
-    /// The scene file's `ambient` (one of [`prt::AMBIENT_NAMES`]), used
+    /// The scene file's `ambient` (one of [`AMBIENT_NAMES`]), used
     /// when the command line gives no `--ambient`.
     pub ambient: Option<String>,
 }

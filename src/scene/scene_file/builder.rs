@@ -88,7 +88,7 @@ impl Builder<'_> {
             out.map_path = Some(path);
         }
         if let Some(a) = env.ambient {
-            let names = crate::scene::prt::AMBIENT_NAMES;
+            let names = crate::scene::AMBIENT_NAMES;
             if !names.contains(&a.get_ref().as_str()) {
                 bail!(
                     "{}: ambient '{}': expected one of {}",

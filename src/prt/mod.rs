@@ -1,5 +1,6 @@
 //! Diffuse precomputed radiance transfer (Sloan, Kautz & Snyder 2002) for
-//! the static geometry, on the CPU.
+//! the static geometry, on the CPU. A layer above `scene` and `accel`: it
+//! traces visibility through the CPU BVH.
 //!
 //! Per vertex of every static instance (not skinned, not under an animated
 //! node) a transfer vector T over the SH basis such that the irradiance is
@@ -30,13 +31,10 @@ use glam::{DMat3, DVec3};
 pub use cache::{default_cache_dir, key as cache_key, CacheOutcome, PrtCache, CACHE_DIR_ENV};
 pub use transfer::offset_origin;
 
-use super::sh::{check_bands, ShCoeffs};
-use super::Scene;
+use crate::scene::sh::{check_bands, ShCoeffs};
+use crate::scene::Scene;
 
-/// The ambient modes' names (`--ambient`, the scene file's
-/// `[environment] ambient`; render::AmbientMode checks it has the same).
-pub const AMBIENT_NAMES: [&str; 5] =
-    ["sh", "constant", "prt-unshadowed", "prt-shadowed", "prt-interreflected"];
+pub use crate::scene::AMBIENT_NAMES;
 
 /// Bump when the computation or the file layout changes: it is part of the
 /// cache key.
