@@ -281,12 +281,6 @@ fn sun_maps_give_no_negative_radiance() {
     }
 }
 
-fn bin() -> std::process::Command {
-    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_hybrid-rt"));
-    c.env("HYBRID_RT_VALIDATION", "1").args(["render", "--width", "16", "--height", "9"]);
-    c
-}
-
 /// The environment flags: bad values are usage errors naming the flag (exit
 /// 2, nothing written), a bad map an error naming --env and the file (exit
 /// 1), an angular probe must be square; good ones render.
@@ -305,7 +299,7 @@ fn environment_flags() {
     ];
     for (args, flag) in usage {
         let _ = std::fs::remove_file(&out);
-        let o = bin().args(args).arg("--out").arg(&out).output().unwrap();
+        let o = common::tiny_render_cmd().args(args).arg("--out").arg(&out).output().unwrap();
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {stderr}");
         assert!(stderr.contains(flag), "{args:?}: does not name {flag}: {stderr}");
@@ -320,7 +314,7 @@ fn environment_flags() {
         ),
     ];
     for (args, needles) in failing {
-        let o = bin().args(&args).arg("--out").arg(&out).output().unwrap();
+        let o = common::tiny_render_cmd().args(&args).arg("--out").arg(&out).output().unwrap();
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
         assert!(!stderr.contains("panicked"), "{stderr}");
@@ -335,7 +329,7 @@ fn environment_flags() {
         vec!["--env-intensity".into(), "2".into(), "--ambient".into(), "constant".into()],
     ] {
         let _ = std::fs::remove_file(&out);
-        let o = bin().args(&args).arg("--out").arg(&out).output().unwrap();
+        let o = common::tiny_render_cmd().args(&args).arg("--out").arg(&out).output().unwrap();
         assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
         assert!(out.exists(), "{args:?}: no image");
     }

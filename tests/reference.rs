@@ -305,12 +305,6 @@ fn every_backend_gives_the_same_image() {
     }
 }
 
-fn bin() -> std::process::Command {
-    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_hybrid-rt"));
-    c.env("HYBRID_RT_VALIDATION", "1").args(["render", "--width", "16", "--height", "9"]);
-    c
-}
-
 /// Bad values are usage errors naming the flag; a good one renders.
 #[test]
 fn reference_flags() {
@@ -327,7 +321,7 @@ fn reference_flags() {
         (&["--reference-samples", "4", "--debug-view", "normal"], "--reference-samples"),
     ];
     for (args, flag) in cases {
-        let o = bin().args(args).arg("--out").arg(&out).output().unwrap();
+        let o = common::tiny_render_cmd().args(args).arg("--out").arg(&out).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(flag), "{args:?}: error does not name {flag}: {err}");
@@ -343,7 +337,7 @@ fn reference_flags() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "report: {err}");
     assert!(err.contains("--reference-samples"), "report: {err}");
-    let o = bin()
+    let o = common::tiny_render_cmd()
         .args(["--reference-samples", "6", "--reference-bounces", "2", "--out"])
         .arg(&out)
         .output()

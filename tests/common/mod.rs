@@ -266,3 +266,11 @@ pub fn split_csv(line: &str) -> Vec<String> {
     fields.push(cur);
     fields
 }
+
+/// The binary's `render` at 16x9 with the validation layer on: for the
+/// command-line tests of flags (append the flags under test).
+pub fn tiny_render_cmd() -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_hybrid-rt"));
+    c.env("HYBRID_RT_VALIDATION", "1").args(["render", "--width", "16", "--height", "9"]);
+    c
+}
