@@ -7,11 +7,13 @@
 //!
 //! Layers, lowest first: `vk`, `scene` (no GPU code), `gpu`, `accel`,
 //! `render`, then `app`, `report` and `viewer`. A layer imports only the ones below.
+//! `par` (a parallel map) sits below them all.
 
 pub mod accel;
 pub mod app;
 pub mod gpu;
 pub mod metrics;
+pub mod par;
 pub mod prt;
 pub mod render;
 pub mod report;

@@ -14,7 +14,7 @@
 //! topology. The topology only decides speed; the bounds tracing uses are
 //! always this frame's.
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use ash::vk;
 use glam::Mat4;
 
@@ -140,33 +140,41 @@ impl ComputeBvh {
         let mut triangles = 0;
         // Primitives drawn only skinned (or not at all) get no static tree.
         let used = scene.rigidly_instanced();
-        let blas: Vec<Vec<Option<BlasRef>>> = scene
+        let wanted: Vec<(usize, usize)> = scene
             .meshes
             .iter()
             .zip(&used)
-            .map(|(mesh, used)| {
+            .enumerate()
+            .flat_map(|(m, (mesh, used))| {
                 mesh.primitives
                     .iter()
                     .zip(used)
-                    .map(|(p, used)| {
-                        if p.indices.len() < 3 || !used {
-                            return None;
-                        }
-                        triangles += p.indices.len() / 3;
-                        // Static geometry is built once: the split BVH's
-                        // better trees (fewer node and triangle tests per
-                        // ray) are worth its slower build. It cannot be
-                        // refit (leaf boxes hold clipped triangle parts).
-                        // Collapsed 4-wide: fewer, wider node fetches.
-                        let bvh = Bvh::build_sbvh(
-                            &triangle_positions(&p.vertices, &p.indices),
-                            Some(DEFAULT_ALPHA),
-                        );
-                        Some(append_wide(&mut nodes, &mut prims, bvh))
-                    })
-                    .collect()
+                    .enumerate()
+                    .filter(|(_, (p, used))| p.indices.len() >= 3 && **used)
+                    .map(move |(i, _)| (m, i))
             })
             .collect();
+        let size = |&(m, i): &(usize, usize)| scene.meshes[m].primitives[i].indices.len();
+        // Biggest first: Sponza's largest primitives take most of the time.
+        let mut order: Vec<usize> = (0..wanted.len()).collect();
+        order.sort_by_key(|&k| std::cmp::Reverse(size(&wanted[k])));
+        // Static geometry is built once: the split BVH's better trees (fewer
+        // node and triangle tests per ray) are worth its slower build, on
+        // every core. It cannot be refit (leaf boxes hold clipped triangle
+        // parts).
+        let trees = crate::par::map(wanted.len(), &order, |k| {
+            let (m, i) = wanted[k];
+            let p = &scene.meshes[m].primitives[i];
+            Bvh::build_sbvh(&triangle_positions(&p.vertices, &p.indices), Some(DEFAULT_ALPHA))
+        })
+        .context("building the static BLASes")?;
+        let mut blas: Vec<Vec<Option<BlasRef>>> =
+            scene.meshes.iter().map(|m| m.primitives.iter().map(|_| None).collect()).collect();
+        for (&(m, i), bvh) in wanted.iter().zip(trees) {
+            triangles += size(&(m, i)) / 3;
+            // Collapsed 4-wide: fewer, wider node fetches.
+            blas[m][i] = Some(append_wide(&mut nodes, &mut prims, bvh));
+        }
         let static_ms = t0.elapsed().as_secs_f64() * 1e3;
         // Skinned instances: their own trees over the current (CPU) pose,
         // which is exactly what the GPU vertex range holds at upload. Binned

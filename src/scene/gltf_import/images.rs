@@ -2,7 +2,6 @@
 //! glTF samplers, and the images decoded once each, in parallel.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{ensure, Context, Result};
 use gltf::texture::{MagFilter, MinFilter, WrappingMode};
@@ -142,26 +141,12 @@ impl ImageSource {
 /// Decodes `sources` on up to all available cores; the first failure (in
 /// source order) is returned.
 fn decode_parallel(sources: &[ImageSource], buffers: &[Vec<u8>]) -> Result<Vec<DecodedImage>> {
-    let next = AtomicUsize::new(0);
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(sources.len()).max(1);
-    let mut results: Vec<(usize, Result<DecodedImage>)> = std::thread::scope(|s| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                s.spawn(|| {
-                    let mut out = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        let Some(src) = sources.get(i) else { break out };
-                        out.push((i, src.decode(buffers).with_context(|| format!("image '{}'", src.name))));
-                    }
-                })
-            })
-            .collect();
-        workers.into_iter().flat_map(|w| w.join().unwrap_or_default()).collect()
-    });
-    ensure!(results.len() == sources.len(), "an image decoding thread panicked");
-    results.sort_by_key(|(i, _)| *i);
-    results.into_iter().map(|(_, r)| r).collect()
+    let results = crate::par::map(sources.len(), &[], |i| {
+        let src = &sources[i];
+        src.decode(buffers).with_context(|| format!("image '{}'", src.name))
+    })
+    .context("decoding images")?;
+    results.into_iter().collect()
 }
 
 fn sampler_desc(s: &gltf::texture::Sampler) -> SamplerDesc {
