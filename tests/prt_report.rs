@@ -76,3 +76,33 @@ fn prt_report_rows_and_shadowed_beats_unshadowed() {
     );
     drop(ctx); // validation errors, teardown included, fail here
 }
+
+/// Bad `report --prt` input: an error naming the knob and value (exit 1,
+/// checked before anything renders), or a usage error (exit 2); no panic,
+/// nothing written.
+#[test]
+fn prt_report_bad_input_is_named() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("prt-report-bad");
+    let _ = std::fs::remove_dir_all(&out);
+    for (args, code, says) in [
+        (&["--prt", "--knobs", "bands=9"][..], 1, "bands 9"),
+        (&["--prt", "--knobs", "sh-samples=many"], 1, "sh-samples 'many'"),
+        (&["--prt", "--knobs", "transfer=prt-interreflected-0"], 1, "transfer 'prt-interreflected-0'"),
+        (&["--prt", "--knobs", "max-depth"], 1, "unknown knob 'max-depth' for report --prt"),
+        (&["--prt-sweep"], 2, "--prt"),
+        (&["--prt", "--stability"], 2, "--stability"),
+    ] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_hybrid-rt"))
+            .arg("report")
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: error does not say {says}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}
