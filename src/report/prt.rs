@@ -23,6 +23,8 @@ use super::knobs::{Knob, KnobSelection, Variant};
 use super::measure::{self, Measured};
 use super::metrics::{self, HdrImage};
 use crate::app::{load_posed, with_context, GpuOptions, RenderJob};
+use crate::gpu::env_sh::SH_BANDS;
+use crate::gpu::shared::REFERENCE_SAMPLES_PER_FRAME;
 use crate::prt::{default_cache_dir, CacheOutcome, PrtCache, PrtSettings};
 use crate::render::{AmbientMode, EnvProjection, ReferenceSettings, RenderSettings, Renderer};
 use crate::scene::sh::{project, Projection};
@@ -276,12 +278,10 @@ fn plan(opts: &PrtReportOptions, base: &Variant) -> Result<Plan> {
                 }
             }
         }
-        if v.settings.ambient == AmbientMode::Sh && s.bands != crate::gpu::env_sh::SH_BANDS {
+        if v.settings.ambient == AmbientMode::Sh && s.bands != SH_BANDS {
             let why = format!(
                 "transfer sh, bands {}, sh-samples {}: the sh ambient evaluates {} bands only",
-                s.bands,
-                s.sh_samples,
-                crate::gpu::env_sh::SH_BANDS
+                s.bands, s.sh_samples, SH_BANDS
             );
             if !skipped.contains(&why) {
                 skipped.push(why);
@@ -412,7 +412,7 @@ pub fn run(ctx: &Context, opts: &PrtReportOptions) -> Result<PrtReport> {
                 precomputes.push((s, precompute(&scene, &s)?));
             }
         }
-        let bands = if prt_settings(&v.settings).is_some() { v.settings.prt.bands } else { 3 };
+        let bands = if prt_settings(&v.settings).is_some() { v.settings.prt.bands } else { SH_BANDS };
         let key = (bands, v.settings.prt.projection);
         if !projections.iter().any(|(k, _)| *k == key) {
             let t = Instant::now();
@@ -465,7 +465,7 @@ pub fn run(ctx: &Context, opts: &PrtReportOptions) -> Result<PrtReport> {
             .with_context(|| format!("comparing {s:?} with the reference"))?;
         let p = prt_settings(&v.settings);
         let precompute = p.and_then(|p| precomputes.iter().find(|(x, _)| *x == p).map(|(_, c)| *c));
-        let bands = if p.is_some() { v.settings.prt.bands } else { 3 };
+        let bands = if p.is_some() { v.settings.prt.bands } else { SH_BANDS };
         let key = (bands, v.settings.prt.projection);
         let projection_ms = projections.iter().find(|(k, _)| *k == key).map_or(f64::NAN, |(_, ms)| *ms);
         rows.push(PrtRow {
@@ -490,7 +490,11 @@ pub fn run(ctx: &Context, opts: &PrtReportOptions) -> Result<PrtReport> {
         prt_samples: base.settings.prt.samples,
         reference: opts.reference,
         reference_seconds,
-        convergence: ((opts.reference.frames() / 2).max(1) * 4, conv.flip_mean, conv.psnr),
+        convergence: (
+            (opts.reference.frames() / 2).max(1) * REFERENCE_SAMPLES_PER_FRAME,
+            conv.flip_mean,
+            conv.psnr,
+        ),
         exposure,
         reference_image: reference,
         environment: map,
