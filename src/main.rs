@@ -195,6 +195,16 @@ enum Command {
         /// --exposure; tone_sheet.md with the measured exposures and pass ms.
         #[arg(long, value_delimiter = ',', conflicts_with_all = ["stability", "knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts"])]
         tone_sheet: Vec<PathBuf>,
+        /// The environment light's ambient instead (SH irradiance and
+        /// diffuse PRT) against a ray-traced reference of the view
+        /// (--reference-samples N (1024) --reference-bounces K (3 here)); --knobs
+        /// picks among bands, sh-samples, transfer, whose product runs.
+        #[arg(long, conflicts_with_all = ["stability", "budget_paths", "tone_sheet", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "ref_supersample", "ref_ss_filter"])]
+        prt: bool,
+        /// With --prt: one knob at a time around the base settings instead
+        /// of the product.
+        #[arg(long, requires = "prt")]
+        prt_sweep: bool,
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
@@ -486,9 +496,10 @@ impl Cli {
                         .into(),
                 )
             }
-            Some(Command::Report { .. }) if view.env.reference_samples.is_some() => Some(
-                "--reference-samples is not a report option: report renders one frame per variant, and the \
-                 reference needs ceil(N/4) (render it with `render --reference-samples N`, then `compare`)"
+            Some(Command::Report { prt: false, .. }) if view.env.reference_samples.is_some() => Some(
+                "--reference-samples is a report option only with --prt (the ambient's reference): report \
+                 renders one frame per variant, and the reference needs ceil(N/4) (render it with `render \
+                 --reference-samples N`, then `compare`)"
                     .into(),
             ),
             Some(Command::Render { supersample: Some(k), .. }) if view.env.reference_samples.is_some() => {
@@ -601,8 +612,24 @@ fn run(cli: Cli) -> Result<()> {
             cases,
             budget_paths,
             tone_sheet,
+            prt,
+            prt_sweep,
             out,
         }) => {
+            if prt {
+                let opts = report::prt::PrtReportOptions {
+                    frames,
+                    warmup,
+                    knobs: report::prt::parse_selection(knobs.as_deref().unwrap_or("")).context("--knobs")?,
+                    sweep: prt_sweep,
+                    reference: hybrid_rt::render::ReferenceSettings {
+                        samples: view.env.reference_samples.unwrap_or(report::prt::DEFAULT_REFERENCE.samples),
+                        bounces: view.env.reference_bounces.unwrap_or(report::prt::DEFAULT_REFERENCE.bounces),
+                    },
+                    ..report::prt::PrtReportOptions::new(view.job()?, out)
+                };
+                return report::prt::command(&gpu, &opts);
+            }
             if !budget_paths.is_empty() {
                 let opts = report::budget_paths::BudgetPathOptions {
                     job: view.job()?,

@@ -26,40 +26,9 @@ const R: f32 = 1.0;
 const D: f32 = 2.0;
 const SAMPLES: u32 = 64;
 
-/// A white floor (replaced by a 21×21 vertex grid below) under a sphere of
-/// radius R centred at height D; the camera looks at the origin from the
-/// side, under the sphere. No light: the frame is the ambient term.
-const SCENE: &str = r#"
-[[camera]]
-position = [3.0, 0.6, 0.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 60
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "white"
-base_color = [0.8, 0.8, 0.8]
-roughness = 1.0
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = [4.0, 4.0]
-material = "white"
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 1.0
-slices = 32
-stacks = 16
-translation = [0.0, 2.0, 0.0]
-material = "white"
-"#;
+/// The plane under a sphere (tests/common/scenes.rs), its floor replaced
+/// by a 21×21 vertex grid below.
+const SCENE: &str = common::scenes::PLANE_UNDER_SPHERE;
 
 fn cache_dir() -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("prt-cache");

@@ -79,6 +79,7 @@ impl EnvArgs {
             samples: self.prt_samples.unwrap_or(d.samples),
             bounces: self.prt_bounces.unwrap_or(d.bounces),
             bands: self.prt_bands.map_or(d.bands, |b| b as usize),
+            ..d
         }
     }
 

@@ -46,7 +46,7 @@ use tracer::Tracer;
 
 pub use output::FrameOutput;
 pub use reference::ReferenceSettings;
-pub use settings::{AmbientMode, DebugView, PrtOptions, RenderSettings};
+pub use settings::{AmbientMode, DebugView, EnvProjection, PrtOptions, RenderSettings};
 
 /// The frame uniforms' tone-mapping fields.
 fn tone_uniforms(t: &ToneSettings, adapt_dt: Option<f32>) -> GpuFrame {
@@ -515,7 +515,8 @@ impl Renderer {
         let env = &scene.environment;
         // No map: no SH (the constant colour's irradiance is pi L, exactly
         // the constant ambient).
-        let sh = match (settings.ambient, &self.gpu.env_sh) {
+        let sh_radiance = self.prt.sh_radiance(&self.gpu, scene, settings.prt.projection)?;
+        let sh = match (settings.ambient, &sh_radiance) {
             (AmbientMode::Constant, _) => None,
             // PRT shades static primary hits; the rest keep SH irradiance.
             (_, Some(sh)) => Some(crate::gpu::env_sh::irradiance_uniform(sh, env)),

@@ -2,15 +2,20 @@
 //! environment's radiance coefficients at its band count. The transfer is
 //! computed (or loaded from the cache) when a frame first asks for a prt
 //! ambient mode with an environment map; without one nothing is computed
-//! and the scene set keeps its placeholder.
+//! and the scene set keeps its placeholder. It also holds the map's
+//! projection when a frame asks for another integrator than the scene
+//! upload's exact quadrature (`PrtOptions::projection`, the report's
+//! `sh-samples` knob).
 
 use anyhow::{Context as _, Result};
 
+use super::settings::EnvProjection;
 use super::RenderSettings;
+use crate::gpu::env_sh::SH_BANDS;
 use crate::gpu::scene::GpuScene;
 use crate::prt::{default_cache_dir, PrtCache, PrtSettings};
-use crate::scene::sh::{project_quadrature, Projection, ShCoeffs};
-use crate::scene::Scene;
+use crate::scene::sh::{project, Projection, ShCoeffs};
+use crate::scene::{HdrImage, Scene};
 use crate::vk::Context;
 
 #[derive(Default)]
@@ -19,6 +24,8 @@ pub struct PrtState {
     uploaded: Option<PrtSettings>,
     /// The map's radiance coefficients at `uploaded`'s bands.
     radiance: Option<ShCoeffs>,
+    /// The last projection other than the scene's exact 3-band one.
+    projected: Option<(EnvProjection, usize, ShCoeffs)>,
 }
 
 impl PrtState {
@@ -39,30 +46,64 @@ impl PrtState {
             }),
             _ => None,
         };
-        if want == self.uploaded {
-            return Ok(());
+        if want != self.uploaded {
+            match want {
+                None => gpu.set_prt(ctx, None)?,
+                Some(s) => {
+                    let cache = PrtCache::new(default_cache_dir());
+                    let (transfer, _) = cache.get(scene, &s).context("PRT precompute")?;
+                    gpu.set_prt(ctx, Some(&crate::gpu::prt_buffer::pack(&transfer)))?;
+                }
+            }
+            self.uploaded = want;
         }
-        let Some(s) = want else {
-            gpu.set_prt(ctx, None)?;
-            (self.uploaded, self.radiance) = (None, None);
-            return Ok(());
+        self.radiance = match (want, &scene.environment.map) {
+            (Some(s), Some(map)) => Some(self.projected(gpu, map, s.bands, settings.prt.projection)?),
+            _ => None,
         };
-        let cache = PrtCache::new(default_cache_dir());
-        let (transfer, _) = cache.get(scene, &s).context("PRT precompute")?;
-        gpu.set_prt(ctx, Some(&crate::gpu::prt_buffer::pack(&transfer)))?;
-        let map = scene.environment.map.as_ref().context("PRT without an environment map")?;
-        // The scene's 3-band projection is reused; other band counts project
-        // the map again (same quadrature and Hann window).
-        self.radiance = Some(match &gpu.env_sh {
-            Some(sh) if sh.bands() == s.bands => sh.clone(),
-            _ => project_quadrature(map, &Projection { bands: s.bands, ..Default::default() })?,
-        });
-        self.uploaded = Some(s);
         Ok(())
     }
 
     /// The radiance coefficients while a transfer is on the GPU.
     pub fn radiance(&self) -> Option<&ShCoeffs> {
         self.radiance.as_ref()
+    }
+
+    /// The 3-band radiance coefficients the SH irradiance is made of,
+    /// projected the way `projection` says (None without a map).
+    pub fn sh_radiance(
+        &mut self,
+        gpu: &GpuScene,
+        scene: &Scene,
+        projection: EnvProjection,
+    ) -> Result<Option<ShCoeffs>> {
+        match &scene.environment.map {
+            Some(map) if gpu.env_sh.is_some() => Ok(Some(self.projected(gpu, map, SH_BANDS, projection)?)),
+            _ => Ok(gpu.env_sh.clone()),
+        }
+    }
+
+    /// The map's coefficients at `bands` by `projection`: the scene
+    /// upload's exact 3-band projection is reused, the last other one is
+    /// kept (same Hann window either way).
+    fn projected(
+        &mut self,
+        gpu: &GpuScene,
+        map: &HdrImage,
+        bands: usize,
+        projection: EnvProjection,
+    ) -> Result<ShCoeffs> {
+        if let (EnvProjection::Exact, SH_BANDS, Some(sh)) = (projection, bands, &gpu.env_sh) {
+            return Ok(sh.clone());
+        }
+        if let Some((p, b, sh)) = &self.projected {
+            if (*p, *b) == (projection, bands) {
+                return Ok(sh.clone());
+            }
+        }
+        let sh = project(map, &Projection { bands, ..Default::default() }, projection.integrator())
+            .with_context(|| format!("projecting the environment onto {bands} SH bands ({projection:?})"))?;
+        self.projected = Some((projection, bands, sh.clone()));
+        Ok(sh)
     }
 }

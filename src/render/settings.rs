@@ -46,19 +46,51 @@ impl AmbientMode {
 }
 
 /// The PRT precompute's parameters (`--prt-samples`, `--prt-bounces`,
-/// `--prt-bands`); used only by the prt ambient modes.
+/// `--prt-bands`); used only by the prt ambient modes. `projection` is how
+/// the environment is projected onto SH for the sh and prt modes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PrtOptions {
     /// N: N×N directions a vertex.
     pub samples: u32,
     pub bounces: u32,
     pub bands: usize,
+    pub projection: EnvProjection,
+}
+
+/// The integrator of the environment's SH projection (report knob
+/// `sh-samples`; scene/sh/project.rs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EnvProjection {
+    /// Per-texel solid-angle quadrature (what the scene upload uses).
+    #[default]
+    Exact,
+    /// Stratified jittered N×N Monte-Carlo, fixed seed.
+    MonteCarlo(u32),
+}
+
+impl EnvProjection {
+    /// The seed of the Monte-Carlo projection (fixed: a report row is
+    /// reproducible).
+    pub const SEED: u64 = 0x5eed;
+
+    pub fn integrator(self) -> crate::scene::sh::Integrator {
+        use crate::scene::sh::Integrator;
+        match self {
+            EnvProjection::Exact => Integrator::Quadrature,
+            EnvProjection::MonteCarlo(n) => Integrator::MonteCarlo { n, seed: Self::SEED },
+        }
+    }
 }
 
 impl Default for PrtOptions {
     fn default() -> Self {
         use crate::prt::{DEFAULT_BOUNCES, DEFAULT_SAMPLES};
-        Self { samples: DEFAULT_SAMPLES, bounces: DEFAULT_BOUNCES, bands: crate::scene::sh::DEFAULT_BANDS }
+        Self {
+            samples: DEFAULT_SAMPLES,
+            bounces: DEFAULT_BOUNCES,
+            bands: crate::scene::sh::DEFAULT_BANDS,
+            projection: EnvProjection::Exact,
+        }
     }
 }
 

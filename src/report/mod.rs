@@ -9,7 +9,9 @@
 //! knob table), `measure` (warm-up and GPU timing), `write` (tables),
 //! `plot` (the chart and the Pareto front), `compare` (two image files),
 //! `stability` (`report --stability`: stiff and extreme variants of a scene),
-//! `tone_sheet` (`report --tone-sheet`: tone operators side by side).
+//! `tone_sheet` (`report --tone-sheet`: tone operators side by side),
+//! `prt` and `prt_write` (`report --prt`: the environment light's ambient
+//! against a ray-traced reference).
 
 pub mod budget_paths;
 pub mod compare;
@@ -17,6 +19,8 @@ pub mod knobs;
 pub mod measure;
 pub mod metrics;
 pub mod plot;
+pub mod prt;
+pub mod prt_write;
 pub mod stability;
 pub mod tone_sheet;
 pub mod write;
