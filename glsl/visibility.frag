@@ -2,10 +2,10 @@
 // G-buffer raster, visibility-buffer variant: stores only each pixel's
 // (instance + 1, primitive) and depth; the `gbuffer_resolve` pass fills the
 // material targets from that triangle. On llvmpipe the old pass (four MRTs,
-// eleven interpolated floats) spent most of its time setting up and
+// nine interpolated floats) spent most of its time setting up and
 // interpolating attributes of tiny triangles (bench/results/
 // lavapipe-2core-vm-raster.md). Alpha-masked geometry (GB_ALPHA_TEST) still
-// interpolates uv and tests the base colour's alpha like gbuffer.frag did.
+// interpolates uv and tests the base colour's alpha as before.
 #include "common/scene.glsl"
 #ifdef GB_ALPHA_TEST
 #define MAT_SAMPLE(index, uv, fallback) sample_tex(index, uv, fallback)
