@@ -37,15 +37,16 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
         let (h, targets) = frame_of(&ctx, &scene, &hybrid);
         assert_eq!(
             h,
-            ["gbuffer", "direct", "specular", "composite", "tonemap", "edge aa"],
+            ["gbuffer", "gbuffer resolve", "direct", "specular", "composite", "tonemap", "edge aa"],
             "{backend:?} hybrid"
         );
         assert!(targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
         let rt = RenderSettings { backend, mode: Mode::Rt, ..Default::default() };
         let (p, targets) = frame_of(&ctx, &scene, &rt);
         assert_eq!(p, ["primary", "direct", "specular", "composite", "tonemap", "edge aa"], "{backend:?} rt");
-        // Pure RT differs by exactly one pass, and needs no depth buffer.
-        assert_eq!(h[1..], p[1..]);
+        // Pure RT differs only in how the primary hits are found (raster
+        // visibility buffer + resolve vs camera rays), and needs no depth buffer.
+        assert_eq!(h[2..], p[1..]);
         assert!(!targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
     }
     common::assert_validation_clean(&ctx);
@@ -87,7 +88,7 @@ material = "clay"
 "#,
     );
     let (passes, targets) = frame_of(&ctx, &plain, &RenderSettings::default());
-    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap", "edge aa"]);
+    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap", "edge aa"]);
     assert!(!targets.contains(&"specular chain"), "{targets:?}");
 
     // The default scene with reflections and refractions switched off.
@@ -96,22 +97,22 @@ material = "clay"
     s.effects.reflections = false;
     s.effects.refractions = false;
     let (passes, targets) = frame_of(&ctx, &scene, &s);
-    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap", "edge aa"]);
+    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap", "edge aa"]);
     assert!(!targets.contains(&"specular chain"), "{targets:?}");
 
     // --aa none: tone mapping's image is the result, no AA target; fxaa
     // instead of the edge filter.
     let none = RenderSettings { aa: AaMode::None, ..s };
     let (passes, targets) = frame_of(&ctx, &scene, &none);
-    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap"]);
+    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap"]);
     assert!(!targets.contains(&"anti-aliased output"), "{targets:?}");
     let (passes, _) = frame_of(&ctx, &scene, &RenderSettings { aa: AaMode::Fxaa, ..s });
-    assert_eq!(passes, ["gbuffer", "direct", "composite", "tonemap", "fxaa"]);
+    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap", "fxaa"]);
 
     // A debug view shows the G-buffer: no light pass at all, and unfiltered.
     let debug = RenderSettings { debug_view: DebugView::Normal, ..Default::default() };
     let (passes, targets) = frame_of(&ctx, &scene, &debug);
-    assert_eq!(passes, ["gbuffer", "composite", "tonemap"]);
+    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "composite", "tonemap"]);
     assert!(!targets.contains(&"anti-aliased output"), "{targets:?}");
     assert!(!targets.contains(&"direct light"), "{targets:?}");
     common::assert_validation_clean(&ctx);
@@ -138,15 +139,17 @@ fn gbuffer_is_24_bytes_per_pixel_and_an_effect_free_frame_allocates_less() {
     let hybrid = RenderSettings { backend: Backend::Compute, ..Default::default() };
     let (targets, bpp) = frame(&scene, &hybrid);
     let names: Vec<_> = targets.iter().map(|(n, _)| *n).collect();
-    let gbuffer: Vec<_> = targets.iter().filter(|(n, _)| n.starts_with("gbuffer ")).collect();
+    // By name: the order is the order of first use.
+    let mut gbuffer: Vec<_> = targets.iter().filter(|(n, _)| n.starts_with("gbuffer ")).copied().collect();
+    gbuffer.sort();
     assert_eq!(
-        gbuffer.iter().map(|(n, b)| (*n, *b)).collect::<Vec<_>>(),
+        gbuffer,
         [
             ("gbuffer albedo+occlusion", 4),
-            ("gbuffer normal (octahedral)", 4),
-            ("gbuffer metallic+roughness+transmission", 4),
-            ("gbuffer hit (instance, primitive)", 8),
             ("gbuffer depth (reversed-Z)", 4),
+            ("gbuffer hit (instance, primitive)", 8),
+            ("gbuffer metallic+roughness+transmission", 4),
+            ("gbuffer normal (octahedral)", 4),
         ],
         "{names:?}"
     );

@@ -1,7 +1,7 @@
 // Pass `primary` (pure ray-traced mode): camera rays find the primary hit
 // and write it into the same G-buffer targets the `gbuffer` raster pass
 // fills, so every later pass is shared between the two modes. Albedo is
-// sRGB-encoded by the same function as in gbuffer.frag (common/srgb.glsl).
+// sRGB-encoded by the same function as in gbuffer_resolve.comp (common/srgb.glsl).
 #include "../common/scene.glsl"
 #include "../common/hit.glsl"
 #include "../common/primary_hit.glsl"

@@ -205,7 +205,6 @@ shared! {
     uint PROBE_OCTAHEDRAL = 8;
 
     // Specialization constants.
-    id SPEC_ALPHA_TEST = 0;
     id SPEC_SHADOWS = 1;
     id SPEC_REFLECTIONS = 2;
     id SPEC_REFRACTIONS = 3;

@@ -1,15 +1,19 @@
-//! Pass `gbuffer`: rasterizes every instance into the MRT targets with a
-//! reversed-Z depth buffer (clear 0, GREATER), and stores each pixel's
-//! (instance + 1, primitive) so later passes reconstruct the exact primary
-//! hit. Alpha-masked materials use a pipeline variant with the alpha test
-//! specialised in; opaque ones keep early depth testing.
+//! Pass `gbuffer`: rasterizes every instance as a visibility buffer: each
+//! pixel's (instance + 1, primitive) into the hit target, with a reversed-Z
+//! depth buffer (clear 0, GREATER). The `gbuffer_resolve` pass then fills
+//! the material targets from that triangle, so the vertex stage passes on
+//! no shading attributes: on llvmpipe, setting up and interpolating them
+//! for many tiny triangles was most of this pass's time (measured in
+//! bench/results/lavapipe-2core-vm-raster.md). Alpha-masked materials use a
+//! pipeline that interpolates uv and runs the alpha test; opaque ones keep
+//! early depth testing.
 
 use anyhow::Result;
 use ash::vk;
 
 use super::fullscreen::Io;
 use super::{Cx, Init, Pass, PassDesc};
-use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL, SPEC_ALPHA_TEST};
+use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::render::targets::{TargetDesc, Targets};
@@ -18,8 +22,8 @@ use crate::vk::pipeline::{pipeline_layout, Specialization};
 use crate::vk::raster::RasterPipeline;
 use crate::vk::Context;
 
-/// The G-buffer targets (gbuffer.frag's outputs, in attachment order; the
-/// `primary` pass writes the same ones). Albedo holds sRGB-encoded values in
+/// The G-buffer targets (written by `gbuffer` + `gbuffer_resolve` in hybrid
+/// mode, by `primary` in pure ray-traced mode). Albedo holds sRGB-encoded values in
 /// a UNORM image, encoded and decoded by the shaders (glsl/common/srgb.glsl)
 /// so both modes store the same bytes. The normal is octahedral-encoded
 /// into one uint (glsl/common/gbuffer_pack.glsl); emission is not stored
@@ -31,8 +35,6 @@ pub static MATERIAL: TargetDesc =
     TargetDesc::new("gbuffer metallic+roughness+transmission", vk::Format::R8G8B8A8_UNORM);
 pub static HIT: TargetDesc = TargetDesc::new("gbuffer hit (instance, primitive)", vk::Format::R32G32_UINT);
 pub static DEPTH: TargetDesc = TargetDesc::new("gbuffer depth (reversed-Z)", vk::Format::D32_SFLOAT);
-
-const COLOR: [&TargetDesc; 4] = [&ALBEDO, &NORMAL, &MATERIAL, &HIT];
 
 /// Every G-buffer target, for the bytes-per-pixel figure.
 pub const ALL: [&TargetDesc; 5] = [&ALBEDO, &NORMAL, &MATERIAL, &HIT, &DEPTH];
@@ -55,10 +57,11 @@ pub fn reads() -> Vec<Io> {
 }
 
 fn uses(_: &ShadingConfig) -> Vec<Use> {
-    let mut u: Vec<Use> = COLOR.iter().map(|t| Use::image(t, Access::ColorAttachment)).collect();
-    u.push(Use::image(&DEPTH, Access::DepthAttachment));
-    u.push(Use::buffer(SharedBuffer::Geometry, Access::VertexInput));
-    u
+    vec![
+        Use::image(&HIT, Access::ColorAttachment),
+        Use::image(&DEPTH, Access::DepthAttachment),
+        Use::buffer(SharedBuffer::Geometry, Access::VertexInput),
+    ]
 }
 
 fn skip(c: &ShadingConfig) -> Option<&'static str> {
@@ -94,19 +97,14 @@ impl Pass for GBufferPass {
 
     fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
         let (d, t, scene) = (&cx.ctx.device, cx.targets, cx.gpu);
-        let colors: Vec<_> = COLOR
-            .iter()
-            .filter_map(|desc| t.get(desc))
-            .map(|img| {
-                vk::RenderingAttachmentInfo::default()
-                    .image_view(img.view)
-                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(vk::AttachmentLoadOp::CLEAR)
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } })
-            })
-            .collect();
-        let Some(depth_target) = t.get(&DEPTH) else { return };
+        let (Some(hit), Some(depth_target)) = (t.get(&HIT), t.get(&DEPTH)) else { return };
+        // Hit id 0: the camera ray missed.
+        let colors = [vk::RenderingAttachmentInfo::default()
+            .image_view(hit.view)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } })];
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(depth_target.view)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
@@ -188,13 +186,16 @@ impl Pass for GBufferPass {
 }
 
 fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) -> Result<vk::Pipeline> {
-    let spec = Specialization::new(&[(SPEC_ALPHA_TEST, alpha_test as u32)]);
-    let formats: Vec<_> = COLOR.iter().map(|t| t.format).collect();
+    let spec = Specialization::new(&[]);
+    let (name, vertex, fragment) = match alpha_test {
+        true => ("gbuffer alpha-masked", "gbuffer_uv", "visibility_masked"),
+        false => ("gbuffer opaque", "gbuffer.vert", "visibility.frag"),
+    };
     RasterPipeline {
-        name: if alpha_test { "gbuffer alpha-masked" } else { "gbuffer opaque" },
-        vertex: "gbuffer.vert",
-        fragment: Some(("gbuffer.frag", &spec)),
-        color_formats: &formats,
+        name,
+        vertex,
+        fragment: Some((fragment, &spec)),
+        color_formats: &[HIT.format],
         depth_format: DEPTH.format,
         // Reversed Z.
         depth_compare: vk::CompareOp::GREATER,

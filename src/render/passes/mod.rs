@@ -10,6 +10,7 @@ pub mod edge_aa;
 pub mod fullscreen;
 pub mod fxaa;
 pub mod gbuffer;
+pub mod gbuffer_resolve;
 pub mod heuristic;
 pub mod luminance;
 pub mod primary;
@@ -30,13 +31,14 @@ use crate::gpu::GpuScene;
 use crate::vk::Context;
 
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
-/// or camera rays) -> per-object statistics for the budget -> the budget's
+/// visibility buffer + resolve, or camera rays) -> per-object statistics for the budget -> the budget's
 /// fallback shadow maps -> direct light -> the ambient reference (with
 /// --reference-samples) -> reflection/refraction chain ->
 /// composite -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one technique). The scene update (skinning, refit, top level)
 /// comes before it, recorded by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
     gbuffer::PASS,
+    gbuffer_resolve::PASS,
     primary::PASS,
     heuristic::PASS,
     shadow_map::PASS,

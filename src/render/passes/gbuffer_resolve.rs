@@ -1,0 +1,44 @@
+//! Pass `gbuffer_resolve` (hybrid mode): the raster `gbuffer` pass is a
+//! visibility buffer (hit ids and depth only); this full-screen pass fills
+//! the material targets (albedo, normal, metallic/roughness/transmission)
+//! from each pixel's stored triangle, as the raster's fragment stage would
+//! have (glsl/gbuffer_resolve.comp). Material work is then done once per
+//! pixel instead of once per covered fragment and no attributes are
+//! interpolated per triangle, which is what llvmpipe spent its G-buffer time
+//! on (bench/results/lavapipe-2core-vm-raster.md).
+
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::{gbuffer, Init, PassDesc};
+use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
+use crate::render::frame::{Access, SharedBuffer, Use};
+use crate::render::shading::{Mode, ShadingConfig};
+use crate::vk::pipeline::Specialization;
+
+fn io() -> Vec<Io> {
+    let w = Access::StorageWrite;
+    vec![
+        Io::new(GB_HIT, &gbuffer::HIT, Access::StorageRead),
+        Io::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
+        Io::new(GB_NORMAL, &gbuffer::NORMAL, w),
+        Io::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
+    ]
+}
+
+fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    (c.mode == Mode::Rt).then_some("pure ray-traced mode: pass primary writes the whole G-buffer")
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "gbuffer resolve",
+    skip,
+    uses: |_| {
+        // The triangle's vertices are read (skinning may have just written them).
+        let mut u = fullscreen::uses(&io(), false);
+        u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));
+        u
+    },
+    create: |i: &Init| {
+        let spec = Specialization::new(&[]);
+        FullScreen::create(i, "gbuffer resolve", io(), Shader::Compute("gbuffer_resolve.comp"), &spec)
+    },
+};
