@@ -32,7 +32,7 @@ struct BenchResult {
 
 layout(set = SET_PASS, binding = RAYS_IN, scalar) readonly buffer Rays { BenchRay rays[]; };
 layout(set = SET_PASS, binding = RAYS_OUT, scalar) writeonly buffer Results { BenchResult results[]; };
-layout(set = SET_PASS, binding = RAYS_STATS, scalar) writeonly buffer Stats { uvec2 stats[]; };
+layout(set = SET_PASS, binding = RAYS_STATS, scalar) writeonly buffer Stats { uvec4 stats[]; };
 
 layout(push_constant) uniform Push {
     uint count;
@@ -79,7 +79,7 @@ void main() {
     }
     results[i] = res;
 #ifdef TRACE_STATS
-    stats[i] = uvec2(g_stat_nodes, g_stat_tris);
+    stats[i] = uvec4(g_stat_nodes, g_stat_tris, g_stat_lane_nodes, 0u);
 #endif
 }
 #endif

@@ -11,6 +11,7 @@ use glam::Vec3;
 
 use hybrid_rt::app::cli_parse::*;
 use hybrid_rt::app::{self, AccelUpdate, CameraChoice, GpuOptions, RenderJob};
+use hybrid_rt::render::rays::Traversal;
 use hybrid_rt::render::shading::{AaMode, Backend, Effects, Mode};
 use hybrid_rt::render::supersample::{SampleFilter, Supersample};
 use hybrid_rt::render::tone::{AutoExposure, ToneOperator, ToneSettings};
@@ -120,6 +121,11 @@ enum Command {
         /// With --rays: timed repetitions per ray set (after one untimed).
         #[arg(long, default_value_t = 5, value_parser = parse_reps, allow_hyphen_values = true, requires = "rays")]
         ray_reps: usize,
+        /// With --rays: the compute tracer's traversal (default: per ray kind as the
+        /// tracing passes use it; lane: every ray on its own; packet: the subgroup's
+        /// rays walk one node sequence together).
+        #[arg(long, value_enum, default_value_t = Traversal::Default, requires = "rays")]
+        ray_traversal: Traversal,
         /// Capture frame N (0-based, in the order rendered: per variant the ray-counting
         /// frame and the warm-up, then the measured frames) with RenderDoc's in-application API
         /// (under `renderdoccmd capture`, or with librenderdoc.so loadable);
@@ -569,10 +575,11 @@ fn run(cli: Cli) -> Result<()> {
             csv,
             rays,
             ray_reps,
+            ray_traversal,
             capture_frame,
         }) => {
             if rays {
-                return app::rays_command(&gpu, &view.job()?, ray_reps);
+                return app::rays_command(&gpu, &view.job()?, ray_reps, ray_traversal);
             }
             gpu.capture_frame = capture_frame;
             let modes = if compare_modes { vec![Mode::Hybrid, Mode::Rt] } else { vec![view.mode] };

@@ -3,7 +3,9 @@
 //! compute BVH tracer and by the driver's ray query agree ray by ray: hit
 //! versus miss (blocked versus not for shadow rays) exactly, hit distances
 //! within sets::T_REL_BOUND (1e-3) of the distance, shadow transmittance
-//! within sets::TRANSMITTANCE_BOUND (1e-3) per channel. No timing is checked.
+//! within sets::TRANSMITTANCE_BOUND (1e-3) per channel, with the compute
+//! tracer's per-lane and its subgroup ("packet") traversal alike. No timing
+//! is checked.
 //! Scenes: the default scene (every material and light type, opaque and
 //! glass) and a glass square between a point light and the ground (shadow
 //! rays through it carry a transmittance strictly between 0 and 1).
@@ -12,11 +14,12 @@ mod common;
 use common::scenes::{glass_occluder, shadow_scene, Frame};
 use hybrid_rt::app::{RayBench, RenderJob};
 use hybrid_rt::render::rays::sets::RayKind;
+use hybrid_rt::render::rays::Traversal;
 use hybrid_rt::scene::Scene;
 
-fn agree(scene: &Scene, w: u32, h: u32) -> Vec<hybrid_rt::app::KindReport> {
+fn agree(scene: &Scene, w: u32, h: u32, traversal: Traversal) -> Vec<hybrid_rt::app::KindReport> {
     let ctx = common::validated_context();
-    let mut bench = RayBench::new(&ctx, scene).expect("set up both tracers");
+    let mut bench = RayBench::with_traversal(&ctx, scene, traversal).expect("set up both tracers");
     let job = RenderJob::new(&scene.source, w, h);
     let reports = bench.all(&ctx, scene, &job, 1);
     bench.destroy(&ctx);
@@ -48,6 +51,14 @@ fn agree(scene: &Scene, w: u32, h: u32) -> Vec<hybrid_rt::app::KindReport> {
         assert!(hits > 0, "{}: no {} ray hits", scene.source.display(), r.kind.name());
         let stats = r.compute.stats.as_ref().expect("compute statistics");
         assert_eq!(stats.len(), r.rays);
+        // A ray enters no node its subgroup did not visit; lane by lane the
+        // two counts are one.
+        for s in stats {
+            assert!(s[2] <= s[0], "{} ray entered {} of {} nodes visited", r.kind.name(), s[2], s[0]);
+            if traversal == Traversal::Lane {
+                assert_eq!(s[2], s[0]);
+            }
+        }
     }
     common::assert_validation_clean(&ctx);
     reports
@@ -56,10 +67,14 @@ fn agree(scene: &Scene, w: u32, h: u32) -> Vec<hybrid_rt::app::KindReport> {
 #[test]
 fn compute_and_query_agree_on_the_default_scene() {
     let scene = Scene::load(&common::repo_path("assets/default.toml")).unwrap();
-    for r in agree(&scene, 64, 36) {
-        // Both outcomes occur (sky, shadowed and lit points).
-        let hits = r.compute.results.iter().filter(|x| x.hit != 0).count();
-        assert!(hits < r.rays, "every {} ray hits", r.kind.name());
+    // Both traversals of the compute tracer (each ray on its own, and the
+    // subgroup's rays together), whichever the passes use by default.
+    for traversal in [Traversal::Lane, Traversal::Packet] {
+        for r in agree(&scene, 64, 36, traversal) {
+            // Both outcomes occur (sky, shadowed and lit points).
+            let hits = r.compute.results.iter().filter(|x| x.hit != 0).count();
+            assert!(hits < r.rays, "every {} ray hits", r.kind.name());
+        }
     }
 }
 
@@ -67,13 +82,15 @@ fn compute_and_query_agree_on_the_default_scene() {
 fn compute_and_query_agree_through_glass() {
     let toml = shadow_scene(Frame::IDENTITY, &glass_occluder([0.9, 0.5, 0.2]));
     let scene = common::scene_from_toml("rays_glass", &toml);
-    let reports = agree(&scene, 32, 18);
-    let shadow = reports.iter().find(|r| r.kind == RayKind::Shadow).unwrap();
-    let tinted = shadow
-        .query
-        .results
-        .iter()
-        .filter(|x| x.hit == 0 && x.next.iter().any(|&c| c > 0.0 && c < 1.0))
-        .count();
-    assert!(tinted > 0, "no shadow ray crossed the glass square");
+    for traversal in [Traversal::Lane, Traversal::Packet] {
+        let reports = agree(&scene, 32, 18, traversal);
+        let shadow = reports.iter().find(|r| r.kind == RayKind::Shadow).unwrap();
+        let tinted = shadow
+            .query
+            .results
+            .iter()
+            .filter(|x| x.hit == 0 && x.next.iter().any(|&c| c > 0.0 && c < 1.0))
+            .count();
+        assert!(tinted > 0, "no shadow ray crossed the glass square");
+    }
 }

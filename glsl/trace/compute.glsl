@@ -37,17 +37,28 @@ layout(set = SET_TRACE, binding = BVH_INSTANCES, scalar) readonly buffer BvhInst
 
 // Traversal statistics (TRACE_STATS variants only, e.g. rays_compute_stats
 // of `bench --rays`): nodes visited and triangles tested by the current ray,
-// top and bottom level together. Without TRACE_STATS the macros are empty,
-// so the normal tracing passes pay nothing.
+// top and bottom level together. In packet traversal (compute_packet.glsl)
+// `nodes` counts the nodes the ray's subgroup visited while the ray took
+// part, `lane_nodes` those the ray itself entered (its useful tests); per
+// lane both are the same. Without TRACE_STATS the macros are empty, so the
+// normal tracing passes pay nothing.
 #ifdef TRACE_STATS
 uint g_stat_nodes = 0u;
+uint g_stat_lane_nodes = 0u;
 uint g_stat_tris = 0u;
-#define STAT_NODE() (g_stat_nodes++)
+#define STAT_NODE() (g_stat_nodes++, g_stat_lane_nodes++)
+#define STAT_PACKET_NODE(entered) (g_stat_nodes++, g_stat_lane_nodes += (entered) ? 1u : 0u)
 #define STAT_TRI() (g_stat_tris++)
 #else
 #define STAT_NODE()
+#define STAT_PACKET_NODE(entered)
 #define STAT_TRI()
 #endif
+
+// Which rays take the subgroup-cooperative traversal (compute_packet.glsl):
+// TRACE_PACKET_SHADOW and/or TRACE_PACKET_CLOSEST bits; the others trace
+// lane by lane. A specialization constant, so no extra shader variant.
+layout(constant_id = SPEC_TRACE_PACKET) const uint TRACE_PACKET = TRACE_PACKET_DEFAULT;
 
 // Slab test; inv_d may hold +-inf for zero direction components. A NaN
 // (0 * inf: origin on a slab plane, ray parallel to it) puts no constraint
@@ -257,16 +268,20 @@ bool trace_bvh(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit hi
     return found;
 }
 
+#include "compute_packet.glsl"
+
 bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
     vec3 unused = vec3(1.0);
+    if ((TRACE_PACKET & TRACE_PACKET_CLOSEST) != 0u) return trace_packet(o, d, tmax, MASK_VISIBLE, false, hit, unused);
     return trace_bvh(o, d, tmax, MASK_VISIBLE, false, hit, unused);
 }
 
 vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
     vec3 tr = vec3(1.0);
     RayHit hit;
-    if (trace_bvh(o, d, tmax, MASK_SHADOW, true, hit, tr)) return vec3(0.0);
-    return tr;
+    bool blocked = (TRACE_PACKET & TRACE_PACKET_SHADOW) != 0u ? trace_packet(o, d, tmax, MASK_SHADOW, true, hit, tr)
+                                                               : trace_bvh(o, d, tmax, MASK_SHADOW, true, hit, tr);
+    return blocked ? vec3(0.0) : tr;
 }
 
 #endif

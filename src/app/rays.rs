@@ -9,7 +9,7 @@ use super::{load_posed, with_context, GpuOptions, RenderJob};
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
 use crate::render::rays::sets::{self, RayKind};
-use crate::render::rays::{BenchRay, RayRig, TraceRun};
+use crate::render::rays::{BenchRay, RayRig, TraceRun, Traversal};
 use crate::render::shading::Backend;
 use crate::render::tracer::{self, Tracer};
 use crate::scene::Scene;
@@ -37,14 +37,22 @@ impl KindReport {
 
     /// Ray count, agreement and the compute tracer's traversal statistics.
     pub fn detail(&self) -> String {
-        let (nodes, tris) = self.compute.mean_stats().unwrap_or((f64::NAN, f64::NAN));
-        format!(
-            "  {}: {} rays, {} mismatches between the tracers; compute traversal {nodes:.1} nodes, \
-             {tris:.1} triangle tests per ray",
+        let (nodes, tris, entered) = self.compute.mean_stats().unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+        let mut s = format!(
+            "  {}: {} rays, {} mismatches between the tracers; compute traversal {nodes:.1} nodes \
+             ({entered:.1} entered by the ray), {tris:.1} triangle tests per ray",
             self.kind.name(),
             self.rays,
             self.mismatches.len()
-        )
+        );
+        // The first disagreement, so it can be looked into.
+        if let Some(&i) = self.mismatches.first() {
+            s.push_str(&format!(
+                "\n    first mismatch: ray {i}, compute {:?}, query {:?}",
+                self.compute.results[i], self.query.results[i]
+            ));
+        }
+        s
     }
 }
 
@@ -55,7 +63,12 @@ pub struct RayBench {
 }
 
 impl RayBench {
+    /// With the compute tracer's default traversal per ray kind.
     pub fn new(ctx: &Context, scene: &Scene) -> Result<RayBench> {
+        RayBench::with_traversal(ctx, scene, Traversal::Default)
+    }
+
+    pub fn with_traversal(ctx: &Context, scene: &Scene, traversal: Traversal) -> Result<RayBench> {
         if !ctx.rt.ray_query {
             bail!(
                 "bench --rays compares with the driver's ray query, which this device {} (use a device with \
@@ -77,7 +90,7 @@ impl RayBench {
             bench.gpu.write_frame(&frame)?;
             for backend in [Backend::Compute, Backend::Query] {
                 let mut t = tracer::create(ctx, backend, scene, &bench.gpu)?;
-                match RayRig::new(ctx, &bench.gpu, t.as_ref()) {
+                match RayRig::new(ctx, &bench.gpu, t.as_ref(), traversal) {
                     Ok(rig) => bench.tracers.push((t, rig)),
                     Err(e) => {
                         t.destroy(ctx);
@@ -147,15 +160,16 @@ impl RayBench {
 
 /// `bench --rays`: prints one `rays <kind>:` line per kind, then the
 /// details (ray counts, mismatches, traversal statistics).
-pub fn rays_command(gpu: &GpuOptions, job: &RenderJob, reps: usize) -> Result<()> {
+pub fn rays_command(gpu: &GpuOptions, job: &RenderJob, reps: usize, traversal: Traversal) -> Result<()> {
     with_context(gpu, |ctx| {
         let (scene, _) = load_posed(job)?;
-        let mut bench = RayBench::new(ctx, &scene)?;
+        let mut bench = RayBench::with_traversal(ctx, &scene, traversal)?;
         let reports = bench.all(ctx, &scene, job, reps);
         bench.destroy(ctx);
         let reports = reports?;
         println!(
-            "ray microbenchmark: {} at {}x{} primary rays, median of {reps} repetitions (GPU timestamps)",
+            "ray microbenchmark: {} at {}x{} primary rays, median of {reps} repetitions (GPU timestamps), \
+             compute traversal {traversal:?}",
             scene.source.display(),
             job.width,
             job.height

@@ -213,6 +213,14 @@ shared! {
     id SPEC_COUNT_RAYS = 6;
     // The luminance reduction's two kernels (glsl/luminance.comp).
     id SPEC_LUMINANCE_STAGE = 7;
+    // The compute tracer's subgroup-cooperative ("packet") traversal
+    // (glsl/trace/compute_packet.glsl): a bit per ray kind that takes it;
+    // the rest trace lane by lane. Default none: on lavapipe it measured no
+    // faster (bench/results/lavapipe-2core-vm-rays.md).
+    id SPEC_TRACE_PACKET = 8;
+    uint TRACE_PACKET_SHADOW = 1;
+    uint TRACE_PACKET_CLOSEST = 2;
+    uint TRACE_PACKET_DEFAULT = 0;
 
     // Instance mask bits: which kind of ray may hit an instance.
     uint MASK_VISIBLE = 1;

@@ -31,6 +31,10 @@ pub struct Capabilities {
     pub ray_tracing_pipeline: bool,
     pub timestamp_period_ns: f32,
     pub timestamps: bool,
+    /// Subgroup ballot and broadcast operations in compute shaders:
+    /// the compute tracer's packet traversal (glsl/trace/compute_packet.glsl)
+    /// needs them.
+    pub subgroup_ops: bool,
     pub graphics_queue_family: u32,
     pub limits: super::limits::Limits,
     /// Why the device is unusable, if it is.
@@ -100,9 +104,13 @@ pub fn query_capabilities(
     instance_api: u32,
 ) -> Capabilities {
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut subgroup);
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let props = props2.properties;
+    let ops = vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::BALLOT;
+    let subgroup_ops = subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+        && subgroup.supported_operations.contains(ops);
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
     // What a layer lets through differs from the driver (RenderDoc hides
     // what it cannot capture): `--log debug` lists it.
@@ -210,6 +218,7 @@ pub fn query_capabilities(
         ray_tracing_pipeline: as_ok && has_rt && rtf.ray_tracing_pipeline != 0,
         timestamp_period_ns: props.limits.timestamp_period,
         timestamps,
+        subgroup_ops,
         graphics_queue_family: gfx.unwrap_or(0) as u32,
         limits: super::limits::Limits::query(instance, pd, has_as),
         unusable,

@@ -14,7 +14,10 @@ use gpu_allocator::MemoryLocation;
 use super::kernel::Kernel;
 use super::shading::Backend;
 use super::tracer::Tracer;
-use crate::gpu::shared::{BENCH_RAY_STRIDE, BENCH_RESULT_STRIDE, RAYS_IN, RAYS_OUT, RAYS_STATS};
+use crate::gpu::shared::{
+    BENCH_RAY_STRIDE, BENCH_RESULT_STRIDE, RAYS_IN, RAYS_OUT, RAYS_STATS, SPEC_TRACE_PACKET,
+    TRACE_PACKET_CLOSEST, TRACE_PACKET_DEFAULT, TRACE_PACKET_SHADOW,
+};
 use crate::gpu::GpuScene;
 use crate::vk::pipeline::{pipeline_layout, DescriptorSet, Specialization};
 use crate::vk::{memory_barrier, Buffer, Context};
@@ -55,8 +58,10 @@ const _: () = assert!(std::mem::size_of::<BenchResult>() == BENCH_RESULT_STRIDE 
 pub struct TraceRun {
     pub results: Vec<BenchResult>,
     pub gpu_ms: Vec<f64>,
-    /// (nodes visited, triangles tested) per ray (compute tracer, stats variant).
-    pub stats: Option<Vec<[u32; 2]>>,
+    /// Per ray (compute tracer, stats variant): nodes visited, triangles
+    /// tested, nodes the ray itself entered (fewer than the nodes visited
+    /// in packet traversal, where the subgroup visits the union), 0.
+    pub stats: Option<Vec<[u32; 4]>>,
 }
 
 impl TraceRun {
@@ -72,12 +77,36 @@ impl TraceRun {
         self.results.len() as f64 / (self.median_ms() * 1e3)
     }
 
-    /// Mean nodes visited and triangles tested per ray.
-    pub fn mean_stats(&self) -> Option<(f64, f64)> {
+    /// Mean nodes visited, triangles tested and nodes entered per ray.
+    pub fn mean_stats(&self) -> Option<(f64, f64, f64)> {
         let s = self.stats.as_ref()?;
         let n = s.len().max(1) as f64;
-        let (a, b) = s.iter().fold((0u64, 0u64), |(a, b), v| (a + v[0] as u64, b + v[1] as u64));
-        Some((a as f64 / n, b as f64 / n))
+        let sum = |k: usize| s.iter().map(|v| v[k] as u64).sum::<u64>() as f64 / n;
+        Some((sum(0), sum(1), sum(2)))
+    }
+}
+
+/// Which rays the compute tracer traces as subgroup packets
+/// (glsl/trace/compute_packet.glsl) rather than lane by lane: the value of
+/// the SPEC_TRACE_PACKET specialization constant.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Traversal {
+    /// What the tracing passes use (TRACE_PACKET_DEFAULT).
+    #[default]
+    Default,
+    /// Every ray on its own.
+    Lane,
+    /// Every ray kind as packets.
+    Packet,
+}
+
+impl Traversal {
+    pub fn spec_value(self) -> u32 {
+        match self {
+            Traversal::Default => TRACE_PACKET_DEFAULT,
+            Traversal::Lane => 0,
+            Traversal::Packet => TRACE_PACKET_SHADOW | TRACE_PACKET_CLOSEST,
+        }
     }
 }
 
@@ -93,7 +122,7 @@ pub struct RayRig {
 }
 
 impl RayRig {
-    pub fn new(ctx: &Context, gpu: &GpuScene, tracer: &dyn Tracer) -> Result<RayRig> {
+    pub fn new(ctx: &Context, gpu: &GpuScene, tracer: &dyn Tracer, traversal: Traversal) -> Result<RayRig> {
         let backend = tracer.backend();
         let mut rig = RayRig {
             set: DescriptorSet::null(),
@@ -103,7 +132,7 @@ impl RayRig {
             timestamps: vk::QueryPool::null(),
             backend,
         };
-        match rig.fill(ctx, gpu, tracer) {
+        match rig.fill(ctx, gpu, tracer, traversal) {
             Ok(()) => Ok(rig),
             Err(e) => {
                 rig.destroy(ctx);
@@ -112,13 +141,20 @@ impl RayRig {
         }
     }
 
-    fn fill(&mut self, ctx: &Context, gpu: &GpuScene, tracer: &dyn Tracer) -> Result<()> {
+    fn fill(
+        &mut self,
+        ctx: &Context,
+        gpu: &GpuScene,
+        tracer: &dyn Tracer,
+        traversal: Traversal,
+    ) -> Result<()> {
         use crate::vk::pipeline::Binding;
         let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
         self.set = DescriptorSet::numbered(ctx, "rays", &[(RAYS_IN, sb), (RAYS_OUT, sb), (RAYS_STATS, sb)])?;
         self.layout =
             pipeline_layout(ctx, "rays layout", &[gpu.set.layout, self.set.layout, tracer.set().layout], 8)?;
-        let spec = Specialization::new(&[]);
+        // The ray query's shader has no such constant: Vulkan ignores the entry.
+        let spec = Specialization::new(&[(SPEC_TRACE_PACKET, traversal.spec_value())]);
         self.kernel = tracer.kernel(ctx, "rays", self.layout, &spec)?;
         if self.backend == Backend::Compute {
             self.stats = Some(Kernel::compute(ctx, "rays_compute_stats", self.layout, &spec)?);
@@ -161,7 +197,7 @@ impl RayRig {
             bufs.push(Buffer::with_data(ctx, "bench rays", bytemuck::cast_slice(rays), storage)?);
             let size = (n * std::mem::size_of::<BenchResult>()) as u64;
             bufs.push(Buffer::new(ctx, "bench ray results", size, storage, MemoryLocation::GpuToCpu)?);
-            let size = (n * 8) as u64;
+            let size = (n * 16) as u64;
             bufs.push(Buffer::new(ctx, "bench ray stats", size, storage, MemoryLocation::GpuToCpu)?);
             self.run(ctx, gpu, tracer, rays.len(), (&bufs[0], &bufs[1], &bufs[2]), shadow, reps, stats)
         })();
@@ -200,7 +236,7 @@ impl RayRig {
         let stats = match (&self.stats, stats) {
             (Some(k), true) => {
                 self.dispatch(ctx, gpu, tracer, k, count, shadow)?;
-                Some(bytemuck::pod_collect_to_vec::<u8, [u32; 2]>(&read(counters)?[..count * 8]))
+                Some(bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(&read(counters)?[..count * 16]))
             }
             _ => None,
         };

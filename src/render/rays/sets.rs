@@ -42,8 +42,14 @@ fn ray(o: Vec3, d: Vec3, tmax: f32) -> BenchRay {
     BenchRay { origin: o.to_array(), tmax, dir: d.to_array(), pad: 0 }
 }
 
+/// Pixels per ray-order tile: 4 x 2, so the 8 consecutive rays that one
+/// llvmpipe subgroup (8 lanes) traces are neighbours in both directions.
+pub const TILE: (u32, u32) = (4, 2);
+
 /// Camera rays through the pixel centres of a `width` x `height` image
-/// (the same directions as glsl/common/primary_hit.glsl `camera_ray_dir`).
+/// (the same directions as glsl/common/primary_hit.glsl `camera_ray_dir`),
+/// in TILE-sized tiles row by row (partial tiles at the right and bottom
+/// edges); the shadow and diffuse sets inherit the order.
 pub fn primary_rays(camera: &Camera, origin: &RenderOrigin, width: u32, height: u32) -> Vec<BenchRay> {
     let (_, rot, _) = camera.world.to_scale_rotation_translation();
     let rot: DQuat = rot.normalize();
@@ -52,13 +58,17 @@ pub fn primary_rays(camera: &Camera, origin: &RenderOrigin, width: u32, height: 
     let f = 1.0 / (0.5 * camera.yfov).tan();
     let aspect = width as f32 / height as f32;
     let mut rays = Vec::with_capacity((width * height) as usize);
-    for y in 0..height {
-        for x in 0..width {
-            let ndc_x = (x as f32 + 0.5) / width as f32 * 2.0 - 1.0;
-            let ndc_y = (y as f32 + 0.5) / height as f32 * 2.0 - 1.0;
-            let dv = Vec3::new(ndc_x * aspect / f, -ndc_y / f, -1.0);
-            rays.push(ray(eye, (rot * dv).normalize(), RAY_TMAX));
-        }
+    let pixels = (0..height).step_by(TILE.1 as usize).flat_map(|ty| {
+        (0..width).step_by(TILE.0 as usize).flat_map(move |tx| {
+            (ty..(ty + TILE.1).min(height))
+                .flat_map(move |y| (tx..(tx + TILE.0).min(width)).map(move |x| (x, y)))
+        })
+    });
+    for (x, y) in pixels {
+        let ndc_x = (x as f32 + 0.5) / width as f32 * 2.0 - 1.0;
+        let ndc_y = (y as f32 + 0.5) / height as f32 * 2.0 - 1.0;
+        let dv = Vec3::new(ndc_x * aspect / f, -ndc_y / f, -1.0);
+        rays.push(ray(eye, (rot * dv).normalize(), RAY_TMAX));
     }
     rays
 }
@@ -176,6 +186,38 @@ mod tests {
         assert!(a.iter().zip(&b).all(|(x, y)| x.dir == y.dir));
         let c = diffuse_rays(&hits, 8);
         assert!(a.iter().zip(&c).any(|(x, y)| x.dir != y.dir));
+    }
+
+    /// Every pixel once, and each run of 8 rays inside the full tiles
+    /// within one 4x2 block; 10 x 5 has partial tiles at both edges.
+    #[test]
+    fn primary_rays_cover_every_pixel_once_in_tiles() {
+        let camera = Camera::look_at("t", Vec3::ZERO, Vec3::NEG_Z, std::f32::consts::FRAC_PI_2, 0.1);
+        let (w, h) = (10u32, 5u32);
+        let rays = primary_rays(&camera, &RenderOrigin(glam::DVec3::ZERO), w, h);
+        assert_eq!(rays.len(), (w * h) as usize);
+        // Invert the pixel-centre directions (yfov 90 degrees: f = 1).
+        let pixel = |r: &BenchRay| {
+            let d = Vec3::from_array(r.dir);
+            let ndc_x = d.x / -d.z / (w as f32 / h as f32);
+            let ndc_y = -d.y / -d.z;
+            let x = ((ndc_x + 1.0) * 0.5 * w as f32 - 0.5).round() as u32;
+            let y = ((ndc_y + 1.0) * 0.5 * h as f32 - 0.5).round() as u32;
+            (x, y)
+        };
+        let px: Vec<(u32, u32)> = rays.iter().map(pixel).collect();
+        let mut seen = vec![false; (w * h) as usize];
+        for &(x, y) in &px {
+            assert!(x < w && y < h, "({x}, {y}) outside the image");
+            assert!(!std::mem::replace(&mut seen[(y * w + x) as usize], true), "({x}, {y}) twice");
+        }
+        // The first tile row: 4x2, 4x2, then the 2x2 remainder.
+        assert_eq!(&px[..8], &[(0, 0), (1, 0), (2, 0), (3, 0), (0, 1), (1, 1), (2, 1), (3, 1)]);
+        assert_eq!(&px[16..20], &[(8, 0), (9, 0), (8, 1), (9, 1)]);
+        for run in px[..16].chunks(8) {
+            let (x0, y0) = run[0];
+            assert!(run.iter().all(|&(x, y)| x - x0 < TILE.0 && y - y0 < TILE.1), "{run:?}");
+        }
     }
 
     #[test]

@@ -26,6 +26,13 @@ pub struct ComputeTracer {
 
 impl ComputeTracer {
     pub fn new(ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<ComputeTracer> {
+        if !ctx.caps.subgroup_ops {
+            anyhow::bail!(
+                "device {} lacks subgroup ballot operations in compute shaders, which the \
+                 compute tracer's packet traversal needs (use --backend query or pipeline)",
+                ctx.caps.name
+            );
+        }
         Ok(ComputeTracer { bvh: ComputeBvh::build(ctx, scene, gpu)?, plan: Vec::new() })
     }
 }

@@ -1,0 +1,228 @@
+// Subgroup-cooperative ("packet") traversal for the compute tracer
+// (included by compute.glsl, which defines the node types, ray_box,
+// trace_leaf and the per-lane trace_blas).
+//
+// Why: llvmpipe runs a subgroup's invocations as the lanes of one SIMD
+// vector, so in the per-lane traversal every node fetch is an 8-lane gather
+// and every lane waits for the slowest one. Here the active lanes walk ONE
+// node sequence together: the node index and the stack are the same in
+// every lane (they only ever change through subgroup votes and values
+// broadcast from the first active lane),
+// so node and triangle fetches have one address, and the loop never
+// diverges. Each lane still tests its own ray with its own tmax; a child is
+// visited if any lane that entered its parent hits it, so each lane sees a
+// superset of the nodes its own traversal would, and closest and any hit
+// per lane are exact. Each stack entry keeps this lane's entry distance
+// (MISS where the lane did not hit it): a lane takes part in a node only if
+// it entered it and no nearer hit has been found since; the entry is dropped
+// when that holds for no lane. Children are ordered along the first active
+// lane's direction. Shadow lanes drop out when blocked, and the walk ends
+// when every lane is.
+//
+// Assumes the lanes that call trace_packet execute it together (as one
+// SIMD vector on llvmpipe; structured control flow, uniform loop exits).
+#ifndef TRACE_COMPUTE_PACKET_GLSL
+#define TRACE_COMPUTE_PACKET_GLSL
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+
+// ray_box's miss value; anything at or above MISS_BOUND is a miss.
+#define MISS 1e38
+#define MISS_BOUND 1e37
+
+// The subgroup's shared node index as a value the compiler can see is
+// uniform (it is already equal in every active lane), so the fetch is one
+// load rather than a gather.
+#define SHARED(x) subgroupBroadcastFirst(x)
+
+// Votes over the active lanes through a ballot: llvmpipe builds vote_any /
+// vote_all as a loop with a branch per lane, a ballot as a branch-free loop
+// of shifts and ors (gallivm lp_bld_nir_soa.c).
+bool packet_any(bool c) {
+    uvec4 b = subgroupBallot(c);
+    return (b.x | b.y | b.z | b.w) != 0u;
+}
+bool packet_all(bool c) {
+    return !packet_any(!c);
+}
+
+// Children are visited in the order of their box centres along the first
+// active lane's direction: a shared order with no cross-lane reduction per
+// child (for coherent rays it is nearly every lane's own order).
+float packet_key(vec3 bmin, vec3 bmax, vec3 dir) {
+    return dot(bmin + bmax, dir);
+}
+
+// The triangles of a leaf, walked by the whole subgroup (one fetch per
+// triangle for all lanes), tested by the lanes that entered it. True for a
+// lane whose shadow ray is now blocked.
+bool packet_leaf(Instance inst, uint inst_index, uint first, uint count, bool in_leaf, WatertightRay wr,
+                 bool shadow, inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
+    bool blocked = false;
+    for (uint i = 0u; i < count; ++i) {
+        uint prim = blas_prims[first + i];
+        vec3 p0, p1, p2;
+        object_triangle(inst, prim, p0, p1, p2);
+        if (in_leaf && !blocked) {
+            STAT_TRI();
+            vec2 b;
+            float t = watertight_hit(wr, p0, p1, p2, tmax, b);
+            if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
+                tmax = t;
+                hit = RayHit(inst_index, prim, b, t);
+                found = true;
+                blocked = shadow;
+            }
+        }
+    }
+    return blocked;
+}
+
+// The wide BLAS at blas_wide[base...] for the lanes with `lane` set.
+bool packet_blas_wide(uint inst_index, uint base, uint prim_offset, bool lane, vec3 o, vec3 inv_d, vec3 dir0,
+                      WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
+    Instance inst = instances[inst_index];
+    uint stack[WIDE_STACK];
+    float stack_t[WIDE_STACK];
+    int sp = 0;
+    uint cur = 0u;
+    float cur_t = lane ? 0.0 : MISS;
+    bool found = false;
+    bool done = false;  // shadow ray blocked
+    while (true) {
+        bool in_node = !done && cur_t < MISS_BOUND && cur_t <= tmax;
+        if ((cur & BVH_WIDE_LEAF) != 0u) {
+            uint leaf = SHARED(cur);
+            if (packet_leaf(inst, inst_index, prim_offset + (leaf & 0x07FFFFFFu), (leaf >> 27) & 7u, in_node, wr, shadow,
+                            tmax, hit, found, tr)) {
+                done = true;
+            }
+        } else {
+            STAT_PACKET_NODE(in_node);
+            WideNode n = blas_wide[base + SHARED(cur)];
+            vec3 scale = vec3(uintBitsToFloat((n.meta & 0xFFu) << 23), uintBitsToFloat(((n.meta >> 8) & 0xFFu) << 23),
+                              uintBitsToFloat(((n.meta >> 16) & 0xFFu) << 23));
+            uint cnt = n.meta >> 24;
+            float keys[4];  // the shared order (packet_key)
+            float ts[4];    // this lane's entry distance
+            uint cs[4];
+            uint nh = 0u;
+            for (uint i = 0u; i < cnt; ++i) {
+                uint sh = 8u * i;
+                vec3 qlo = vec3((n.qmin[0] >> sh) & 0xFFu, (n.qmin[1] >> sh) & 0xFFu, (n.qmin[2] >> sh) & 0xFFu);
+                vec3 qhi = vec3((n.qmax[0] >> sh) & 0xFFu, (n.qmax[1] >> sh) & 0xFFu, (n.qmax[2] >> sh) & 0xFFu);
+                vec3 lo = n.origin + qlo * scale, hi = n.origin + qhi * scale;
+                float t = in_node ? ray_box(o, inv_d, tmax, lo, hi) : MISS;
+                if (packet_any(t < MISS_BOUND)) {
+                    float k = packet_key(lo, hi, dir0);
+                    uint j = nh;
+                    while (j > 0u && keys[j - 1u] > k) {
+                        keys[j] = keys[j - 1u];
+                        ts[j] = ts[j - 1u];
+                        cs[j] = cs[j - 1u];
+                        --j;
+                    }
+                    keys[j] = k;
+                    ts[j] = t;
+                    cs[j] = n.child[i];
+                    ++nh;
+                }
+            }
+            if (nh > 0u) {
+                for (uint j = nh - 1u; j > 0u; --j) {
+                    if (sp < WIDE_STACK) {
+                        stack[sp] = cs[j];
+                        stack_t[sp++] = ts[j];
+                    }
+                }
+                cur = cs[0];
+                cur_t = ts[0];
+                continue;
+            }
+        }
+        if (shadow && packet_all(done)) break;
+        while (sp > 0 && packet_all(done || stack_t[sp - 1] >= MISS_BOUND || stack_t[sp - 1] > tmax)) --sp;
+        if (sp == 0) break;
+        cur = stack[--sp];
+        cur_t = stack_t[sp];
+    }
+    return found;
+}
+
+// One instance's BLAS (the instance is the same in every lane; the ray is
+// each lane's, in object space) for the lanes with `lane` set.
+bool packet_blas(uint inst_index, bool lane, vec3 o, vec3 d, bool shadow, inout float tmax, inout RayHit hit,
+                 inout vec3 tr) {
+    BvhInstance bi = bvh_instances[inst_index];
+    vec3 inv_d = 1.0 / d;
+    BvhNode root = blas_nodes[bi.node_offset];
+    lane = lane && ray_box(o, inv_d, tmax, root.bmin, root.bmax) < MISS_BOUND;
+    if (!packet_any(lane)) return false;
+    if (root.count == BVH_WIDE_HEADER) {
+        WatertightRay wr = watertight_setup(o, d);
+        return packet_blas_wide(inst_index, (bi.node_offset + 1u) / 2u, bi.prim_offset, lane, o, inv_d,
+                                subgroupBroadcastFirst(d), wr, shadow, tmax, hit, tr);
+    }
+    // A binary (skinned, refitted) BLAS: each lane on its own.
+    return lane && trace_blas(inst_index, o, d, shadow, tmax, hit, tr);
+}
+
+bool trace_packet(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit hit, inout vec3 tr) {
+    vec3 inv_d = 1.0 / d;
+    uint stack[BVH_STACK];
+    float stack_t[BVH_STACK];
+    int sp = 0;
+    uint node = 0u;
+    bool found = false;
+    bool done = false;
+    hit = RayHit(0u, 0u, vec2(0.0), tmax);
+    if (tlas_nodes.length() == 0) return false;
+    float cur_t = ray_box(o, inv_d, tmax, tlas_nodes[0].bmin, tlas_nodes[0].bmax);
+    if (packet_all(cur_t >= MISS_BOUND)) return false;
+    vec3 dir0 = subgroupBroadcastFirst(d);
+    while (true) {
+        bool in_node = !done && cur_t < MISS_BOUND && cur_t <= tmax;
+        STAT_PACKET_NODE(in_node);
+        BvhNode n = tlas_nodes[SHARED(node)];
+        if (n.count > 0u) {
+            for (uint i = 0u; i < n.count; ++i) {
+                uint inst = SHARED(tlas_prims[n.left_or_first + i]);
+                BvhInstance bi = bvh_instances[inst];
+                bool lane = in_node && !done && (bi.mask & mask) != 0u;
+                if (!packet_any(lane)) continue;
+                // Object-space ray; the direction is not renormalized, so t
+                // is the same in both spaces.
+                vec3 oo = (bi.world_to_object * vec4(o, 1.0)).xyz;
+                vec3 od = mat3(bi.world_to_object) * d;
+                if (packet_blas(inst, lane, oo, od, shadow, tmax, hit, tr)) {
+                    found = true;
+                    if (shadow) done = true;
+                }
+            }
+        } else {
+            uint l = n.left_or_first;
+            BvhNode cl = tlas_nodes[l], cr = tlas_nodes[l + 1u];
+            float tl = in_node ? ray_box(o, inv_d, tmax, cl.bmin, cl.bmax) : MISS;
+            float tr_ = in_node ? ray_box(o, inv_d, tmax, cr.bmin, cr.bmax) : MISS;
+            bool hl = packet_any(tl < MISS_BOUND), hr = packet_any(tr_ < MISS_BOUND);
+            if (hl || hr) {
+                bool left_first = hl && (!hr || packet_key(cl.bmin, cl.bmax, dir0) <= packet_key(cr.bmin, cr.bmax, dir0));
+                if (hl && hr && sp < BVH_STACK) {
+                    stack[sp] = left_first ? l + 1u : l;
+                    stack_t[sp++] = left_first ? tr_ : tl;
+                }
+                node = left_first ? l : l + 1u;
+                cur_t = left_first ? tl : tr_;
+                continue;
+            }
+        }
+        if (shadow && packet_all(done)) break;
+        while (sp > 0 && packet_all(done || stack_t[sp - 1] >= MISS_BOUND || stack_t[sp - 1] > tmax)) --sp;
+        if (sp == 0) break;
+        node = stack[--sp];
+        cur_t = stack_t[sp];
+    }
+    return found;
+}
+
+#endif
