@@ -208,6 +208,16 @@ pub struct KnobSelection {
 /// Parses `--knobs`: comma-separated knob names, each optionally with its
 /// values after '=' separated by ':' (`max-depth=0:2,mode`). Empty: every knob.
 pub fn parse_selection(s: &str) -> Result<Vec<KnobSelection>> {
+    parse_selection_in(s, KNOBS, find)
+}
+
+/// `parse_selection` over another knob table (the `--prt` report's), whose
+/// `find` names it in its errors.
+pub fn parse_selection_in(
+    s: &str,
+    table: &'static [Knob],
+    find: fn(&str) -> Result<&'static Knob>,
+) -> Result<Vec<KnobSelection>> {
     let mut out: Vec<KnobSelection> = Vec::new();
     for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
         let (name, values) = match part.split_once('=') {
@@ -232,7 +242,7 @@ pub fn parse_selection(s: &str) -> Result<Vec<KnobSelection>> {
         out.push(KnobSelection { knob: knob.name, values });
     }
     if out.is_empty() {
-        out = KNOBS.iter().map(|k| KnobSelection { knob: k.name, values: None }).collect();
+        out = table.iter().map(|k| KnobSelection { knob: k.name, values: None }).collect();
     }
     Ok(out)
 }

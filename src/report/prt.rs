@@ -119,32 +119,7 @@ pub fn find(name: &str) -> Result<&'static Knob> {
 /// (`bands=1:3,transfer`), over [`PRT_KNOBS`]; empty: every knob with
 /// its full value list.
 pub fn parse_selection(s: &str) -> Result<Vec<KnobSelection>> {
-    let mut out: Vec<KnobSelection> = Vec::new();
-    for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-        let (name, values) = match part.split_once('=') {
-            Some((n, v)) => {
-                let vals: Vec<String> =
-                    v.split(':').map(|x| x.trim().to_string()).filter(|x| !x.is_empty()).collect();
-                if vals.is_empty() {
-                    bail!("--knobs {part}: no values after '='");
-                }
-                (n.trim(), Some(vals))
-            }
-            None => (part, None),
-        };
-        let knob = find(name)?;
-        if out.iter().any(|k| k.knob == knob.name) {
-            bail!("--knobs: {} given twice", knob.name);
-        }
-        for v in values.iter().flatten() {
-            (knob.apply)(&mut Variant::new(RenderSettings::default()), v)?;
-        }
-        out.push(KnobSelection { knob: knob.name, values });
-    }
-    if out.is_empty() {
-        out = PRT_KNOBS.iter().map(|k| KnobSelection { knob: k.name, values: None }).collect();
-    }
-    Ok(out)
+    super::knobs::parse_selection_in(s, PRT_KNOBS, find)
 }
 
 #[derive(Clone, Debug)]
