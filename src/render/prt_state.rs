@@ -24,8 +24,10 @@ pub struct PrtState {
     uploaded: Option<PrtSettings>,
     /// The map's radiance coefficients at `uploaded`'s bands.
     radiance: Option<ShCoeffs>,
-    /// The last projection other than the scene's exact 3-band one.
-    projected: Option<(EnvProjection, usize, ShCoeffs)>,
+    /// The last projections other than the scene's exact 3-band one: a
+    /// frame may ask for two (PRT's bands and the SH irradiance's 3), and
+    /// one slot would project the map twice every frame.
+    projected: Vec<(EnvProjection, usize, ShCoeffs)>,
 }
 
 impl PrtState {
@@ -96,14 +98,15 @@ impl PrtState {
         if let (EnvProjection::Exact, SH_BANDS, Some(sh)) = (projection, bands, &gpu.env_sh) {
             return Ok(sh.clone());
         }
-        if let Some((p, b, sh)) = &self.projected {
-            if (*p, *b) == (projection, bands) {
-                return Ok(sh.clone());
-            }
+        if let Some((_, _, sh)) = self.projected.iter().find(|(p, b, _)| (*p, *b) == (projection, bands)) {
+            return Ok(sh.clone());
         }
         let sh = project(map, &Projection { bands, ..Default::default() }, projection.integrator())
             .with_context(|| format!("projecting the environment onto {bands} SH bands ({projection:?})"))?;
-        self.projected = Some((projection, bands, sh.clone()));
+        if self.projected.len() == 2 {
+            self.projected.remove(0);
+        }
+        self.projected.push((projection, bands, sh.clone()));
         Ok(sh)
     }
 }
