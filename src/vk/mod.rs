@@ -3,6 +3,7 @@
 
 pub mod device;
 pub mod features;
+pub mod frame_ring;
 pub mod instance;
 pub mod limits;
 pub mod memory;

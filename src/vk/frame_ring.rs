@@ -1,0 +1,296 @@
+//! Per-slot host staging for frames in flight.
+//!
+//! With N frames in flight the host prepares frame N+1 while the GPU still
+//! runs frame N, so nothing the GPU of frame N reads may be written by the
+//! host in place, and nothing the host reads of frame N may be overwritten
+//! by frame N+1 before the host got to it. The ring keeps the device
+//! buffers (and their descriptor sets) single and moves every host access
+//! to a per-slot staging range:
+//!
+//! - uploads: the host stages bytes for a device buffer into slot s; at the
+//!   START of frame s's GPU work `record_uploads` copies them into the
+//!   device buffers, between a barrier that orders the copies after every
+//!   earlier submission's reads and writes (write-after-read / -write on the
+//!   single device buffers) and one that makes them visible to the frame.
+//! - downloads: at the END of frame s's GPU work `record_downloads` copies
+//!   buffer ranges (or timestamp query results) into slot s's readback
+//!   range; the host reads them (`read`) after slot s's fence.
+//!
+//! Slot s is only touched by the host after its own previous frame's fence
+//! (N frames ago), which is what makes per-slot staging memory safe to
+//! rewrite and to grow. The ring knows nothing about what the bytes mean
+//! (a lower layer: no imports from render / app).
+
+use anyhow::{ensure, Context as _, Result};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::{memory_barrier, Buffer, Context};
+
+/// Where a download comes from.
+#[derive(Clone, Copy, Debug)]
+pub enum Source {
+    /// `size` bytes of a buffer (TRANSFER_SRC usage) from `offset`.
+    Buffer { buffer: vk::Buffer, offset: u64, size: u64 },
+    /// `count` 64-bit timestamp results from query `first` of `pool`; the
+    /// copy waits for them on the GPU (no host wait).
+    Timestamps { pool: vk::QueryPool, first: u32, count: u32 },
+}
+
+impl Source {
+    fn size(&self) -> u64 {
+        match *self {
+            Source::Buffer { size, .. } => size,
+            Source::Timestamps { count, .. } => count as u64 * 8,
+        }
+    }
+}
+
+/// A download registered for a slot; `read` returns its bytes once the
+/// slot's fence has signalled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Download(usize);
+
+struct Upload {
+    dst: vk::Buffer,
+    dst_offset: u64,
+    src_offset: u64,
+    size: u64,
+}
+
+#[derive(Default)]
+struct Slot {
+    /// Staged bytes, copied into `staging` when the uploads are recorded.
+    bytes: Vec<u8>,
+    uploads: Vec<Upload>,
+    staging: Option<Buffer>,
+    downloads: Vec<(Source, u64)>,
+    readback: Option<Buffer>,
+    /// The downloads were recorded and may be read after the fence.
+    recorded: bool,
+}
+
+pub struct FrameRing {
+    slots: Vec<Slot>,
+    name: String,
+}
+
+/// Copies land at 16-byte aligned staging offsets (the strictest alignment
+/// a copy region of our buffers needs; vkCmdCopyQueryPoolResults needs 8).
+const ALIGN: u64 = 16;
+
+fn align(n: u64) -> u64 {
+    n.div_ceil(ALIGN) * ALIGN
+}
+
+impl FrameRing {
+    /// A ring of `slots` (>= 1) frames in flight; `name` prefixes the debug
+    /// names of its staging buffers.
+    pub fn new(slots: usize, name: &str) -> Result<FrameRing> {
+        ensure!(slots >= 1, "a frame ring needs at least one slot");
+        Ok(FrameRing { slots: (0..slots).map(|_| Slot::default()).collect(), name: name.to_string() })
+    }
+
+    pub fn slots(&self) -> usize {
+        self.slots.len()
+    }
+
+    fn slot(&mut self, s: usize) -> Result<&mut Slot> {
+        let n = self.slots.len();
+        self.slots.get_mut(s).with_context(|| format!("frame ring slot {s} of {n}"))
+    }
+
+    /// Starts a new frame in slot `s`: forgets its last frame's uploads and
+    /// downloads. Call after slot `s`'s previous fence has signalled (and
+    /// after reading its downloads).
+    pub fn begin(&mut self, s: usize) -> Result<()> {
+        let slot = self.slot(s)?;
+        slot.bytes.clear();
+        slot.uploads.clear();
+        slot.downloads.clear();
+        slot.recorded = false;
+        Ok(())
+    }
+
+    /// Stages `data` for `dst` (a device buffer with TRANSFER_DST usage) at
+    /// `offset`; the copy happens in `record_uploads` of the same slot.
+    /// A later upload to an overlapping range wins.
+    pub fn upload(&mut self, s: usize, dst: &Buffer, offset: u64, data: &[u8]) -> Result<()> {
+        ensure!(
+            offset + data.len() as u64 <= dst.size,
+            "frame ring: upload of {} bytes at {offset} past the end of a {}-byte buffer",
+            data.len(),
+            dst.size
+        );
+        if data.is_empty() {
+            return Ok(());
+        }
+        let slot = self.slot(s)?;
+        let src_offset = align(slot.bytes.len() as u64);
+        slot.bytes.resize(src_offset as usize, 0);
+        slot.bytes.extend_from_slice(data);
+        slot.uploads.push(Upload { dst: dst.raw, dst_offset: offset, src_offset, size: data.len() as u64 });
+        Ok(())
+    }
+
+    /// Records slot `s`'s staged copies; put them first in the frame's GPU
+    /// work (before any command that reads the destination buffers).
+    pub fn record_uploads(&mut self, ctx: &Context, cmd: vk::CommandBuffer, s: usize) -> Result<()> {
+        let name = format!("{} uploads {s}", self.name);
+        let slot = self.slot(s)?;
+        ctx.begin_label(cmd, &name, super::timer::label_color("frame ring uploads"));
+        // The frame boundary, recorded even without uploads: every earlier
+        // submission (the previous frame, maybe still running) completes its
+        // reads and writes of the single device buffers and targets before
+        // this frame's copies and passes touch them.
+        memory_barrier(
+            ctx,
+            cmd,
+            (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_WRITE),
+            (
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
+            ),
+        );
+        if slot.uploads.is_empty() {
+            ctx.end_label(cmd);
+            return Ok(());
+        }
+        let need = slot.bytes.len() as u64;
+        let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+        let staging = grow(ctx, &mut slot.staging, need, &name, usage, MemoryLocation::CpuToGpu)?;
+        staging.write(0, &slot.bytes)?;
+        // Copies between two barriers are unordered: a copy overlapping an
+        // earlier one of the batch waits for it, so the later upload wins.
+        let mut since_barrier: Vec<&Upload> = Vec::new();
+        for u in &slot.uploads {
+            let overlaps = |o: &&Upload| {
+                o.dst == u.dst && o.dst_offset < u.dst_offset + u.size && u.dst_offset < o.dst_offset + o.size
+            };
+            if since_barrier.iter().any(overlaps) {
+                let copy_write = (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE);
+                memory_barrier(ctx, cmd, copy_write, copy_write);
+                since_barrier.clear();
+            }
+            since_barrier.push(u);
+            let region =
+                [vk::BufferCopy::default().src_offset(u.src_offset).dst_offset(u.dst_offset).size(u.size)];
+            unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, u.dst, &region) };
+        }
+        memory_barrier(
+            ctx,
+            cmd,
+            (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+            (
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
+            ),
+        );
+        ctx.end_label(cmd);
+        Ok(())
+    }
+
+    /// Registers a download for the end of slot `s`'s frame.
+    pub fn download(&mut self, s: usize, source: Source) -> Result<Download> {
+        let slot = self.slot(s)?;
+        ensure!(!slot.recorded, "frame ring: download registered after its slot's downloads were recorded");
+        let at = slot.downloads.last().map_or(0, |(src, at)| align(at + src.size()));
+        slot.downloads.push((source, at));
+        Ok(Download(slot.downloads.len() - 1))
+    }
+
+    /// Records slot `s`'s downloads; put them last in the frame's GPU work.
+    pub fn record_downloads(&mut self, ctx: &Context, cmd: vk::CommandBuffer, s: usize) -> Result<()> {
+        let name = format!("{} readback {s}", self.name);
+        let slot = self.slot(s)?;
+        slot.recorded = true;
+        let Some(&(last, at)) = slot.downloads.last() else { return Ok(()) };
+        let need = at + last.size();
+        let readback = grow(
+            ctx,
+            &mut slot.readback,
+            need,
+            &name,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        ctx.begin_label(cmd, &name, super::timer::label_color("frame ring readback"));
+        // Everything the frame wrote is complete before it is copied.
+        memory_barrier(
+            ctx,
+            cmd,
+            (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_WRITE),
+            (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_READ),
+        );
+        for &(src, at) in &slot.downloads {
+            match src {
+                Source::Buffer { buffer, offset, size } => {
+                    let region = [vk::BufferCopy::default().src_offset(offset).dst_offset(at).size(size)];
+                    unsafe { ctx.device.cmd_copy_buffer(cmd, buffer, readback.raw, &region) };
+                }
+                Source::Timestamps { pool, first, count } => unsafe {
+                    ctx.device.cmd_copy_query_pool_results(
+                        cmd,
+                        pool,
+                        first,
+                        count,
+                        readback.raw,
+                        at,
+                        8,
+                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                    )
+                },
+            }
+        }
+        memory_barrier(
+            ctx,
+            cmd,
+            (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+        );
+        ctx.end_label(cmd);
+        Ok(())
+    }
+
+    /// The bytes of download `d` of slot `s`; call after the fence of the
+    /// submission that held `record_downloads(s)`.
+    pub fn read(&self, s: usize, d: Download) -> Result<&[u8]> {
+        let slot = self.slots.get(s).with_context(|| format!("frame ring slot {s}"))?;
+        ensure!(slot.recorded, "frame ring: slot {s}'s downloads were never recorded");
+        let &(src, at) = slot.downloads.get(d.0).context("frame ring: unknown download")?;
+        let bytes = slot.readback.as_ref().context("frame ring: no readback buffer")?.read()?;
+        Ok(&bytes[at as usize..(at + src.size()) as usize])
+    }
+
+    /// Frees the staging memory (after the device is idle).
+    pub fn destroy(&mut self, ctx: &Context) {
+        for slot in &mut self.slots {
+            for b in [&mut slot.staging, &mut slot.readback].into_iter().flatten() {
+                b.destroy(ctx);
+            }
+            slot.staging = None;
+            slot.readback = None;
+        }
+    }
+}
+
+/// `buf`, replaced by a larger one (twice the need, to grow rarely) when
+/// smaller than `need`. Only called for a slot whose last frame completed.
+fn grow<'a>(
+    ctx: &Context,
+    buf: &'a mut Option<Buffer>,
+    need: u64,
+    name: &str,
+    usage: vk::BufferUsageFlags,
+    location: MemoryLocation,
+) -> Result<&'a mut Buffer> {
+    if buf.as_ref().is_some_and(|b| b.size < need) {
+        if let Some(mut old) = buf.take() {
+            old.destroy(ctx);
+        }
+    }
+    if buf.is_none() {
+        *buf = Some(Buffer::new(ctx, name, (need * 2).max(256), usage, location)?);
+    }
+    buf.as_mut().context("frame ring staging")
+}
