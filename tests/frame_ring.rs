@@ -150,8 +150,8 @@ fn run(ctx: &Context, slots: usize) -> (Vec<Vec<u8>>, u32) {
 /// Synchronization validation across submissions as well: the hazards a
 /// ring must prevent are between one frame's submission and the next. The
 /// validation layer here (1.3.239) checks those only with this ALPHA check
-/// enabled, read from the environment when the instance is created (no
-/// other test in this binary creates one).
+/// enabled, read from the environment when the instance is created (the
+/// other tests of this binary pass with or without it).
 fn sync_validated_across_submits() -> hybrid_rt::vk::Context {
     std::env::set_var(
         "VK_LAYER_ENABLES",
@@ -178,4 +178,34 @@ fn slots_are_checked() {
     let e = ring.begin(2).unwrap_err().to_string();
     assert!(e.contains("slot 2 of 2"), "{e}");
     assert!(FrameRing::new(0, "none").is_err());
+}
+
+/// Staging after the slot's copies were recorded, or registering a download
+/// after its copies were recorded, is an error (it would be lost silently).
+#[test]
+fn late_uploads_and_downloads_are_errors() {
+    let ctx = common::sync_validated_context();
+    let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+    let mut target = Buffer::new(&ctx, "late test target", 64, usage, MemoryLocation::GpuOnly).unwrap();
+    let mut ring = FrameRing::new(1, "late test").unwrap();
+    let e = ring.upload(0, &target, 60, &[0; 8]).unwrap_err().to_string();
+    assert!(e.contains("past the end of a 64-byte buffer"), "{e}");
+    ctx.one_shot("late test", |cmd| {
+        ring.upload(0, &target, 0, &[1; 8])?;
+        ring.record_uploads(&ctx, cmd, 0)?;
+        let e = ring.upload(0, &target, 0, &[2; 8]).unwrap_err().to_string();
+        assert!(e.contains("after its slot's uploads were recorded"), "{e}");
+        let d = ring.download(0, Source::Buffer { buffer: target.raw, offset: 0, size: 8 })?;
+        ring.record_downloads(&ctx, cmd, 0)?;
+        let e = ring.download(0, Source::Buffer { buffer: target.raw, offset: 0, size: 8 }).unwrap_err();
+        assert!(e.to_string().contains("after its slot's downloads were recorded"), "{e}");
+        Ok(d)
+    })
+    .map(|d| assert_eq!(ring.read(0, d).unwrap(), &[1; 8]))
+    .unwrap();
+    ring.begin(0).unwrap();
+    ring.upload(0, &target, 0, &[3; 8]).expect("a new frame stages again");
+    ring.destroy(&ctx);
+    target.destroy(&ctx);
+    ctx.finish().expect("validation clean");
 }

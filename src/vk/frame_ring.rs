@@ -66,6 +66,8 @@ struct Slot {
     staging: Option<Buffer>,
     downloads: Vec<(Source, u64)>,
     readback: Option<Buffer>,
+    /// The uploads were recorded: a later upload would never be copied.
+    uploads_recorded: bool,
     /// The downloads were recorded and may be read after the fence.
     recorded: bool,
 }
@@ -108,6 +110,7 @@ impl FrameRing {
         slot.bytes.clear();
         slot.uploads.clear();
         slot.downloads.clear();
+        slot.uploads_recorded = false;
         slot.recorded = false;
         Ok(())
     }
@@ -126,6 +129,7 @@ impl FrameRing {
             return Ok(());
         }
         let slot = self.slot(s)?;
+        ensure!(!slot.uploads_recorded, "frame ring: upload staged after its slot's uploads were recorded");
         let src_offset = align(slot.bytes.len() as u64);
         slot.bytes.resize(src_offset as usize, 0);
         slot.bytes.extend_from_slice(data);
@@ -138,6 +142,7 @@ impl FrameRing {
     pub fn record_uploads(&mut self, ctx: &Context, cmd: vk::CommandBuffer, s: usize) -> Result<()> {
         let name = format!("{} uploads {s}", self.name);
         let slot = self.slot(s)?;
+        slot.uploads_recorded = true;
         ctx.begin_label(cmd, &name, super::timer::label_color("frame ring uploads"));
         // The frame boundary, recorded even without uploads: every earlier
         // submission (the previous frame, maybe still running) completes its
