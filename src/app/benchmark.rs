@@ -157,7 +157,7 @@ fn budget_table(t: f64, frames: &[BudgetFrame]) -> String {
 }
 
 /// The passes that may trace rays (camera, shadow, reflection/refraction).
-const TRACING_PASSES: [&str; 4] = ["primary", "direct", "reference", "specular"];
+const TRACING_PASSES: [&str; 5] = ["primary", "visibility trace", "direct", "reference", "specular"];
 
 fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
     v.sort_by(|a, b| a.total_cmp(b));
