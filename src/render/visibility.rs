@@ -49,6 +49,11 @@ pub const REPROBE_FRAMES: u32 = 300;
 /// A probe costs both passes: at most one in this many frames, however
 /// fast the camera moves.
 pub const MIN_PROBE_INTERVAL: u32 = 30;
+/// One probe frame is one noisy sample (on a shared 2-core lavapipe machine
+/// Sponza's raster probe read 27-44 ms across runs): the technique in use
+/// (raster before any decision) is kept unless the other costs less than
+/// this fraction of it, so near-equal costs do not flip the choice.
+pub const SWITCH_BELOW: f64 = 0.8;
 /// The camera turned more than this (radians, ~20 degrees) since the
 /// measurement: measure again.
 const REPROBE_TURN: f32 = 0.35;
@@ -163,10 +168,15 @@ impl Chooser {
         if !std::mem::replace(&mut self.warm, true) {
             return; // compile time, not the passes' cost
         }
-        let pick = if traced < raster { Technique::Traced } else { Technique::Raster };
+        let (current, other, current_ms, other_ms) = match self.last {
+            Some((Technique::Traced, ..)) => (Technique::Traced, Technique::Raster, traced, raster),
+            _ => (Technique::Raster, Technique::Traced, raster, traced),
+        };
+        let pick = if other_ms < SWITCH_BELOW * current_ms { other } else { current };
         if self.last.is_none_or(|(t, ..)| t != pick) {
             log::info!(
-                "primary visibility: {} (cheaper for this view: raster {raster:.2} ms, traced {traced:.2} ms)",
+                "primary visibility: {} (for this view: raster {raster:.2} ms, traced {traced:.2} ms; a switch \
+                 needs the other below {SWITCH_BELOW}x)",
                 pick.name()
             );
         }
@@ -257,6 +267,12 @@ mod tests {
         // raster is cheaper at the new view.
         let seq: Vec<_> = (0..2).map(|_| frame(&mut c, Vec3::new(5.0, 0.0, 0.0), 2.0, 5.0)).collect();
         assert_eq!(seq, [Both, One(Raster)]);
+        // Near-equal costs keep the technique in use (raster here): traced
+        // at 0.85x of raster is within one probe's noise.
+        c.chosen = None;
+        c.passes_rebuilt(&hybrid_auto());
+        let seq: Vec<_> = (0..3).map(|_| frame(&mut c, Vec3::new(5.0, 0.0, 0.0), 10.0, 8.5)).collect();
+        assert_eq!(seq, [Both, Both, One(Raster)]);
         // A probe finishes while the camera keeps moving (else a moving
         // camera would never be measured); rebuilt passes are cold again.
         c.chosen = None;
