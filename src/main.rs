@@ -12,6 +12,7 @@ use glam::Vec3;
 use hybrid_rt::app::cli_parse::*;
 use hybrid_rt::app::{self, AccelUpdate, CameraChoice, GpuOptions, RenderJob};
 use hybrid_rt::render::rays::Traversal;
+use hybrid_rt::render::settings::PrimaryVisibility;
 use hybrid_rt::render::shading::{AaMode, Backend, Effects, Mode};
 use hybrid_rt::render::supersample::{SampleFilter, Supersample};
 use hybrid_rt::render::tone::{AutoExposure, ToneOperator, ToneSettings};
@@ -297,6 +298,11 @@ struct ViewArgs {
     /// Ray traversal backend.
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
+    /// Hybrid mode's primary hits: raster (visibility buffer), traced
+    /// (camera rays) or auto (view and bench: measure both per view, keep
+    /// the cheaper; render: raster, so images do not depend on timing).
+    #[arg(long, value_enum, default_value_t = PrimaryVisibility::Auto)]
+    primary_visibility: PrimaryVisibility,
     /// Anti-aliasing after tone mapping: edge (G-buffer depth and normal
     /// discontinuities), fxaa (luminance edges) or none [default: edge].
     #[arg(long, value_enum)]
@@ -468,6 +474,7 @@ impl ViewArgs {
                 ambient_from_scene: self.env.ambient.is_none(),
                 prt: self.env.prt_options(),
                 reference: self.env.reference(),
+                primary_visibility: self.primary_visibility,
             },
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),

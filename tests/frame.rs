@@ -4,6 +4,7 @@
 //! validation on every backend in both modes.
 mod common;
 
+use hybrid_rt::render::settings::PrimaryVisibility;
 use hybrid_rt::render::shading::{AaMode, Backend, Mode};
 use hybrid_rt::render::{DebugView, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
@@ -48,7 +49,22 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
         // visibility buffer + resolve vs camera rays), and needs no depth buffer.
         assert_eq!(h[2..], p[1..]);
         assert!(!targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
+        // Traced primary visibility: camera rays write the hit ids instead
+        // of the raster pass, and no depth buffer exists.
+        let traced = RenderSettings { primary_visibility: PrimaryVisibility::Traced, ..hybrid };
+        let (t, targets) = frame_of(&ctx, &scene, &traced);
+        assert_eq!(t[0], "visibility trace", "{backend:?} traced");
+        assert_eq!(t[1..], h[1..]);
+        assert!(!targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
     }
+    // Auto's probe frame records both (the traced pass overwrites the
+    // raster's hit ids: a write after a colour-attachment write).
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: 48, height: 27 }).unwrap();
+    r.visibility.measure = true;
+    let s = RenderSettings { backend: Backend::Compute, ..Default::default() };
+    r.render(&ctx, &scene, &scene.cameras[0], &s).unwrap();
+    assert_eq!(r.pass_names()[..3], ["gbuffer", "visibility trace", "gbuffer resolve"]);
+    r.destroy(&ctx);
     common::assert_validation_clean(&ctx);
 }
 

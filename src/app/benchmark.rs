@@ -49,6 +49,9 @@ pub struct BenchReport {
     /// G-buffer draws of the last measured frame: recorded, and left out
     /// as outside the view frustum.
     pub raster_draws: (usize, u32),
+    /// Auto primary visibility: what the last measured frame used and the
+    /// times it chose by (None: raster or traced was fixed, or pure RT).
+    pub visibility: Option<String>,
 }
 
 impl BenchReport {
@@ -97,6 +100,10 @@ impl BenchReport {
             s.push_str(&format!(
                 "gbuffer draws (last frame): {drawn} recorded, {culled} outside the view frustum\n"
             ));
+        }
+        if let Some(v) = &self.visibility {
+            s.push_str(v);
+            s.push('\n');
         }
         if let Some((t, frames)) = &self.budget {
             s.push_str(&budget_table(*t, frames));
@@ -150,7 +157,7 @@ fn budget_table(t: f64, frames: &[BudgetFrame]) -> String {
 }
 
 /// The passes that may trace rays (camera, shadow, reflection/refraction).
-const TRACING_PASSES: [&str; 4] = ["primary", "direct", "reference", "specular"];
+const TRACING_PASSES: [&str; 5] = ["primary", "visibility trace", "direct", "reference", "specular"];
 
 fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
     v.sort_by(|a, b| a.total_cmp(b));
@@ -341,6 +348,8 @@ pub fn bench(
         bail!("--capture-frame {c}: this bench renders {total} frames (0..={})", total - 1);
     }
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
+    // Auto primary visibility measures like the viewer's does.
+    renderer.visibility.measure = true;
     // The camera path adapts like a played-back animation: 1 / fps per frame
     // (the first frame converges at once).
     renderer.adapt_dt = Some(1.0 / job.fps.max(1e-3));
@@ -464,6 +473,7 @@ pub fn bench(
                     .map(|b| (b.budget, budget_frames)),
                 gbuffer_bytes_per_pixel: crate::render::passes::gbuffer::bytes_per_pixel(renderer.targets()),
                 raster_draws: renderer.raster_draws(),
+                visibility: renderer.visibility.describe(),
             });
         }
         Ok(())

@@ -21,6 +21,7 @@ pub mod supersample;
 pub mod targets;
 pub mod tone;
 pub mod tracer;
+pub mod visibility;
 
 use anyhow::{Context as _, Result};
 use ash::vk;
@@ -38,7 +39,7 @@ use crate::vk::timer::GpuTimer;
 use crate::vk::{Buffer, Context};
 use frame::{Access, Recorder, SharedBuffer, Use};
 use passes::{antialias::final_ldr, composite::HDR, Cx, Init, Pass, FRAME};
-use shading::{Mode, SceneNeeds, ShadingConfig};
+use shading::{SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;
 use tone::{ExposureState, ToneOperator, ToneSettings};
@@ -77,12 +78,11 @@ struct Recorded {
     pass: Box<dyn Pass>,
 }
 
-/// Whether the current frame leaves out its pass `name`: the passes are
-/// made per configuration, but `shadow_map` records only in frames whose
-/// selection leaves some visible object's shadows out (`shadow_map_left_out`
-/// says why not).
-fn left_out_this_frame(name: &str, shadow_map_left_out: Option<&str>) -> bool {
-    name == passes::shadow_map::PASS.name && shadow_map_left_out.is_some()
+/// Whether the current frame leaves out its pass `name`: `shadow_map`
+/// records only when the budget leaves some visible object's shadows out
+/// (`shadow_map_left_out` says why not); auto visibility records one technique.
+fn left_out_this_frame(name: &str, shadow_map_left_out: Option<&str>, vis: &visibility::Chooser) -> bool {
+    name == passes::shadow_map::PASS.name && shadow_map_left_out.is_some() || vis.leaves_out(name)
 }
 
 /// The readback and the viewer's blit copy these out of the frame: its
@@ -142,6 +142,9 @@ pub struct Renderer {
     draw_list: cull::DrawList,
     /// The `reference` pass's frames accumulated (--reference-samples).
     reference: reference::Accumulation,
+    /// `--primary-visibility auto`'s per-view choice (the viewer and bench
+    /// switch its measuring on and the viewer feeds it each frame's times).
+    pub visibility: visibility::Chooser,
 }
 
 fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
@@ -196,6 +199,7 @@ impl Renderer {
             prt: Default::default(),
             draw_list: cull::DrawList::default(),
             reference: reference::Accumulation::default(),
+            visibility: visibility::Chooser::default(),
         };
         match r.create_resources(ctx, scene) {
             Ok(()) => Ok(r),
@@ -395,13 +399,14 @@ impl Renderer {
     }
 
     pub fn pass_names(&self) -> Vec<&'static str> {
-        let left_out = self.shadow_map_left_out;
-        self.passes.iter().filter(|p| !left_out_this_frame(p.name, left_out)).map(|p| p.name).collect()
+        let (left_out, vis) = (self.shadow_map_left_out, &self.visibility);
+        self.passes.iter().filter(|p| !left_out_this_frame(p.name, left_out, vis)).map(|p| p.name).collect()
     }
 
     /// Makes the frame's passes, tracer and targets match `settings`. Waits
     /// for the GPU when it has to rebuild.
     fn ensure_frame(&mut self, ctx: &Context, scene: &Scene, settings: &RenderSettings) -> Result<()> {
+        let settings = &visibility::effective(settings, self.visibility.measure);
         let config = ShadingConfig::resolve(ctx, self.needs, settings)?;
         if self.config == Some(config) {
             return Ok(());
@@ -444,6 +449,7 @@ impl Renderer {
             self.passes.push(Recorded { name: desc.name, uses, pass });
         }
         self.passes_new = true;
+        self.visibility.passes_rebuilt(&config);
         if ctx.caps.device_type == vk::PhysicalDeviceType::CPU {
             log::info!(
                 "frame: compiling shaders: a software device compiles each pipeline on first use, inside the \
@@ -503,8 +509,8 @@ impl Renderer {
         let view = camera.view().as_mat4();
         let proj = camera.projection(aspect);
         let view_proj = proj * view;
-        // Only the raster pass draws; pure RT mode finds hits by tracing.
-        self.draw_list = if self.config.is_some_and(|c| c.mode == Mode::Hybrid) {
+        // Only the raster pass draws; pure RT mode and traced visibility find hits by tracing.
+        self.draw_list = if self.visibility.before_frame(camera, &scene.bounds, self.config) {
             cull::draw_list(scene, &self.gpu, self.gpu.origin, &(proj.as_dmat4() * camera.view()))
         } else {
             cull::DrawList::default()
@@ -579,7 +585,7 @@ impl Renderer {
         tail: impl FnOnce(&mut Recorder, &Targets) -> Result<()>,
     ) -> Result<()> {
         anyhow::ensure!(self.config.is_some(), "prepare() must run before record()");
-        let shadow_map_left_out = self.shadow_map_left_out;
+        let (shadow_map_left_out, vis) = (self.shadow_map_left_out, &self.visibility);
         let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
         let cx = Cx {
             ctx,
@@ -589,7 +595,7 @@ impl Renderer {
             draws: &self.draw_list,
         };
         for p in &self.passes {
-            if left_out_this_frame(p.name, shadow_map_left_out) {
+            if left_out_this_frame(p.name, shadow_map_left_out, vis) {
                 continue;
             }
             rec.pass(p.name, p.pass.stage(), &p.uses, |cmd| {
@@ -689,6 +695,7 @@ impl Renderer {
         let bad_pixels = counts[RAY_COUNTER_BAD_PIXELS as usize];
         let exposure = self.exposure_state()?;
         self.finish_budget(scene, camera, settings, &timings)?;
+        self.visibility.after_frame(&timings);
         let e = self.extent;
         Ok(FrameOutput {
             width: e.width,

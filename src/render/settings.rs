@@ -94,6 +94,39 @@ impl Default for PrtOptions {
     }
 }
 
+/// How the hybrid frame finds its primary hits (the visibility buffer that
+/// `gbuffer_resolve` reads): rasterized or traced, or chosen per view by
+/// measured GPU cost (render/visibility.rs). Pure ray-traced mode always traces.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrimaryVisibility {
+    /// Measure both (GPU timestamps of a probe frame each) and keep the
+    /// cheaper, re-measuring when the view changes a lot or every few
+    /// hundred frames. Only a renderer told to measure (`Renderer::
+    /// measure_visibility`: the viewer and `bench`) does; elsewhere (`render`,
+    /// tests, goldens: images must not depend on timing) auto is raster.
+    #[default]
+    Auto,
+    /// The raster visibility buffer (pass `gbuffer`).
+    Raster,
+    /// Camera rays through the pixel centres (pass `visibility_trace`).
+    Traced,
+}
+
+impl PrimaryVisibility {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            PrimaryVisibility::Auto => "auto",
+            PrimaryVisibility::Raster => "raster",
+            PrimaryVisibility::Traced => "traced",
+        }
+    }
+
+    pub fn is_traced(self) -> bool {
+        self == PrimaryVisibility::Traced
+    }
+}
+
 /// G-buffer debug views (also selectable in the viewer).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum DebugView {
@@ -147,6 +180,8 @@ pub struct RenderSettings {
     /// The ray-traced reference replaces the ambient radiance at primary
     /// hits (--reference-samples; render/reference.rs).
     pub reference: Option<super::ReferenceSettings>,
+    /// How hybrid mode finds primary hits (--primary-visibility).
+    pub primary_visibility: PrimaryVisibility,
 }
 
 impl Default for RenderSettings {
@@ -164,6 +199,7 @@ impl Default for RenderSettings {
             ambient_from_scene: false,
             prt: PrtOptions::default(),
             reference: None,
+            primary_visibility: PrimaryVisibility::Auto,
         }
     }
 }

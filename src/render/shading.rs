@@ -241,6 +241,11 @@ pub struct ShadingConfig {
     /// The ray-traced ambient reference runs (--reference-samples; not in
     /// debug views): the `reference` pass exists and traces.
     pub reference: bool,
+    /// How hybrid mode finds primary hits: `Raster` (pass `gbuffer`),
+    /// `Traced` (pass `visibility_trace`) or `Auto` (both exist, each frame
+    /// records one: render/visibility.rs). `Raster` in pure ray-traced mode
+    /// (not used there).
+    pub visibility: crate::render::settings::PrimaryVisibility,
 }
 
 impl ShadingConfig {
@@ -264,8 +269,14 @@ impl ShadingConfig {
             ..wanted
         };
         let reference = settings.reference.is_some() && !debug_view;
-        let traces =
-            mode == Mode::Rt || reference || effects.shadows || effects.reflections || effects.refractions;
+        use crate::render::settings::PrimaryVisibility as Pv;
+        let visibility = if mode == Mode::Hybrid { settings.primary_visibility } else { Pv::Raster };
+        let traces = mode == Mode::Rt
+            || visibility != Pv::Raster
+            || reference
+            || effects.shadows
+            || effects.reflections
+            || effects.refractions;
         let backend = if !traces {
             None
         } else {
@@ -291,6 +302,7 @@ impl ShadingConfig {
             shadow_fallback,
             aa: settings.aa,
             reference,
+            visibility,
         })
     }
 
@@ -343,6 +355,14 @@ impl ShadingConfig {
             if on.is_empty() { "none".to_string() } else { on.join(", ") },
             if self.budget { " (per-object budget)" } else { "" }
         ) + if self.reference { ", ray-traced ambient reference" } else { "" }
+            + match (self.mode, self.visibility) {
+                (Mode::Rt, _) => "",
+                (_, crate::render::settings::PrimaryVisibility::Raster) => ", primary visibility raster",
+                (_, crate::render::settings::PrimaryVisibility::Traced) => ", primary visibility traced",
+                (_, crate::render::settings::PrimaryVisibility::Auto) => {
+                    ", primary visibility auto (measured per view)"
+                }
+            }
     }
 }
 

@@ -168,6 +168,7 @@ impl Viewer {
         // frame's statistics (the camera has not moved since it).
         let camera = self.controller.camera();
         self.renderer.finish_budget(&self.scene, &camera, &self.settings, &passes)?;
+        self.renderer.visibility.after_frame(&passes);
 
         // --capture-frame N or F9: this frame, from its uniforms to its
         // present, in a RenderDoc capture.

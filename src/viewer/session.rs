@@ -123,6 +123,8 @@ impl Viewer {
             capture_frame: g.capture_frame,
         })?;
         let mut renderer = Renderer::new(&ctx, &scene, requested)?;
+        // An interactive view: auto primary visibility measures per view.
+        renderer.visibility.measure = true;
         let presenter = match Presenter::new(&ctx, &window, opts.present_mode) {
             Ok(p) => p,
             Err(e) => {

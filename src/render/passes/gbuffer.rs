@@ -65,7 +65,13 @@ fn uses(_: &ShadingConfig) -> Vec<Use> {
 }
 
 fn skip(c: &ShadingConfig) -> Option<&'static str> {
-    (c.mode == Mode::Rt).then_some("pure ray-traced mode: camera rays (pass primary) find the primary hits")
+    match (c.mode, c.visibility) {
+        (Mode::Rt, _) => Some("pure ray-traced mode: camera rays (pass primary) find the primary hits"),
+        (_, crate::render::settings::PrimaryVisibility::Traced) => {
+            Some("--primary-visibility traced: pass visibility trace finds the primary hits")
+        }
+        _ => None,
+    }
 }
 
 pub const PASS: PassDesc = PassDesc {

@@ -18,6 +18,7 @@ pub mod reference;
 pub mod shadow_map;
 pub mod specular;
 pub mod tonemap;
+pub mod visibility_trace;
 
 use anyhow::Result;
 use ash::vk;
@@ -31,13 +32,14 @@ use crate::gpu::GpuScene;
 use crate::vk::Context;
 
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
-/// visibility buffer + resolve, or camera rays) -> per-object statistics for the budget -> the budget's
+/// or traced visibility buffer + resolve, or camera rays) -> per-object statistics for the budget -> the budget's
 /// fallback shadow maps -> direct light -> the ambient reference (with
 /// --reference-samples) -> reflection/refraction chain ->
 /// composite -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one technique). The scene update (skinning, refit, top level)
 /// comes before it, recorded by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
     gbuffer::PASS,
+    visibility_trace::PASS,
     gbuffer_resolve::PASS,
     primary::PASS,
     heuristic::PASS,

@@ -20,7 +20,8 @@ fn io(_: &ShadingConfig) -> Vec<Io> {
 }
 
 fn skip(c: &ShadingConfig) -> Option<&'static str> {
-    (c.mode == Mode::Hybrid).then_some("hybrid mode: the raster G-buffer holds the primary hits")
+    (c.mode == Mode::Hybrid)
+        .then_some("hybrid mode: the visibility buffer (gbuffer or visibility trace) holds the primary hits")
 }
 
 pub const PASS: PassDesc = PassDesc {

@@ -1,0 +1,26 @@
+// Pass `visibility_trace` (hybrid mode, traced primary visibility): the
+// camera ray through each pixel centre finds the primary hit and stores only
+// (instance + 1, primitive) in the hit target, the visibility buffer the
+// raster `gbuffer` pass would have written; `gbuffer_resolve` and every later
+// pass are the same either way. The ray is the one `primary` traces (same
+// direction, same alpha test with the same camera-ray mip selection), so
+// alpha-masked cut-outs fall where the raster's alpha test puts them.
+#include "../common/scene.glsl"
+#include "../common/hit.glsl"
+#include "../common/primary_hit.glsl"
+#include "../common/integrator.glsl"
+
+layout(set = SET_PASS, binding = GB_HIT, rg32ui) uniform writeonly uimage2D gb_hit;
+
+void visibility_pixel(ivec2 px) {
+    if (any(greaterThanEqual(uvec2(px), frame.resolution))) return;
+    vec3 dir = camera_ray_dir(vec2(px) + 0.5);
+    RayHit h;
+    count_ray(RAY_KIND_CAMERA);
+    g_camera_ray = true;
+    g_camera_pixel = px;
+    bool hit = trace_closest(frame.camera_pos, dir, RAY_TMAX, h);
+    g_camera_ray = false;
+    // Hit id 0: the camera ray missed (as the raster pass's clear value).
+    imageStore(gb_hit, px, hit ? uvec4(h.instance + 1u, h.primitive, 0u, 0u) : uvec4(0u));
+}

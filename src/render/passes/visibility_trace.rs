@@ -1,0 +1,41 @@
+//! Pass `visibility_trace` (hybrid mode, traced primary visibility): camera
+//! rays through the pixel centres, traced by the active backend exactly as
+//! pass `primary` traces them (alpha test included), write only the
+//! visibility buffer's hit ids (instance + 1, primitive; 0 on a miss) —
+//! what the raster `gbuffer` pass writes — so `gbuffer_resolve` and every
+//! later pass are unchanged (glsl/passes/visibility_trace.glsl). No depth
+//! buffer: only the raster's depth test reads it. On lavapipe a mesh of
+//! many small triangles rasterizes slower than it traces (the armadillo:
+//! bench/results/lavapipe-2core-vm-raster.md), so `--primary-visibility
+//! auto` measures both and keeps the cheaper (render/visibility.rs).
+
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::{gbuffer, Init, PassDesc};
+use crate::gpu::shared::GB_HIT;
+use crate::render::frame::Access;
+use crate::render::settings::PrimaryVisibility;
+use crate::render::shading::{Mode, ShadingConfig};
+use crate::vk::pipeline::Specialization;
+
+fn io() -> Vec<Io> {
+    vec![Io::new(GB_HIT, &gbuffer::HIT, Access::StorageWrite)]
+}
+
+fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    match (c.mode, c.visibility) {
+        (Mode::Rt, _) => Some("pure ray-traced mode: pass primary traces the camera rays"),
+        (_, PrimaryVisibility::Raster) => Some("--primary-visibility raster: pass gbuffer rasterizes them"),
+        _ => None,
+    }
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "visibility trace",
+    skip,
+    uses: |_| fullscreen::uses(&io(), true),
+    create: |i: &Init| {
+        // The same specialization as `primary`: ray counting follows it.
+        let spec = Specialization::new(&i.config.specialization());
+        FullScreen::create(i, "visibility trace", io(), Shader::Traced("visibility_trace"), &spec)
+    },
+};
