@@ -6,6 +6,7 @@
 pub mod budget;
 pub mod cull;
 pub mod frame;
+mod frame_results;
 pub mod inject;
 pub mod kernel;
 pub mod output;
@@ -26,7 +27,6 @@ pub mod visibility;
 use anyhow::{Context as _, Result};
 use ash::vk;
 use glam::Mat4;
-use gpu_allocator::MemoryLocation;
 
 use crate::accel::dynamic::RebuildPolicy;
 use crate::gpu::shared::{
@@ -147,22 +147,6 @@ pub struct Renderer {
     pub visibility: visibility::Chooser,
 }
 
-fn readback_buffers(ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, Buffer)> {
-    let px = extent.width as u64 * extent.height as u64;
-    let buffer = |name, bytes| {
-        Buffer::new(ctx, name, px * bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)
-    };
-    let ldr = buffer("readback ldr", 4)?;
-    match buffer("readback hdr", 16) {
-        Ok(hdr) => Ok((ldr, hdr)),
-        Err(e) => {
-            let mut ldr = ldr;
-            ldr.destroy(ctx);
-            Err(e)
-        }
-    }
-}
-
 impl Renderer {
     pub fn new(ctx: &Context, scene: &Scene, extent: vk::Extent2D) -> Result<Renderer> {
         ctx.caps.limits.check_extent(extent.width, extent.height)?;
@@ -211,7 +195,7 @@ impl Renderer {
     }
 
     fn create_resources(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
-        (self.readback_ldr, self.readback_hdr) = readback_buffers(ctx, self.extent)?;
+        (self.readback_ldr, self.readback_hdr) = frame_results::readback_buffers(ctx, self.extent)?;
         self.skinning = Skinning::new(ctx, scene, &self.gpu)?;
         self.update_cmd = ctx.allocate_command_buffer("scene update")?;
         self.update_timer = GpuTimer::new(ctx, 8)?;
@@ -234,7 +218,7 @@ impl Renderer {
     pub fn resize(&mut self, ctx: &Context, extent: vk::Extent2D) -> Result<()> {
         self.readback_ldr.destroy(ctx);
         self.readback_hdr.destroy(ctx);
-        (self.readback_ldr, self.readback_hdr) = readback_buffers(ctx, extent)?;
+        (self.readback_ldr, self.readback_hdr) = frame_results::readback_buffers(ctx, extent)?;
         self.extent = extent;
         self.reference.reset();
         let uses: Vec<Use> = self.passes.iter().flat_map(|p| p.uses.iter().copied()).collect();
@@ -709,52 +693,6 @@ impl Renderer {
             exposure,
             cold: self.recorded_cold,
         })
-    }
-
-    /// After a completed frame (its GPU pass times `timings`): the budget's
-    /// selection for the next one (nothing without a budget).
-    pub fn finish_budget(
-        &mut self,
-        scene: &Scene,
-        camera: &Camera,
-        settings: &RenderSettings,
-        timings: &[(&'static str, f64)],
-    ) -> Result<()> {
-        let (Some(b), true) = (&settings.budget, self.config.is_some_and(|c| c.budget)) else {
-            return Ok(());
-        };
-        let screen = budget::Screen { width: self.extent.width, height: self.extent.height };
-        let timings = (!self.recorded_cold).then_some(timings);
-        self.budget.after_frame(&self.gpu, scene, camera, screen, b, timings)
-    }
-
-    /// Makes the next frame under `budget` trace the effects `bits` (EFFECT_*
-    /// bits per object) instead of what the heuristic chose.
-    pub fn set_budget_selection(&mut self, budget: &budget::BudgetSettings, bits: Vec<u32>) {
-        self.budget.set_selection(budget, bits);
-    }
-
-    /// The budget's last selection and what it was made from.
-    pub fn budget_report(&self) -> Option<&budget::BudgetReport> {
-        self.budget.last()
-    }
-
-    /// What auto exposure measured in the last completed frame (None when
-    /// the frame measures no luminance).
-    pub fn exposure_state(&self) -> Result<Option<ExposureState>> {
-        if !self.config.is_some_and(|c| c.luminance) {
-            return Ok(None);
-        }
-        let bytes = &self.gpu.exposure.read()?[..tone::EXPOSURE_STATE_BYTES];
-        Ok(Some(bytemuck::pod_read_unaligned(bytes)))
-    }
-
-    /// Reads and clears the bad-pixel counter (the viewer, after its frame's fence).
-    pub fn take_bad_pixels(&mut self) -> Result<u32> {
-        let at = RAY_COUNTER_BAD_PIXELS as usize * 4;
-        let n = bytemuck::pod_read_unaligned(&self.gpu.ray_counters.read()?[at..at + 4]);
-        self.gpu.ray_counters.write(at, &[0u8; 4])?;
-        Ok(n)
     }
 
     /// Fault injection for tests: from the next frame on, these HDR pixels
