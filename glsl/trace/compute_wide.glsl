@@ -28,9 +28,11 @@ layout(set = SET_TRACE, binding = BVH_BLAS_NODES, scalar) readonly buffer BlasWi
 // Closest hit (any opaque hit for shadow rays) in the wide tree at
 // blas_wide[base...]: hit children sorted by entry distance, the nearest
 // visited next, the others pushed far to near with their entry distance, and
-// dropped when popped if a hit found since is nearer.
-bool trace_blas_wide(uint inst_index, uint base, uint prim_offset, vec3 o, vec3 inv_d, WatertightRay wr,
-                     bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
+// dropped when popped if a hit found since is nearer. `in_flat`: the flat static
+// tree (leaves index flat_tris; `mask` filters its triangles); otherwise
+// instance `inst_index`'s BLAS.
+bool trace_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint prim_offset, vec3 o, vec3 inv_d,
+                     WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
     Instance inst = instances[inst_index];
     uint stack[WIDE_STACK];
     float stack_t[WIDE_STACK];  // entry distance: skipped once a hit is nearer
@@ -41,7 +43,7 @@ bool trace_blas_wide(uint inst_index, uint base, uint prim_offset, vec3 o, vec3 
         if ((cur & BVH_WIDE_LEAF) != 0u) {
             uint first = cur & 0x07FFFFFFu;
             uint count = (cur >> 27) & 7u;
-            if (trace_leaf(inst, inst_index, prim_offset + first, count, wr, shadow, tmax, hit, found, tr)) {
+            if (trace_leaf(in_flat, mask, inst, inst_index, prim_offset + first, count, wr, shadow, tmax, hit, found, tr)) {
                 return true;
             }
         } else {
