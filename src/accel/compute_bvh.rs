@@ -149,6 +149,14 @@ fn push_wide_nodes(nodes: &mut Vec<BvhNode>, bvh: &Bvh, wide: &WideBvh) -> u32 {
     at
 }
 
+/// What `build` uploads once: BLAS node slots, BLAS triangle order, the flat
+/// tree's triangles.
+struct TreeData<'a> {
+    nodes: &'a [BvhNode],
+    prims: &'a [u32],
+    flat_tris: &'a [FlatTriangle],
+}
+
 /// Top-level buffers are host-visible and rewritten in place every frame
 /// something moves; sized for the worst case once.
 pub(super) fn host_buffer(ctx: &Context, name: &str, bytes: usize) -> Result<Buffer> {
@@ -263,7 +271,8 @@ impl ComputeBvh {
             top_level_ms: 0.0,
             origin: gpu.origin,
         };
-        if let Err(e) = bvh.create_buffers(ctx, scene, gpu, &nodes, &prims, &flat.triangles, staging_size) {
+        let data = TreeData { nodes: &nodes, prims: &prims, flat_tris: &flat.triangles };
+        if let Err(e) = bvh.create_buffers(ctx, scene, gpu, data, staging_size) {
             bvh.destroy(ctx);
             return Err(e);
         }
@@ -525,11 +534,10 @@ impl ComputeBvh {
         ctx: &Context,
         scene: &Scene,
         gpu: &GpuScene,
-        nodes: &[BvhNode],
-        prims: &[u32],
-        flat_tris: &[FlatTriangle],
+        data: TreeData,
         staging_size: u64,
     ) -> Result<()> {
+        let TreeData { nodes, prims, flat_tris } = data;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         self.blas_nodes = Buffer::with_data(ctx, "BVH BLAS nodes", bytemuck::cast_slice(nodes), storage)?;
         self.blas_prims =

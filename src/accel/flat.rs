@@ -151,9 +151,11 @@ mod tests {
     /// Three nodes sharing one two-quad mesh (materials: casts shadows,
     /// does not), the third under an animated parent.
     fn scene() -> Scene {
-        let mut s = Scene::default();
-        s.materials = vec![Material::default(), Material { casts_shadows: false, ..Default::default() }];
-        s.meshes = vec![Mesh { primitives: vec![quad(0), quad(1)], ..Default::default() }];
+        let mut s = Scene {
+            materials: vec![Material::default(), Material { casts_shadows: false, ..Default::default() }],
+            meshes: vec![Mesh { primitives: vec![quad(0), quad(1)], ..Default::default() }],
+            ..Default::default()
+        };
         let place = |translation: DVec3, rotation: Quat, s: f32| Transform {
             translation,
             rotation,
