@@ -18,6 +18,18 @@ use hybrid_rt::render::rays::Traversal;
 use hybrid_rt::scene::Scene;
 
 fn agree(scene: &Scene, w: u32, h: u32, traversal: Traversal) -> Vec<hybrid_rt::app::KindReport> {
+    agree_where(scene, w, h, traversal, true)
+}
+
+/// `agree`; `shadow_hits`: whether some shadow ray must be blocked or tinted
+/// (false for a scene where none may be).
+fn agree_where(
+    scene: &Scene,
+    w: u32,
+    h: u32,
+    traversal: Traversal,
+    shadow_hits: bool,
+) -> Vec<hybrid_rt::app::KindReport> {
     let ctx = common::validated_context();
     let mut bench = RayBench::with_traversal(&ctx, scene, traversal).expect("set up both tracers");
     let job = RenderJob::new(&scene.source, w, h);
@@ -48,7 +60,12 @@ fn agree(scene: &Scene, w: u32, h: u32, traversal: Traversal) -> Vec<hybrid_rt::
             .iter()
             .filter(|x| x.hit != 0 || (r.kind == RayKind::Shadow && x.next.iter().any(|&c| c < 1.0)))
             .count();
-        assert!(hits > 0, "{}: no {} ray hits", scene.source.display(), r.kind.name());
+        assert!(
+            hits > 0 || (r.kind == RayKind::Shadow && !shadow_hits),
+            "{}: no {} ray hits",
+            scene.source.display(),
+            r.kind.name()
+        );
         let stats = r.compute.stats.as_ref().expect("compute statistics");
         assert_eq!(stats.len(), r.rays);
         // A ray enters no node its subgroup did not visit; lane by lane the
@@ -92,5 +109,32 @@ fn compute_and_query_agree_through_glass() {
             .filter(|x| x.hit == 0 && x.next.iter().any(|&c| c > 0.0 && c < 1.0))
             .count();
         assert!(tinted > 0, "no shadow ray crossed the glass square");
+    }
+}
+
+/// An opaque occluder whose material casts no shadow: visible to camera
+/// rays, invisible to shadow rays (instance mask). The compute tracer's flat
+/// static tree filters by per-triangle mask bits, the query by instance
+/// mask; they must agree, and no shadow ray may be blocked. (With the flat
+/// tree's mask test removed, compute shadow rays stop at the occluder and
+/// this fails with mismatches.)
+#[test]
+fn shadow_rays_pass_an_occluder_that_casts_no_shadow() {
+    let occluder = "
+[[material]]
+name = \"occluder\"
+base_color = [0.9, 0.2, 0.2]
+casts_shadows = false
+double_sided = true
+";
+    let scene = common::scene_from_toml("rays_no_shadow", &shadow_scene(Frame::IDENTITY, occluder));
+    for traversal in [Traversal::Lane, Traversal::Packet] {
+        let reports = agree_where(&scene, 32, 18, traversal, false);
+        let shadow = reports.iter().find(|r| r.kind == RayKind::Shadow).unwrap();
+        let blocked = shadow.compute.results.iter().filter(|x| x.hit != 0).count();
+        assert_eq!(blocked, 0, "{blocked} shadow rays blocked by an occluder that casts no shadow");
+        let primary = reports.iter().find(|r| r.kind == RayKind::Primary).unwrap();
+        let occ = primary.compute.results.iter().filter(|x| x.hit != 0 && x.instance == 1).count();
+        assert!(occ > 0, "no camera ray sees the occluder");
     }
 }

@@ -2,11 +2,14 @@
 // extension needed. Same interface as trace/query.glsl:
 //   bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit)
 //   vec3 trace_shadow(vec3 o, vec3 d, float tmax)   -> transmittance
-// Layout (src/accel/bvh/mod.rs, src/accel/compute_bvh.rs): nodes are 32 bytes;
-// static BLASes are 4-wide (compute_wide.glsl), skinned BLASes and the top level binary;
-// count == 0 marks an interior node whose children are left and left + 1;
-// count > 0 a leaf over prims[first .. first + count]. Triangles are read
-// from the one shared vertex/index copy.
+// Layout (src/accel/bvh/mod.rs, src/accel/compute_bvh.rs, src/accel/flat.rs):
+// static instances are flattened into ONE world-space 4-wide tree (header at
+// blas_nodes[BVH_FLAT_ROOT]) whose leaves hold their triangles (flat_tris);
+// it is traced first, then the two-level BVH over the other instances. There
+// nodes are 32 bytes; rigid BLASes are 4-wide (compute_wide.glsl), skinned
+// BLASes and the top level binary; count == 0 marks an interior node whose
+// children are left and left + 1; count > 0 a leaf over prims[first .. first
+// + count], whose triangles are read from the one shared vertex/index copy.
 #ifndef TRACE_COMPUTE_GLSL
 #define TRACE_COMPUTE_GLSL
 #include "../common/hit.glsl"
@@ -32,6 +35,18 @@ layout(set = SET_TRACE, binding = BVH_BLAS_PRIMS, scalar) readonly buffer BlasPr
 layout(set = SET_TRACE, binding = BVH_TLAS_NODES, scalar) readonly buffer TlasNodes { BvhNode tlas_nodes[]; };
 layout(set = SET_TRACE, binding = BVH_TLAS_PRIMS, scalar) readonly buffer TlasPrims { uint tlas_prims[]; };
 layout(set = SET_TRACE, binding = BVH_INSTANCES, scalar) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
+
+// A triangle of the flat static tree (world space, relative to the render
+// origin), with the hit record it reports and the ray mask bits it answers to.
+struct FlatTri {
+    vec3 p0;
+    uint instance;
+    vec3 p1;
+    uint primitive;
+    vec3 p2;
+    uint mask;
+};
+layout(set = SET_TRACE, binding = BVH_FLAT_TRIS, scalar) readonly buffer FlatTris { FlatTri flat_tris[]; };
 
 #define BVH_STACK 32
 
@@ -159,24 +174,56 @@ uint candidate(bool shadow, uint inst, uint prim, vec2 b, float hit_t, inout vec
     return 0u;
 }
 
-// The triangles prims[first .. first + count) of a leaf, in object space:
-// the nearest accepted hit shortens tmax and lands in `hit`. True when a
-// shadow ray is blocked (it stops there).
-bool trace_leaf(Instance inst, uint inst_index, uint first, uint count, WatertightRay wr, bool shadow,
-                inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
-    for (uint i = 0u; i < count; ++i) {
-        uint prim = blas_prims[first + i];
-        vec3 p0, p1, p2;
+// Leaf entry `entry`: from the flat tree (`in_flat`: a world-space triangle
+// with its own instance, primitive and mask) or from the BLAS of instance
+// `inst_index` (its triangle order, positions in object space; the top level
+// already checked its mask).
+void leaf_triangle(bool in_flat, Instance inst, uint inst_index, uint entry, out uint ti, out uint prim, out vec3 p0,
+                   out vec3 p1, out vec3 p2, out uint tmask) {
+    if (in_flat) {
+        FlatTri f = flat_tris[entry];
+        ti = f.instance;
+        prim = f.primitive;
+        p0 = f.p0;
+        p1 = f.p1;
+        p2 = f.p2;
+        tmask = f.mask;
+    } else {
+        ti = inst_index;
+        prim = blas_prims[entry];
         object_triangle(inst, prim, p0, p1, p2);
-        STAT_TRI();
-        vec2 b;
-        float t = watertight_hit(wr, p0, p1, p2, tmax, b);
-        if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
-            tmax = t;
-            hit = RayHit(inst_index, prim, b, t);
-            found = true;
-            if (shadow) return true;
-        }
+        tmask = 0xFFFFFFFFu;
+    }
+}
+
+// One triangle against the ray (every traversal's per-triangle step): the
+// nearest accepted hit shortens tmax and lands in `hit`. True when a shadow
+// ray is blocked (it stops there).
+bool test_triangle(uint inst_index, uint prim, vec3 p0, vec3 p1, vec3 p2, WatertightRay wr, bool shadow,
+                   inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
+    STAT_TRI();
+    vec2 b;
+    float t = watertight_hit(wr, p0, p1, p2, tmax, b);
+    if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
+        tmax = t;
+        hit = RayHit(inst_index, prim, b, t);
+        found = true;
+        return shadow;
+    }
+    return false;
+}
+
+// The triangles of a leaf, entries [first .. first + count) (see
+// leaf_triangle), for a ray with mask `mask`. True when a shadow ray is
+// blocked (it stops there).
+bool trace_leaf(bool in_flat, uint mask, Instance inst, uint inst_index, uint first, uint count, WatertightRay wr,
+                bool shadow, inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
+    for (uint i = 0u; i < count; ++i) {
+        uint ti, prim, tmask;
+        vec3 p0, p1, p2;
+        leaf_triangle(in_flat, inst, inst_index, first + i, ti, prim, p0, p1, p2, tmask);
+        if ((tmask & mask) == 0u) continue;
+        if (test_triangle(ti, prim, p0, p1, p2, wr, shadow, tmax, hit, found, tr)) return true;
     }
     return false;
 }
@@ -198,15 +245,15 @@ bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, 
     BvhNode root = blas_nodes[bi.node_offset];
     if (ray_box(o, inv_d, tmax, root.bmin, root.bmax) > 1e37) return false;
     if (root.count == BVH_WIDE_HEADER) {
-        return trace_blas_wide(inst_index, (bi.node_offset + 1u) / 2u, bi.prim_offset, o, inv_d, wr, shadow, tmax, hit,
-                               tr);
+        return trace_blas_wide(false, 0xFFFFFFFFu, inst_index, (bi.node_offset + 1u) / 2u, bi.prim_offset, o, inv_d, wr,
+                               shadow, tmax, hit, tr);
     }
     while (true) {
         STAT_NODE();
         BvhNode n = blas_nodes[bi.node_offset + node];
         if (n.count > 0u) {
-            if (trace_leaf(inst, inst_index, bi.prim_offset + n.left_or_first, n.count, wr, shadow, tmax, hit, found,
-                           tr)) {
+            if (trace_leaf(false, 0xFFFFFFFFu, inst, inst_index, bi.prim_offset + n.left_or_first, n.count, wr, shadow,
+                           tmax, hit, found, tr)) {
                 return true;
             }
         } else {
@@ -226,15 +273,27 @@ bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, 
     return found;
 }
 
+// The flat static tree (world space, no instance transform). True when it
+// holds a hit (for shadow rays: a blocking one).
+bool trace_flat(vec3 o, vec3 d, vec3 inv_d, uint mask, bool shadow, inout float tmax, inout RayHit hit,
+                inout vec3 tr) {
+    BvhNode root = blas_nodes[BVH_FLAT_ROOT];
+    if (ray_box(o, inv_d, tmax, root.bmin, root.bmax) > 1e37) return false;
+    return trace_blas_wide(true, mask, 0u, (BVH_FLAT_ROOT + 1u) / 2u, 0u, o, inv_d, watertight_setup(o, d), shadow,
+                           tmax, hit, tr);
+}
+
 bool trace_bvh(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit hit, inout vec3 tr) {
     vec3 inv_d = 1.0 / d;
     uint stack[BVH_STACK];
     int sp = 0;
     uint node = 0u;
-    bool found = false;
     hit = RayHit(0u, 0u, vec2(0.0), tmax);
+    // Static geometry first: a hit there shortens the rest of the walk.
+    bool found = trace_flat(o, d, inv_d, mask, shadow, tmax, hit, tr);
+    if (found && shadow) return true;
     if (tlas_nodes.length() == 0 || ray_box(o, inv_d, tmax, tlas_nodes[0].bmin, tlas_nodes[0].bmax) > 1e37) {
-        return false;
+        return found;
     }
     while (true) {
         STAT_NODE();

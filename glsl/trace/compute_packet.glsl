@@ -1,6 +1,6 @@
 // Subgroup-cooperative ("packet") traversal for the compute tracer
 // (included by compute.glsl, which defines the node types, ray_box,
-// trace_leaf and the per-lane trace_blas).
+// leaf_triangle, test_triangle and the per-lane trace_blas).
 //
 // Why: llvmpipe runs a subgroup's invocations as the lanes of one SIMD
 // vector, so in the per-lane traversal every node fetch is an 8-lane gather
@@ -53,34 +53,28 @@ float packet_key(vec3 bmin, vec3 bmax, vec3 dir) {
     return dot(bmin + bmax, dir);
 }
 
-// The triangles of a leaf, walked by the whole subgroup (one fetch per
-// triangle for all lanes), tested by the lanes that entered it. True for a
-// lane whose shadow ray is now blocked.
-bool packet_leaf(Instance inst, uint inst_index, uint first, uint count, bool in_leaf, WatertightRay wr,
-                 bool shadow, inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
+// The triangles of a leaf (entries as in leaf_triangle), walked by the
+// whole subgroup (one fetch per triangle for all lanes), tested by the lanes
+// that entered it. True for a lane whose shadow ray is now blocked.
+bool packet_leaf(bool in_flat, uint mask, Instance inst, uint inst_index, uint first, uint count, bool in_leaf,
+                 WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
     bool blocked = false;
     for (uint i = 0u; i < count; ++i) {
-        uint prim = blas_prims[first + i];
+        uint ti, prim, tmask;
         vec3 p0, p1, p2;
-        object_triangle(inst, prim, p0, p1, p2);
-        if (in_leaf && !blocked) {
-            STAT_TRI();
-            vec2 b;
-            float t = watertight_hit(wr, p0, p1, p2, tmax, b);
-            if (t > 0.0 && candidate(shadow, inst_index, prim, b, t, tr) == 1u) {
-                tmax = t;
-                hit = RayHit(inst_index, prim, b, t);
-                found = true;
-                blocked = shadow;
-            }
+        leaf_triangle(in_flat, inst, inst_index, first + i, ti, prim, p0, p1, p2, tmask);
+        if (in_leaf && !blocked && (tmask & mask) != 0u) {
+            blocked = test_triangle(ti, prim, p0, p1, p2, wr, shadow, tmax, hit, found, tr);
         }
     }
     return blocked;
 }
 
-// The wide BLAS at blas_wide[base...] for the lanes with `lane` set.
-bool packet_blas_wide(uint inst_index, uint base, uint prim_offset, bool lane, vec3 o, vec3 inv_d, vec3 dir0,
-                      WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
+// The wide tree at blas_wide[base...] (`in_flat` and `mask` as in
+// trace_blas_wide) for the lanes with `lane` set.
+bool packet_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint prim_offset, bool lane, vec3 o,
+                      vec3 inv_d, vec3 dir0, WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit,
+                      inout vec3 tr) {
     Instance inst = instances[inst_index];
     uint stack[WIDE_STACK];
     float stack_t[WIDE_STACK];
@@ -93,8 +87,8 @@ bool packet_blas_wide(uint inst_index, uint base, uint prim_offset, bool lane, v
         bool in_node = !done && cur_t < MISS_BOUND && cur_t <= tmax;
         if ((cur & BVH_WIDE_LEAF) != 0u) {
             uint leaf = SHARED(cur);
-            if (packet_leaf(inst, inst_index, prim_offset + (leaf & 0x07FFFFFFu), (leaf >> 27) & 7u, in_node, wr, shadow,
-                            tmax, hit, found, tr)) {
+            if (packet_leaf(in_flat, mask, inst, inst_index, prim_offset + (leaf & 0x07FFFFFFu), (leaf >> 27) & 7u, in_node,
+                            wr, shadow, tmax, hit, found, tr)) {
                 done = true;
             }
         } else {
@@ -160,8 +154,8 @@ bool packet_blas(uint inst_index, bool lane, vec3 o, vec3 d, bool shadow, inout 
     if (!packet_any(lane)) return false;
     if (root.count == BVH_WIDE_HEADER) {
         WatertightRay wr = watertight_setup(o, d);
-        return packet_blas_wide(inst_index, (bi.node_offset + 1u) / 2u, bi.prim_offset, lane, o, inv_d,
-                                subgroupBroadcastFirst(d), wr, shadow, tmax, hit, tr);
+        return packet_blas_wide(false, 0xFFFFFFFFu, inst_index, (bi.node_offset + 1u) / 2u, bi.prim_offset, lane, o,
+                                inv_d, subgroupBroadcastFirst(d), wr, shadow, tmax, hit, tr);
     }
     // A binary (skinned, refitted) BLAS: each lane on its own.
     return lane && trace_blas(inst_index, o, d, shadow, tmax, hit, tr);
@@ -173,12 +167,17 @@ bool trace_packet(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit
     float stack_t[BVH_STACK];
     int sp = 0;
     uint node = 0u;
-    bool found = false;
-    bool done = false;
     hit = RayHit(0u, 0u, vec2(0.0), tmax);
-    if (tlas_nodes.length() == 0) return false;
-    float cur_t = ray_box(o, inv_d, tmax, tlas_nodes[0].bmin, tlas_nodes[0].bmax);
-    if (packet_all(cur_t >= MISS_BOUND)) return false;
+    // The flat static tree first, walked together like a BLAS.
+    BvhNode froot = blas_nodes[BVH_FLAT_ROOT];
+    bool flat_lane = ray_box(o, inv_d, tmax, froot.bmin, froot.bmax) < MISS_BOUND;
+    bool found = packet_any(flat_lane) &&
+                 packet_blas_wide(true, mask, 0u, (BVH_FLAT_ROOT + 1u) / 2u, 0u, flat_lane, o, inv_d,
+                                  subgroupBroadcastFirst(d), watertight_setup(o, d), shadow, tmax, hit, tr);
+    bool done = shadow && found;
+    if (tlas_nodes.length() == 0) return found;
+    float cur_t = done ? MISS : ray_box(o, inv_d, tmax, tlas_nodes[0].bmin, tlas_nodes[0].bmax);
+    if (packet_all(cur_t >= MISS_BOUND)) return found;
     vec3 dir0 = subgroupBroadcastFirst(d);
     while (true) {
         bool in_node = !done && cur_t < MISS_BOUND && cur_t <= tmax;

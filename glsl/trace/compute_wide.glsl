@@ -25,12 +25,25 @@ layout(set = SET_TRACE, binding = BVH_BLAS_NODES, scalar) readonly buffer BlasWi
 // ever dropped.
 #define WIDE_STACK 96
 
+// Compare-exchange of slots a < b (constants) by entry distance.
+#define WIDE_SORT2(a, b)                                 \
+    if (ts[b] < ts[a]) {                                 \
+        float t_ = ts[a];                                \
+        ts[a] = ts[b];                                   \
+        ts[b] = t_;                                      \
+        uint c_ = cs[a];                                 \
+        cs[a] = cs[b];                                   \
+        cs[b] = c_;                                      \
+    }
+
 // Closest hit (any opaque hit for shadow rays) in the wide tree at
 // blas_wide[base...]: hit children sorted by entry distance, the nearest
 // visited next, the others pushed far to near with their entry distance, and
-// dropped when popped if a hit found since is nearer.
-bool trace_blas_wide(uint inst_index, uint base, uint prim_offset, vec3 o, vec3 inv_d, WatertightRay wr,
-                     bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
+// dropped when popped if a hit found since is nearer. `in_flat`: the flat static
+// tree (leaves index flat_tris; `mask` filters its triangles); otherwise
+// instance `inst_index`'s BLAS.
+bool trace_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint prim_offset, vec3 o, vec3 inv_d,
+                     WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
     Instance inst = instances[inst_index];
     uint stack[WIDE_STACK];
     float stack_t[WIDE_STACK];  // entry distance: skipped once a hit is nearer
@@ -41,7 +54,7 @@ bool trace_blas_wide(uint inst_index, uint base, uint prim_offset, vec3 o, vec3 
         if ((cur & BVH_WIDE_LEAF) != 0u) {
             uint first = cur & 0x07FFFFFFu;
             uint count = (cur >> 27) & 7u;
-            if (trace_leaf(inst, inst_index, prim_offset + first, count, wr, shadow, tmax, hit, found, tr)) {
+            if (trace_leaf(in_flat, mask, inst, inst_index, prim_offset + first, count, wr, shadow, tmax, hit, found, tr)) {
                 return true;
             }
         } else {
@@ -51,30 +64,26 @@ bool trace_blas_wide(uint inst_index, uint base, uint prim_offset, vec3 o, vec3 
             vec3 scale = vec3(uintBitsToFloat((n.meta & 0xFFu) << 23), uintBitsToFloat(((n.meta >> 8) & 0xFFu) << 23),
                               uintBitsToFloat(((n.meta >> 16) & 0xFFu) << 23));
             uint cnt = n.meta >> 24;
+            // All 4 slots with constant indices (missing children miss), then
+            // a 5-exchange sorting network: no dynamically indexed local
+            // array, which llvmpipe would keep in memory per lane.
             float ts[4];
             uint cs[4];
-            uint nh = 0u;
-            for (uint i = 0u; i < cnt; ++i) {
+            for (uint i = 0u; i < 4u; ++i) {
                 uint sh = 8u * i;
                 vec3 qlo = vec3((n.qmin[0] >> sh) & 0xFFu, (n.qmin[1] >> sh) & 0xFFu, (n.qmin[2] >> sh) & 0xFFu);
                 vec3 qhi = vec3((n.qmax[0] >> sh) & 0xFFu, (n.qmax[1] >> sh) & 0xFFu, (n.qmax[2] >> sh) & 0xFFu);
-                float t = ray_box(o, inv_d, tmax, n.origin + qlo * scale, n.origin + qhi * scale);
-                if (t < 1e37) {
-                    // Insertion sort by entry distance.
-                    uint j = nh;
-                    while (j > 0u && ts[j - 1u] > t) {
-                        ts[j] = ts[j - 1u];
-                        cs[j] = cs[j - 1u];
-                        --j;
-                    }
-                    ts[j] = t;
-                    cs[j] = n.child[i];
-                    ++nh;
-                }
+                ts[i] = i < cnt ? ray_box(o, inv_d, tmax, n.origin + qlo * scale, n.origin + qhi * scale) : 1e38;
+                cs[i] = n.child[i];
             }
-            if (nh > 0u) {
-                for (uint j = nh - 1u; j > 0u; --j) {
-                    if (sp < WIDE_STACK) {
+            WIDE_SORT2(0, 1);
+            WIDE_SORT2(2, 3);
+            WIDE_SORT2(0, 2);
+            WIDE_SORT2(1, 3);
+            WIDE_SORT2(1, 2);
+            if (ts[0] < 1e37) {
+                for (int j = 3; j > 0; --j) {
+                    if (ts[j] < 1e37 && sp < WIDE_STACK) {
                         stack[sp] = cs[j];
                         stack_t[sp++] = ts[j];
                     }

@@ -1,7 +1,10 @@
-//! The compute backend's acceleration structure: our own two-level BVH
-//! (one binned-SAH BVH per mesh primitive + a top level over instances),
-//! laid out flat for glsl/trace/compute.glsl. Triangles are not copied: the
-//! shader reads them from the one shared vertex/index buffer.
+//! The compute backend's acceleration structure: our own BVHs, laid out
+//! flat for glsl/trace/compute.glsl. Static instances (never skinned or
+//! animated) are flattened into one world-space tree with its triangles
+//! stored in leaf order ([`FlatStatic`], traced first); the others keep a
+//! two-level BVH: one tree per mesh primitive (4-wide SBVH for rigid ones,
+//! binned SAH for skinned ones, whose triangles the shader reads from the
+//! one shared vertex/index buffer) and a top level over those instances.
 //!
 //! A frame's update needs no host round-trip: before recording,
 //! [`ComputeBvh::prepare_update`] rebuilds the trees the policy marks (on the
@@ -16,7 +19,7 @@
 
 use anyhow::{Context as _, Result};
 use ash::vk;
-use glam::Mat4;
+use glam::{DMat4, Mat4};
 
 use gpu_allocator::MemoryLocation;
 
@@ -24,11 +27,12 @@ use super::bvh::{triangle_aabbs, Bvh, BvhNode, WideBvh, DEFAULT_ALPHA};
 use super::compute_refit::ComputeRefit;
 use super::compute_top_level::TopLevelRefit;
 use super::dynamic::{RebuildPolicy, RefitState, Update};
+use super::flat::{FlatStatic, FlatTriangle};
 use super::watertight::triangle_positions;
 use super::{instance_mask, instance_opaque};
 use crate::gpu::origin::RenderOrigin;
 use crate::gpu::scene::GpuScene;
-use crate::gpu::shared::BVH_WIDE_HEADER;
+use crate::gpu::shared::{BVH_FLAT_ROOT, BVH_WIDE_HEADER};
 use crate::scene::{Aabb, Instance, Scene};
 use crate::vk::pipeline::{Binding, DescriptorSet};
 use crate::vk::{memory_barrier, Buffer, Context};
@@ -85,6 +89,13 @@ pub struct ComputeBvh {
     uploads: (Vec<vk::BufferCopy>, Vec<vk::BufferCopy>),
     blas_nodes: Buffer,
     blas_prims: Buffer,
+    /// The flat tree's triangles (`FlatTriangle`, leaf order).
+    flat_tris: Buffer,
+    /// Per scene instance: whether the flat tree holds it (then it is not
+    /// in the top level), with the world matrix it was flattened at.
+    flattened: Vec<Option<DMat4>>,
+    /// SAH cost of the flat tree's binary source.
+    flat_sah: f32,
     tlas_nodes: Buffer,
     tlas_prims: Buffer,
     instances: Buffer,
@@ -115,15 +126,35 @@ fn append(nodes: &mut Vec<BvhNode>, prims: &mut Vec<u32>, bvh: Bvh, capacity: us
 /// slots each, from an even slot so the shader indexes them as an array.
 fn append_wide(nodes: &mut Vec<BvhNode>, prims: &mut Vec<u32>, bvh: Bvh) -> BlasRef {
     let wide = WideBvh::from_binary(&bvh);
+    let r =
+        BlasRef { node_offset: push_wide_nodes(nodes, &bvh, &wide), prim_offset: prims.len() as u32, bvh };
+    prims.extend_from_slice(&wide.prim_indices);
+    r
+}
+
+/// Appends `wide`'s header (at an odd slot) and nodes; returns the header's
+/// slot. An empty tree gets an unenterable header and no nodes.
+fn push_wide_nodes(nodes: &mut Vec<BvhNode>, bvh: &Bvh, wide: &WideBvh) -> u32 {
     if nodes.len().is_multiple_of(2) {
         nodes.push(EMPTY_NODE);
     }
-    let root = bvh.nodes[0];
-    let r = BlasRef { node_offset: nodes.len() as u32, prim_offset: prims.len() as u32, bvh };
-    nodes.push(BvhNode { min: root.min, left_or_first: 0, max: root.max, count: BVH_WIDE_HEADER });
-    nodes.extend_from_slice(bytemuck::cast_slice(&wide.nodes));
-    prims.extend_from_slice(&wide.prim_indices);
-    r
+    let at = nodes.len() as u32;
+    match bvh.nodes.first() {
+        Some(root) => {
+            nodes.push(BvhNode { min: root.min, left_or_first: 0, max: root.max, count: BVH_WIDE_HEADER });
+            nodes.extend_from_slice(bytemuck::cast_slice(&wide.nodes));
+        }
+        None => nodes.push(EMPTY_NODE),
+    }
+    at
+}
+
+/// What `build` uploads once: BLAS node slots, BLAS triangle order, the flat
+/// tree's triangles.
+struct TreeData<'a> {
+    nodes: &'a [BvhNode],
+    prims: &'a [u32],
+    flat_tris: &'a [FlatTriangle],
 }
 
 /// Top-level buffers are host-visible and rewritten in place every frame
@@ -137,9 +168,20 @@ impl ComputeBvh {
         let t0 = std::time::Instant::now();
         let mut nodes: Vec<BvhNode> = Vec::new();
         let mut prims: Vec<u32> = Vec::new();
-        let mut triangles = 0;
-        // Primitives drawn only skinned (or not at all) get no static tree.
-        let used = scene.rigidly_instanced();
+        // The flat tree first: its header at the fixed slot the shader reads.
+        let flat = FlatStatic::build(scene, gpu.origin);
+        let flat_at = push_wide_nodes(&mut nodes, &flat.bvh, &flat.wide);
+        assert_eq!(flat_at, BVH_FLAT_ROOT, "the flat tree's header slot");
+        let flat_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let mut triangles = flat.source_triangles;
+        // Primitives drawn only skinned, only flattened (or not at all) get
+        // no tree of their own.
+        let mut used: Vec<Vec<bool>> = scene.meshes.iter().map(|m| vec![false; m.primitives.len()]).collect();
+        for (inst, _) in
+            scene.instances.iter().zip(&flat.flattened).filter(|(i, f)| i.skinned.is_none() && !**f)
+        {
+            used[inst.mesh][inst.primitive] = true;
+        }
         let wanted: Vec<(usize, usize)> = scene
             .meshes
             .iter()
@@ -171,11 +213,10 @@ impl ComputeBvh {
         let mut blas: Vec<Vec<Option<BlasRef>>> =
             scene.meshes.iter().map(|m| m.primitives.iter().map(|_| None).collect()).collect();
         for (&(m, i), bvh) in wanted.iter().zip(trees) {
-            triangles += size(&(m, i)) / 3;
             // Collapsed 4-wide: fewer, wider node fetches.
             blas[m][i] = Some(append_wide(&mut nodes, &mut prims, bvh));
         }
-        let static_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let static_ms = t0.elapsed().as_secs_f64() * 1e3 - flat_ms;
         // Skinned instances: their own trees over the current (CPU) pose,
         // which is exactly what the GPU vertex range holds at upload. Binned
         // SAH: fast to rebuild, and refittable (every leaf box holds its
@@ -196,8 +237,8 @@ impl ComputeBvh {
             staging_size += (capacity * std::mem::size_of::<BvhNode>() + 4 * aabbs.len()) as u64;
         }
         let blas_ms = t0.elapsed().as_secs_f64() * 1e3;
-        if nodes.is_empty() {
-            nodes.push(EMPTY_NODE);
+        // A descriptor needs a buffer.
+        if prims.is_empty() {
             prims.push(0);
         }
         // Every GPU object lands in `bvh` as it is made, so an error half-way
@@ -211,6 +252,14 @@ impl ComputeBvh {
             uploads: (Vec::new(), Vec::new()),
             blas_nodes: Buffer::null(),
             blas_prims: Buffer::null(),
+            flat_tris: Buffer::null(),
+            flattened: scene
+                .instances
+                .iter()
+                .zip(&flat.flattened)
+                .map(|(inst, &f)| f.then_some(inst.world))
+                .collect(),
+            flat_sah: flat.bvh.sah_cost(),
             tlas_nodes: Buffer::null(),
             tlas_prims: Buffer::null(),
             instances: Buffer::null(),
@@ -222,7 +271,8 @@ impl ComputeBvh {
             top_level_ms: 0.0,
             origin: gpu.origin,
         };
-        if let Err(e) = bvh.create_buffers(ctx, scene, gpu, &nodes, &prims, staging_size) {
+        let data = TreeData { nodes: &nodes, prims: &prims, flat_tris: &flat.triangles };
+        if let Err(e) = bvh.create_buffers(ctx, scene, gpu, data, staging_size) {
             bvh.destroy(ctx);
             return Err(e);
         }
@@ -241,15 +291,27 @@ impl ComputeBvh {
             return Err(e);
         }
         bvh.build_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let flattened = flat.flattened.iter().filter(|f| **f).count();
         log::info!(
-            "compute BVH: {} triangles in {} 32-byte node slots (static BLASes 4-wide), built in {:.0} ms ({:.2} Mtri/s; static SBVHs {:.0} ms, skinned binned {:.0} ms), reference-weighted SAH cost {:.1} of the static trees, top level over {} instances, {} refit each frame",
+            "compute BVH: {} triangles; {} static instances flattened into one 4-wide SBVH ({} triangle references, {} wide nodes, SAH cost {:.1}, {:.0} ms); {} B of nodes + {} B of triangle order + {} B of flat triangles = {} B; per-primitive trees: SBVHs {:.0} ms (reference-weighted SAH cost {:.1}), skinned binned {:.0} ms; built in {:.0} ms ({:.2} Mtri/s); top level over {} of {} instances, {} refit each frame",
             triangles,
-            nodes.len(),
+            flattened,
+            flat.triangles.len(),
+            flat.wide.nodes.len(),
+            bvh.flat_sah,
+            flat_ms,
+            nodes.len() * std::mem::size_of::<BvhNode>(),
+            prims.len() * 4,
+            flat.triangles.len() * std::mem::size_of::<FlatTriangle>(),
+            nodes.len() * std::mem::size_of::<BvhNode>()
+                + prims.len() * 4
+                + flat.triangles.len() * std::mem::size_of::<FlatTriangle>(),
+            static_ms,
+            bvh.mean_sah_cost(),
+            blas_ms - static_ms - flat_ms,
             blas_ms,
             triangles as f64 / (blas_ms.max(1e-3) * 1e3),
-            static_ms,
-            blas_ms - static_ms,
-            bvh.mean_sah_cost(),
+            scene.instances.len() - flattened,
             scene.instances.len(),
             bvh.skinned.len()
         );
@@ -263,6 +325,15 @@ impl ComputeBvh {
     /// without, the host's bounds are exact. The GPU must not be reading the
     /// top level (the previous frame is done).
     fn write_top_level(&mut self, scene: &Scene) -> Result<()> {
+        // Only animation moves instances after loading, and the flat tree
+        // holds none that it moves; a moved one would be traced where it was.
+        for (i, (inst, at)) in scene.instances.iter().zip(&self.flattened).enumerate() {
+            anyhow::ensure!(
+                at.is_none_or(|w| w == inst.world),
+                "compute BVH: instance {i} (node {}) moved, but it was flattened into the static tree as never animated",
+                inst.node
+            );
+        }
         let (tlas, instances) = top_level(scene, self.origin, |inst| self.blas_of(inst));
         self.tlas_nodes.write(0, bytemuck::cast_slice(&tlas.nodes))?;
         self.tlas_prims.write(0, bytemuck::cast_slice(&tlas.prim_indices))?;
@@ -430,11 +501,18 @@ impl ComputeBvh {
         (refit, top_level(scene, self.origin, blas_of).0)
     }
 
+    /// An instance's own tree (None for flattened ones: the flat tree
+    /// holds them, the top level leaves them out).
     fn blas_of(&self, inst: &Instance) -> Option<&BlasRef> {
         match inst.skinned {
             Some(slot) => self.skinned.get(slot).map(|s| &s.blas),
             None => self.blas[inst.mesh][inst.primitive].as_ref(),
         }
+    }
+
+    /// How many scene instances the flat static tree holds.
+    pub fn flattened_count(&self) -> usize {
+        self.flattened.iter().filter(|f| f.is_some()).count()
     }
 
     /// SAH cost of the static per-primitive BVHs, averaged with reference
@@ -456,14 +534,19 @@ impl ComputeBvh {
         ctx: &Context,
         scene: &Scene,
         gpu: &GpuScene,
-        nodes: &[BvhNode],
-        prims: &[u32],
+        data: TreeData,
         staging_size: u64,
     ) -> Result<()> {
+        let TreeData { nodes, prims, flat_tris } = data;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         self.blas_nodes = Buffer::with_data(ctx, "BVH BLAS nodes", bytemuck::cast_slice(nodes), storage)?;
         self.blas_prims =
             Buffer::with_data(ctx, "BVH BLAS triangle order", bytemuck::cast_slice(prims), storage)?;
+        // Never empty: a descriptor needs a buffer.
+        let placeholder = [FlatTriangle::default()];
+        let flat_tris = if flat_tris.is_empty() { &placeholder[..] } else { flat_tris };
+        self.flat_tris =
+            Buffer::with_data(ctx, "BVH flat static triangles", bytemuck::cast_slice(flat_tris), storage)?;
         if !self.skinned.is_empty() {
             let src = vk::BufferUsageFlags::TRANSFER_SRC;
             self.staging =
@@ -487,11 +570,17 @@ impl ComputeBvh {
             )?);
         }
         let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
-        self.set = DescriptorSet::new(ctx, "trace set (compute BVH)", &[sb, sb, sb, sb, sb])?;
-        for (i, b) in
-            [&self.blas_nodes, &self.blas_prims, &self.tlas_nodes, &self.tlas_prims, &self.instances]
-                .iter()
-                .enumerate()
+        self.set = DescriptorSet::new(ctx, "trace set (compute BVH)", &[sb, sb, sb, sb, sb, sb])?;
+        for (i, b) in [
+            &self.blas_nodes,
+            &self.blas_prims,
+            &self.tlas_nodes,
+            &self.tlas_prims,
+            &self.instances,
+            &self.flat_tris,
+        ]
+        .iter()
+        .enumerate()
         {
             self.set.write_buffer(ctx, i as u32, b.raw);
         }
@@ -502,6 +591,7 @@ impl ComputeBvh {
         for b in [
             &mut self.blas_nodes,
             &mut self.blas_prims,
+            &mut self.flat_tris,
             &mut self.tlas_nodes,
             &mut self.tlas_prims,
             &mut self.instances,

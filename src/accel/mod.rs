@@ -12,6 +12,7 @@ pub mod compute_bvh;
 pub mod compute_refit;
 pub mod compute_top_level;
 pub mod dynamic;
+pub mod flat;
 pub mod watertight;
 
 use dynamic::{DynamicBlases, Update};

@@ -157,6 +157,7 @@ shared! {
     id BVH_TLAS_NODES = 2;
     id BVH_TLAS_PRIMS = 3;
     id BVH_INSTANCES = 4;
+    id BVH_FLAT_TRIS = 5;
 
     // The animation compute passes' own single set (SET_ANIM): skinning
     // (render/skinning.rs), BLAS refit (accel/compute_refit.rs) and the
@@ -290,4 +291,7 @@ shared! {
     // root bounds), and bit 30 of a wide child word marks a leaf.
     uint BVH_WIDE_HEADER = 1073741824;
     uint BVH_WIDE_LEAF = 1073741824;
+    // The flat static tree's header (accel/flat.rs): always this 32-byte
+    // slot of the BLAS node buffer, its wide nodes from the next one.
+    uint BVH_FLAT_ROOT = 1;
 }

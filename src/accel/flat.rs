@@ -1,0 +1,239 @@
+//! The compute tracer's flattened static geometry: ONE spatial-split BVH,
+//! collapsed 4-wide, over the world-space triangles of every instance that
+//! never moves (not skinned, no animated node above it), with the triangles
+//! stored in leaf order (glsl/trace/compute.glsl `FlatTri`).
+//!
+//! Why: Sponza has ~160 static instances whose boxes overlap, so a ray
+//! through the two-level tree enters many instance BLASes, each costing an
+//! instance fetch, a ray transform, a watertight setup and a root test. One
+//! world-space tree has none of that, and a leaf's triangles are one
+//! contiguous read instead of index -> vertex gathers. Each triangle keeps
+//! the (instance, primitive) it came from, so the hit record and shading
+//! are those of the two-level path, and the ray mask bits its instance
+//! answers to (shadow-only and invisible-to-shadow instances).
+
+use glam::{DVec3, Vec3};
+
+use super::bvh::{Bvh, WideBvh, DEFAULT_ALPHA};
+use super::instance_mask;
+use crate::gpu::origin::RenderOrigin;
+use crate::scene::Scene;
+
+/// One triangle of the flat tree, 48 bytes; mirrors `FlatTri` in
+/// glsl/trace/compute.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FlatTriangle {
+    /// Relative to the render origin, like every GPU position.
+    pub p0: [f32; 3],
+    pub instance: u32,
+    pub p1: [f32; 3],
+    pub primitive: u32,
+    pub p2: [f32; 3],
+    /// The ray mask bits (MASK_VISIBLE / MASK_SHADOW) its instance answers to.
+    pub mask: u32,
+}
+const _: () = assert!(std::mem::size_of::<FlatTriangle>() == 48);
+
+pub struct FlatStatic {
+    /// The binary SBVH over the triangles (for its SAH cost).
+    pub bvh: Bvh,
+    /// Its 4-wide collapse; leaf ranges index `triangles` directly.
+    pub wide: WideBvh,
+    /// In leaf order: `triangles[k]` is reference `k` of `wide` (a
+    /// spatial split may reference a triangle twice).
+    pub triangles: Vec<FlatTriangle>,
+    /// Distinct triangles in the tree.
+    pub source_triangles: usize,
+    /// Per scene instance: whether it is in this tree (and so not in the
+    /// top level).
+    pub flattened: Vec<bool>,
+}
+
+/// Per node: whether an animation channel moves it or one of its ancestors.
+pub fn animated_nodes(scene: &Scene) -> Vec<bool> {
+    let mut targeted = vec![false; scene.nodes.len()];
+    for c in scene.animations.iter().flat_map(|a| &a.channels) {
+        if let Some(t) = targeted.get_mut(c.node) {
+            *t = true;
+        }
+    }
+    (0..scene.nodes.len())
+        .map(|n| {
+            let mut cur = Some(n);
+            // Bounded by the node count, so a malformed cycle cannot hang.
+            for _ in 0..=scene.nodes.len() {
+                let Some(c) = cur else { return false };
+                if targeted[c] {
+                    return true;
+                }
+                cur = scene.nodes[c].parent;
+            }
+            false
+        })
+        .collect()
+}
+
+/// Per instance: whether it belongs in the flat tree (rigid and never
+/// animated; the scene moves nothing else after loading).
+pub fn static_instances(scene: &Scene) -> Vec<bool> {
+    let animated = animated_nodes(scene);
+    scene
+        .instances
+        .iter()
+        .map(|i| i.skinned.is_none() && !animated.get(i.node).copied().unwrap_or(true))
+        .collect()
+}
+
+impl FlatStatic {
+    /// Builds the flat tree over the static instances' triangles, in world
+    /// space relative to `origin`. Instances no ray can hit (mask 0) are
+    /// flattened away with no triangles.
+    pub fn build(scene: &Scene, origin: RenderOrigin) -> FlatStatic {
+        let flattened = static_instances(scene);
+        let mut tris: Vec<[Vec3; 3]> = Vec::new();
+        let mut ids: Vec<(u32, u32, u32)> = Vec::new();
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let mask = instance_mask(scene, inst) as u32;
+            if !flattened[i] || mask == 0 {
+                continue;
+            }
+            // f64 until the end: one rounding per coordinate.
+            let m = origin.relative(&inst.world);
+            let p = &scene.meshes[inst.mesh].primitives[inst.primitive];
+            let world = |v: u32| {
+                m.transform_point3(DVec3::from(Vec3::from(p.vertices[v as usize].position))).as_vec3()
+            };
+            for (prim, t) in p.indices.chunks_exact(3).enumerate() {
+                tris.push([world(t[0]), world(t[1]), world(t[2])]);
+                ids.push((i as u32, prim as u32, mask));
+            }
+        }
+        let bvh = if tris.is_empty() { Bvh::default() } else { Bvh::build_sbvh(&tris, Some(DEFAULT_ALPHA)) };
+        let wide = WideBvh::from_binary(&bvh);
+        let triangles = wide
+            .prim_indices
+            .iter()
+            .map(|&k| {
+                let ([p0, p1, p2], (instance, primitive, mask)) = (tris[k as usize], ids[k as usize]);
+                FlatTriangle { p0: p0.into(), instance, p1: p1.into(), primitive, p2: p2.into(), mask }
+            })
+            .collect();
+        FlatStatic { bvh, wide, triangles, source_triangles: tris.len(), flattened }
+    }
+
+    /// Bytes on the GPU: wide nodes plus the triangles.
+    pub fn bytes(&self) -> usize {
+        self.wide.nodes.len() * std::mem::size_of::<super::bvh::WideNode>()
+            + self.triangles.len() * std::mem::size_of::<FlatTriangle>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{MASK_SHADOW, MASK_VISIBLE};
+    use crate::scene::animation::{Animation, AnimationChannel, Channel, Interpolation};
+    use crate::scene::{Material, Mesh, Node, Primitive, Transform, Vertex};
+    use glam::Quat;
+    use std::collections::HashMap;
+
+    fn quad(material: usize) -> Primitive {
+        let v = |x: f32, y: f32| Vertex { position: [x, y, 0.0], ..Default::default() };
+        Primitive {
+            vertices: vec![v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)],
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material,
+            ..Default::default()
+        }
+    }
+
+    /// Three nodes sharing one two-quad mesh (materials: casts shadows,
+    /// does not), the third under an animated parent.
+    fn scene() -> Scene {
+        let mut s = Scene {
+            materials: vec![Material::default(), Material { casts_shadows: false, ..Default::default() }],
+            meshes: vec![Mesh { primitives: vec![quad(0), quad(1)], ..Default::default() }],
+            ..Default::default()
+        };
+        let place = |translation: DVec3, rotation: Quat, s: f32| Transform {
+            translation,
+            rotation,
+            scale: Vec3::splat(s),
+        };
+        let mesh_node = |name: &str, local: Transform, parent: Option<usize>| Node {
+            name: name.into(),
+            local,
+            mesh: Some(0),
+            parent,
+            ..Default::default()
+        };
+        s.nodes = vec![
+            mesh_node("a", place(DVec3::new(3.0, -2.0, 1.0), Quat::from_rotation_y(0.7), 2.0), None),
+            mesh_node("b", place(DVec3::new(-5.0, 0.5, 4.0), Quat::from_rotation_x(-1.1), 0.5), None),
+            Node { name: "mover".into(), children: vec![3], ..Default::default() },
+            mesh_node("c", place(DVec3::ZERO, Quat::IDENTITY, 1.0), Some(2)),
+        ];
+        s.roots = vec![0, 1, 2];
+        s.animations.push(Animation::new(
+            "move".into(),
+            vec![AnimationChannel {
+                node: 2,
+                times: vec![0.0, 1.0],
+                interpolation: Interpolation::Linear,
+                values: Channel::Translation(vec![Vec3::ZERO, Vec3::X]),
+            }],
+        ));
+        s.update_world();
+        s
+    }
+
+    #[test]
+    fn flat_tree_holds_every_static_triangle_in_world_space_with_its_mask() {
+        let s = scene();
+        let origin = RenderOrigin(DVec3::new(1.0, 0.0, -1.0));
+        let flat = FlatStatic::build(&s, origin);
+        // Instances: a/prim 0, a/prim 1, b/0, b/1, c/0, c/1; c is animated.
+        assert_eq!(flat.flattened, vec![true, true, true, true, false, false]);
+        let mut seen: HashMap<(u32, u32), FlatTriangle> = HashMap::new();
+        for t in &flat.triangles {
+            // A spatial split may reference a triangle from two leaves, but
+            // always as the same record.
+            if let Some(before) = seen.insert((t.instance, t.primitive), *t) {
+                assert_eq!(before, *t, "two different records of one triangle");
+            }
+        }
+        let mut expected = 0;
+        for (i, inst) in s.instances.iter().enumerate().filter(|(i, _)| flat.flattened[*i]) {
+            let p = &s.meshes[inst.mesh].primitives[inst.primitive];
+            let m = origin.relative(&inst.world);
+            let mask = if inst.primitive == 0 { MASK_VISIBLE | MASK_SHADOW } else { MASK_VISIBLE };
+            for (prim, idx) in p.indices.chunks_exact(3).enumerate() {
+                expected += 1;
+                let t = seen[&(i as u32, prim as u32)];
+                assert_eq!(t.mask, mask as u32, "instance {i} triangle {prim}: mask");
+                for (k, got) in [t.p0, t.p1, t.p2].iter().enumerate() {
+                    let want =
+                        m.transform_point3(DVec3::from(Vec3::from(p.vertices[idx[k] as usize].position)));
+                    assert!(
+                        (DVec3::from(Vec3::from(*got)) - want).length() < 1e-5,
+                        "instance {i} triangle {prim} vertex {k}: {got:?} vs {want:?}"
+                    );
+                }
+            }
+        }
+        assert_eq!(seen.len(), expected, "only the static instances' triangles");
+        assert_eq!(flat.source_triangles, expected);
+        // Every leaf range of the wide tree stays inside the triangles, and
+        // all of them are covered (the SBVH may reference one twice).
+        let mut covered = vec![false; flat.triangles.len()];
+        for n in &flat.wide.nodes {
+            for c in 0..n.children() {
+                if let Some((first, count)) = n.leaf(c) {
+                    covered[first..first + count].iter_mut().for_each(|v| *v = true);
+                }
+            }
+        }
+        assert!(covered.iter().all(|&c| c), "a triangle no leaf reaches");
+    }
+}
