@@ -59,6 +59,34 @@ fn sbvh_covers_every_triangle() {
     assert!(Bvh::build_sbvh(&[], Some(DEFAULT_ALPHA)).nodes.is_empty());
 }
 
+/// The parallel build (subtrees on every core, linked in) is as valid as
+/// the serial one, at least as good by SAH cost, and the same tree every time.
+#[test]
+fn parallel_sbvh_is_valid_and_as_good_as_serial() {
+    for (n, seed, alpha) in [(20_000, 7, Some(DEFAULT_ALPHA)), (5_000, 8, None), (40, 9, Some(DEFAULT_ALPHA))]
+    {
+        let tris = slivers(n, seed);
+        let (serial, s) = Bvh::build_sbvh_in(&tris, alpha, usize::MAX);
+        let (par, p) = Bvh::build_sbvh_in(&tris, alpha, 0);
+        par.validate_split(&tris).unwrap();
+        if alpha.is_none() {
+            par.validate(&aabbs(&tris)).unwrap();
+        }
+        let (cs, cp) = (serial.sah_cost(), par.sah_cost());
+        // Not worse; often better: the serial build spends the duplication
+        // budget depth first, left subtrees first, the parallel one shares it
+        // between its subtrees by size.
+        assert!(cp <= 1.01 * cs, "{n} slivers: SAH cost serial {cs}, parallel {cp}");
+        eprintln!("{n} slivers: SAH cost serial {cs:.1}, parallel {cp:.1}");
+        assert_eq!(p.references, par.prim_indices.len());
+        assert!(p.references as f32 <= n as f32 * sbvh::MAX_DUPLICATION + 1.0);
+        assert!(s.spatial_splits == 0 || p.spatial_splits > 0);
+        let again = Bvh::build_sbvh_in(&tris, alpha, 0).0;
+        assert_eq!(bytemuck::cast_slice::<_, u8>(&again.nodes), bytemuck::cast_slice::<_, u8>(&par.nodes));
+        assert_eq!(again.prim_indices, par.prim_indices);
+    }
+}
+
 #[test]
 fn sbvh_closest_hits_match_the_binned_bvh() {
     let tris = slivers(4000, 11);
