@@ -6,6 +6,7 @@
 #include "../common/hit.glsl"
 #include "../common/primary_hit.glsl"
 #include "../common/integrator.glsl"
+#include "../common/camera_ray.glsl"
 #include "../common/srgb.glsl"
 #include "../common/gbuffer_pack.glsl"
 
@@ -17,13 +18,9 @@ layout(set = SET_PASS, binding = GB_HIT, rg32ui) uniform writeonly uimage2D gb_h
 
 void primary_pixel(ivec2 px) {
     if (any(greaterThanEqual(uvec2(px), frame.resolution))) return;
-    vec3 dir = camera_ray_dir(vec2(px) + 0.5);
+    vec3 dir;
     RayHit h;
-    count_ray(RAY_KIND_CAMERA);
-    g_camera_ray = true;
-    g_camera_pixel = px;
-    bool hit = trace_closest(frame.camera_pos, dir, RAY_TMAX, h);
-    g_camera_ray = false;
+    bool hit = trace_camera_ray(px, dir, h);
     if (!hit) {
         imageStore(gb_hit, px, uvec4(0u));
         return;

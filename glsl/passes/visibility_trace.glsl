@@ -9,18 +9,15 @@
 #include "../common/hit.glsl"
 #include "../common/primary_hit.glsl"
 #include "../common/integrator.glsl"
+#include "../common/camera_ray.glsl"
 
 layout(set = SET_PASS, binding = GB_HIT, rg32ui) uniform writeonly uimage2D gb_hit;
 
 void visibility_pixel(ivec2 px) {
     if (any(greaterThanEqual(uvec2(px), frame.resolution))) return;
-    vec3 dir = camera_ray_dir(vec2(px) + 0.5);
+    vec3 dir;
     RayHit h;
-    count_ray(RAY_KIND_CAMERA);
-    g_camera_ray = true;
-    g_camera_pixel = px;
-    bool hit = trace_closest(frame.camera_pos, dir, RAY_TMAX, h);
-    g_camera_ray = false;
+    bool hit = trace_camera_ray(px, dir, h);
     // Hit id 0: the camera ray missed (as the raster pass's clear value).
     imageStore(gb_hit, px, hit ? uvec4(h.instance + 1u, h.primitive, 0u, 0u) : uvec4(0u));
 }
