@@ -10,7 +10,7 @@
 //! and auto is raster in a renderer that does not measure (deterministic).
 mod common;
 
-use common::{base64, BACKENDS};
+use common::BACKENDS;
 use hybrid_rt::render::settings::PrimaryVisibility;
 use hybrid_rt::render::shading::{AaMode, Backend};
 use hybrid_rt::render::{FrameOutput, RenderSettings, Renderer};
@@ -135,55 +135,7 @@ fn fence_scene() -> Scene {
         let a = if x % 8 < 5 { 255 } else { 0 };
         image::Rgba([230, 20, 20, a])
     });
-    let mut png = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).unwrap();
-    let mut bin: Vec<u8> = Vec::new();
-    let s = 2.0f32;
-    for p in [[-s, -s, 0.0], [s, -s, 0.0], [s, s, 0.0], [-s, s, 0.0]] {
-        bin.extend(p.iter().flat_map(|v: &f32| v.to_le_bytes()));
-    }
-    for _ in 0..4 {
-        bin.extend([0.0f32, 0.0, 1.0].iter().flat_map(|v| v.to_le_bytes()));
-    }
-    for uv in [[0.0f32, 2.0], [2.0, 2.0], [2.0, 0.0], [0.0, 0.0]] {
-        bin.extend(uv.iter().flat_map(|v| v.to_le_bytes()));
-    }
-    for i in [0u16, 1, 2, 0, 2, 3] {
-        bin.extend(i.to_le_bytes());
-    }
-    let json = format!(
-        r#"{{
-  "asset": {{"version": "2.0"}},
-  "scene": 0, "scenes": [{{"nodes": [0]}}],
-  "nodes": [{{"mesh": 0, "name": "fence"}}],
-  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "indices": 3, "material": 0}}]}}],
-  "materials": [{{"name": "stripes", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
-    "pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "metallicFactor": 0.0, "roughnessFactor": 1.0}}}}],
-  "textures": [{{"source": 0, "sampler": 0}}],
-  "samplers": [{{"wrapS": 10497, "wrapT": 10497, "minFilter": 9987, "magFilter": 9729}}],
-  "images": [{{"uri": "data:image/png;base64,{png}"}}],
-  "buffers": [{{"uri": "data:application/octet-stream;base64,{bin}", "byteLength": {len}}}],
-  "bufferViews": [
-    {{"buffer": 0, "byteOffset": 0, "byteLength": 48}},
-    {{"buffer": 0, "byteOffset": 48, "byteLength": 48}},
-    {{"buffer": 0, "byteOffset": 96, "byteLength": 32}},
-    {{"buffer": 0, "byteOffset": 128, "byteLength": 12}}
-  ],
-  "accessors": [
-    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-{s}, -{s}, 0], "max": [{s}, {s}, 0]}},
-    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"}},
-    {{"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"}},
-    {{"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}}
-  ]
-}}"#,
-        png = base64(&png),
-        bin = base64(&bin),
-        len = bin.len(),
-    );
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("primary_visibility_fence.gltf");
-    std::fs::write(&path, json).unwrap();
+    let path = common::scenes::masked_quad_gltf("primary_visibility_fence.gltf", 2.0, 2.0, &img);
     let toml = format!(
         r#"
 [environment]

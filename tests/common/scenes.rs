@@ -344,3 +344,66 @@ stacks = 16
 translation = [0.0, 2.0, 0.0]
 material = "white"
 "#;
+
+/// Writes a glTF file `file` (under the test tmpdir's `scenes/`) holding one
+/// double-sided quad of half-size `half` in the XY plane facing +Z, uv
+/// repeated `uv_repeat` times across it, with an alpha-masked (cutoff 0.5)
+/// base-colour texture `texture`: a fence whose gaps show what is behind.
+pub fn masked_quad_gltf(
+    file: &str,
+    half: f32,
+    uv_repeat: f32,
+    texture: &image::RgbaImage,
+) -> std::path::PathBuf {
+    let mut png = Vec::new();
+    texture.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).unwrap();
+    let mut bin: Vec<u8> = Vec::new();
+    let (s, r) = (half, uv_repeat);
+    let mut put = |v: &[f32]| bin.extend(v.iter().flat_map(|x| x.to_le_bytes()));
+    for p in [[-s, -s, 0.0], [s, -s, 0.0], [s, s, 0.0], [-s, s, 0.0]] {
+        put(&p);
+    }
+    for _ in 0..4 {
+        put(&[0.0, 0.0, 1.0]);
+    }
+    for uv in [[0.0, r], [r, r], [r, 0.0], [0.0, 0.0]] {
+        put(&uv);
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bin.extend(i.to_le_bytes());
+    }
+    let json = format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  "scene": 0, "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"mesh": 0, "name": "fence"}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "indices": 3, "material": 0}}]}}],
+  "materials": [{{"name": "stripes", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
+    "pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "metallicFactor": 0.0, "roughnessFactor": 1.0}}}}],
+  "textures": [{{"source": 0, "sampler": 0}}],
+  "samplers": [{{"wrapS": 10497, "wrapT": 10497, "minFilter": 9987, "magFilter": 9729}}],
+  "images": [{{"uri": "data:image/png;base64,{png}"}}],
+  "buffers": [{{"uri": "data:application/octet-stream;base64,{bin}", "byteLength": {len}}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": 48}},
+    {{"buffer": 0, "byteOffset": 48, "byteLength": 48}},
+    {{"buffer": 0, "byteOffset": 96, "byteLength": 32}},
+    {{"buffer": 0, "byteOffset": 128, "byteLength": 12}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-{s}, -{s}, 0], "max": [{s}, {s}, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"}},
+    {{"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}}
+  ]
+}}"#,
+        png = super::base64(&png),
+        bin = super::base64(&bin),
+        len = bin.len(),
+    );
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(file);
+    std::fs::write(&path, json).unwrap();
+    path
+}
