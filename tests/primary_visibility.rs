@@ -99,12 +99,13 @@ fn auto_without_measuring_is_raster() {
         assert!(out.timings.iter().any(|(n, _)| *n == "gbuffer"), "{:?}", out.timings);
         assert!(!r.pass_names().contains(&"visibility trace"), "{:?}", r.pass_names());
     }
-    // Measuring: a probe frame records both passes (the first one after
-    // they were made compiles them, so two probes), then only the one
-    // chosen, whatever the times were.
+    // Measuring: probe frames record both passes (the first one after
+    // they were made compiles them, then PROBE_SAMPLES measured ones), then
+    // only the one chosen, whatever the times were.
     r.visibility.measure = true;
+    let probes = 1 + hybrid_rt::render::visibility::PROBE_SAMPLES as usize;
     let mut seq = Vec::new();
-    for _ in 0..4 {
+    for _ in 0..probes + 2 {
         let out = r.render(&ctx, &scene, &scene.cameras[0], &settings).unwrap();
         let raster = out.timings.iter().any(|(n, _)| *n == "gbuffer");
         let traced = out.timings.iter().any(|(n, _)| *n == "visibility trace");
@@ -115,11 +116,13 @@ fn auto_without_measuring_is_raster() {
             (false, false) => panic!("no visibility pass: {:?}", out.timings),
         });
     }
-    assert_eq!(seq[..2], ["both", "both"]);
-    assert!(seq[2] != "both" && seq[3] == seq[2], "{seq:?}");
+    assert_eq!(seq[..probes], vec!["both"; probes]);
+    assert!(seq[probes] != "both" && seq[probes + 1] == seq[probes], "{seq:?}");
     let d = r.visibility.describe().unwrap();
     assert!(
-        d.contains(&format!("last frame {}", seq[3])) && d.contains("raster") && d.contains("traced"),
+        d.contains(&format!("last frame {}", seq[probes + 1]))
+            && d.contains("raster")
+            && d.contains("traced"),
         "{d}"
     );
     r.destroy(&ctx);
