@@ -15,6 +15,7 @@ use crate::render::frame::{Access, Recorder, SharedBuffer, Use};
 use crate::render::kernel::Kernel;
 use crate::render::shading::Backend;
 use crate::scene::{Aabb, Scene};
+use crate::vk::frame_ring::{Source, Uploads};
 use crate::vk::pipeline::{Binding, DescriptorSet, Specialization};
 use crate::vk::Context;
 
@@ -25,7 +26,8 @@ pub struct HardwareTracer {
     set: DescriptorSet,
     kernel: KernelFn,
     backend: Backend,
-    /// What the update being recorded does to each skinned BLAS.
+    /// What the update being recorded does to each skinned BLAS (its
+    /// `finish_update` gets a copy: frames in flight record later updates).
     plan: Vec<Update>,
 }
 
@@ -67,12 +69,19 @@ impl Tracer for HardwareTracer {
         &self.set
     }
 
-    fn prepare_update(&mut self, _: &Context, _: &Scene, _: &GpuScene, policy: &RebuildPolicy) -> Result<()> {
+    fn prepare_update(
+        &mut self,
+        up: &mut Uploads,
+        scene: &Scene,
+        _: &GpuScene,
+        policy: &RebuildPolicy,
+    ) -> Result<Vec<Update>> {
         self.plan = match &self.accel.dynamic {
             Some(d) => d.blases.iter().map(|b| b.state.next(policy)).collect(),
             None => Vec::new(),
         };
-        Ok(())
+        self.accel.write_instances(up, scene)?;
+        Ok(self.plan.clone())
     }
 
     fn record_update(&mut self, rec: &mut Recorder, scene: &Scene, gpu: &GpuScene) -> Result<()> {
@@ -95,19 +104,23 @@ impl Tracer for HardwareTracer {
         Ok(())
     }
 
+    fn readback(&self) -> Option<Source> {
+        None
+    }
+
     fn finish_update(
         &mut self,
-        _: &Context,
+        plan: &[Update],
         skinned_bounds: &[Aabb],
+        _: Option<&[u8]>,
         policy: &RebuildPolicy,
     ) -> Result<(UpdateCounts, Vec<(&'static str, f64)>)> {
-        let plan = std::mem::take(&mut self.plan);
         if let Some(d) = &mut self.accel.dynamic {
-            for ((b, bounds), u) in d.blases.iter_mut().zip(skinned_bounds).zip(&plan) {
+            for ((b, bounds), u) in d.blases.iter_mut().zip(skinned_bounds).zip(plan) {
                 b.state.done(*u, bounds, policy);
             }
         }
-        Ok((counts(&plan), Vec::new()))
+        Ok((counts(plan), Vec::new()))
     }
 
     fn destroy(&mut self, ctx: &Context) {
