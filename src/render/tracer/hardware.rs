@@ -24,6 +24,8 @@ type KernelFn = fn(&Context, &str, vk::PipelineLayout, &Specialization) -> Resul
 pub struct HardwareTracer {
     accel: SceneAccel,
     set: DescriptorSet,
+    /// The TLAS the set holds.
+    bound_tlas: vk::AccelerationStructureKHR,
     kernel: KernelFn,
     backend: Backend,
     /// What the update being recorded does to each skinned BLAS (its
@@ -46,7 +48,8 @@ impl HardwareTracer {
             &[(TRACE_TLAS, Binding::one(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR))],
         )?;
         set.write_acceleration_structure(ctx, TRACE_TLAS, accel.tlas.raw);
-        Ok(HardwareTracer { accel, set, kernel, backend, plan: Vec::new() })
+        let bound_tlas = accel.tlas.raw;
+        Ok(HardwareTracer { accel, set, bound_tlas, kernel, backend, plan: Vec::new() })
     }
 }
 
@@ -98,9 +101,14 @@ impl Tracer for HardwareTracer {
         rec.pass("tlas build", vk::PipelineStageFlags2::NONE, &[structures], |cmd| {
             accel.record_tlas(ctx, cmd, scene)
         })?;
-        // A TLAS that had to grow is a new object; nothing recorded so far
-        // binds the set, so rewriting it here is allowed.
-        self.set.write_acceleration_structure(ctx, TRACE_TLAS, self.accel.tlas.raw);
+        // A TLAS that had to grow is a new object (`record_tlas` waited for
+        // the device first); nothing recorded so far binds the set, so
+        // rewriting it here is allowed. Only then: a frame in flight may use
+        // the set, and updating it under that frame is undefined.
+        if self.bound_tlas != self.accel.tlas.raw {
+            self.set.write_acceleration_structure(ctx, TRACE_TLAS, self.accel.tlas.raw);
+            self.bound_tlas = self.accel.tlas.raw;
+        }
         Ok(())
     }
 
