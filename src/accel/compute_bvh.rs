@@ -8,12 +8,12 @@
 //!
 //! A frame's update needs no host round-trip: before recording,
 //! [`ComputeBvh::prepare_update`] rebuilds the trees the policy marks (on the
-//! CPU; their upload is a copy recorded into the frame) and the top level's
-//! topology from the bounds the host knows (the previous frame's refit
-//! roots); [`ComputeBvh::record_update`] records the skinned refit and the
+//! CPU; their upload is staged in the frame's ring slot) and the top level's
+//! topology from the bounds the host knows (the last refit roots read
+//! back: with frames in flight, from two frames ago); [`ComputeBvh::record_update`] records the skinned refit and the
 //! GPU fit of the top level's bounds to this frame's roots
 //! ([`TopLevelRefit`]); [`ComputeBvh::finish_update`], after the frame's
-//! fence, reads the roots back for the rebuild policy and the next
+//! fence, takes the roots (a ring download) for the rebuild policy and the next
 //! topology. The topology only decides speed; the bounds tracing uses are
 //! always this frame's.
 
@@ -329,8 +329,8 @@ impl ComputeBvh {
     /// skinned trees: the last roots read back, or a CPU rebuild's) and
     /// writes it with the per-instance records. With skinned trees the GPU
     /// fit recorded by `record_top_level` then sets this frame's bounds;
-    /// without, the host's bounds are exact. The GPU must not be reading the
-    /// top level (the previous frame is done).
+    /// without, the host's bounds are exact. Staged in the frame's ring
+    /// slot: a frame in flight keeps reading its own top level.
     fn write_top_level(&mut self, up: &mut Uploads, scene: &Scene) -> Result<()> {
         // Only animation moves instances after loading, and the flat tree
         // holds none that it moves; a moved one would be traced where it was.

@@ -54,17 +54,20 @@ pub struct GpuScene {
     pub vertices: Buffer,
     pub indices: Buffer,
     pub materials: Buffer,
+    /// Instances, lights and frame uniforms: device-local, written through
+    /// the frame ring (vk/frame_ring.rs) like every per-frame host write.
     pub instances: Buffer,
     pub lights: Buffer,
     pub frame: Buffer,
     /// Frame counters (RAY_COUNTER_*: rays by kind, truncated pixels, bad
-    /// pixels), host-visible.
+    /// pixels), reset and read back through the frame ring.
     pub ray_counters: Buffer,
     /// Auto-exposure state kept across frames, then the luminance
-    /// reduction's scratch (render/tone.rs), host-visible.
+    /// reduction's scratch (render/tone.rs), read back through the ring.
     pub exposure: Buffer,
     /// The ray-tracing budget's per-object statistics (written by the
-    /// `heuristic` pass, host-visible) and selection (written by the host),
+    /// `heuristic` pass, read back through the ring) and selection (written
+    /// by the host through the ring),
     /// BUDGET_STAT_WORDS + 1 words per object (render/budget).
     pub budget_stats: Buffer,
     pub budget_mask: Buffer,

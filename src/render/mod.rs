@@ -109,10 +109,10 @@ pub struct Renderer {
     pub rebuild_policy: RebuildPolicy,
     update_cmd: vk::CommandBuffer,
     update_timer: GpuTimer,
-    /// GPU ms per pass of the last scene update (plus the host's share),
-    /// for benchmarks and the viewer.
+    /// GPU ms per pass of the last finished scene update (plus the host's
+    /// share), for benchmarks and the viewer (`finish_frame` sets it).
     pub update_timings: Vec<(&'static str, f64)>,
-    /// Skinned structures refit / rebuilt by the last scene update.
+    /// Skinned structures refit / rebuilt by the last finished scene update.
     pub update_counts: [usize; 2],
     /// Per-slot staging of host writes and downloads (frames in flight):
     /// one slot unless the viewer asks for more (`set_frames_in_flight`).
