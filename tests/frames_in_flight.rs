@@ -13,7 +13,6 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 use hybrid_rt::metrics::diff_stats;
 use hybrid_rt::render::frame::{Access, Use};
-use hybrid_rt::render::shading::Backend;
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::animation::find_animation;
 use hybrid_rt::scene::Scene;
@@ -139,7 +138,7 @@ fn two_frames_in_flight_render_the_animation_like_waiting_frames() {
     let loaded = Scene::load(&common::shared_asset("gltf/CesiumMan/glTF/CesiumMan.gltf")).unwrap();
     let anim = find_animation(&loaded, "0").unwrap();
     let ctx = sync_validated_across_submits();
-    for backend in [Backend::Compute, Backend::Query] {
+    for backend in common::BACKENDS {
         let settings = RenderSettings { backend, ..Default::default() };
         let (flight, overlapped) = in_flight(&ctx, &loaded, anim, &settings);
         let reference = waited(&ctx, &loaded, anim, &settings);
