@@ -34,6 +34,7 @@ use hybrid_rt::render::skinning::Skinning;
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::animation::find_animation;
 use hybrid_rt::scene::{Camera, Scene};
+use hybrid_rt::vk::frame_ring::{FrameRing, Uploads};
 use hybrid_rt::vk::{memory_barrier, Buffer, Context};
 
 const W: u32 = 320;
@@ -105,18 +106,20 @@ fn gpu_top_level_contains_the_host_fit_over_the_refit_roots() {
     let mut skinning = Skinning::new(&ctx, &scene, &gpu).unwrap().expect("a skinned scene");
     let mut bvh = ComputeBvh::build(&ctx, &scene, &gpu).unwrap();
     let cmd = ctx.allocate_command_buffer("test update").unwrap();
+    let mut ring = FrameRing::new(1, "test ring").unwrap();
     for (i, &t) in TIMES.iter().enumerate().skip(1) {
         scene.animate(anim, t);
         let policy = if i == 2 { RebuildPolicy::ALWAYS } else { RebuildPolicy::NEVER };
         // What the renderer's plan / record / finish do, in one submission.
-        gpu.update_dynamic(&scene).unwrap();
-        skinning.write(&scene, gpu.origin).unwrap();
-        let updates = bvh.prepare_update(&scene, &policy).unwrap();
+        ring.begin(0).unwrap();
+        let up = &mut Uploads { ring: &mut ring, slot: 0 };
+        gpu.update_dynamic(up, &scene).unwrap();
+        skinning.write(up, &scene, gpu.origin).unwrap();
+        let updates = bvh.prepare_update(up, &scene, &policy).unwrap();
+        let roots = ring.download(0, bvh.roots_source().expect("skinned trees")).unwrap();
         let estimate: Bvh = bvh.host_topology().clone();
         ctx.begin_commands(cmd).unwrap();
-        let all = vk::PipelineStageFlags2::ALL_COMMANDS;
-        let rw = vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE;
-        memory_barrier(&ctx, cmd, (all, rw), (all, rw));
+        ring.record_uploads(&ctx, cmd, 0).unwrap();
         skinning.record(&ctx, cmd);
         // What the pass layer derives between skinning and the refit.
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
@@ -127,9 +130,10 @@ fn gpu_top_level_contains_the_host_fit_over_the_refit_roots() {
             (compute, vk::AccessFlags2::SHADER_STORAGE_READ),
         );
         bvh.record_update(&ctx, cmd);
+        ring.record_downloads(&ctx, cmd, 0).unwrap();
         unsafe { ctx.device.end_command_buffer(cmd).unwrap() };
         ctx.submit_and_wait(cmd).unwrap();
-        bvh.finish_update(&updates, &policy).unwrap();
+        bvh.finish_update(&updates, &policy, Some(ring.read(0, roots).unwrap())).unwrap();
 
         let fitted = bvh.gpu_top_level().unwrap();
         let (reference, fresh) = bvh.host_top_level(&scene);
@@ -155,6 +159,7 @@ fn gpu_top_level_contains_the_host_fit_over_the_refit_roots() {
         assert!(stale || i == 2, "t {t}: the step must leave the last pose's bounds");
     }
     unsafe { ctx.device.free_command_buffers(ctx.command_pool, &[cmd]) };
+    ring.destroy(&ctx);
     bvh.destroy(&ctx);
     skinning.destroy(&ctx);
     gpu.destroy(&ctx);
@@ -172,6 +177,7 @@ fn render_in_one_submission(
     readback: &Buffer,
     cmd: vk::CommandBuffer,
 ) -> Vec<u8> {
+    r.begin_frame(0).unwrap();
     r.prepare(ctx, scene, camera, settings).unwrap();
     ctx.begin_commands(cmd).unwrap();
     r.record_scene_update(ctx, cmd, scene).unwrap();
@@ -209,7 +215,7 @@ fn render_in_one_submission(
     let t0 = std::time::Instant::now();
     ctx.submit_and_wait(cmd).unwrap();
     let gpu_wall = t0.elapsed().as_secs_f64() * 1e3;
-    r.finish_scene_update(ctx).unwrap();
+    r.finish_frame(0).unwrap();
     let fit = r.update_timings.iter().find(|(n, _)| *n == "top level fit").map_or(f64::NAN, |t| t.1);
     let refit = r.update_timings.iter().find(|(n, _)| *n == "bvh refit").map_or(f64::NAN, |t| t.1);
     eprintln!(

@@ -8,12 +8,12 @@
 //!
 //! A frame's update needs no host round-trip: before recording,
 //! [`ComputeBvh::prepare_update`] rebuilds the trees the policy marks (on the
-//! CPU; their upload is a copy recorded into the frame) and the top level's
-//! topology from the bounds the host knows (the previous frame's refit
-//! roots); [`ComputeBvh::record_update`] records the skinned refit and the
+//! CPU; their upload is staged in the frame's ring slot) and the top level's
+//! topology from the bounds the host knows (the last refit roots read
+//! back: with frames in flight, from two frames ago); [`ComputeBvh::record_update`] records the skinned refit and the
 //! GPU fit of the top level's bounds to this frame's roots
 //! ([`TopLevelRefit`]); [`ComputeBvh::finish_update`], after the frame's
-//! fence, reads the roots back for the rebuild policy and the next
+//! fence, takes the roots (a ring download) for the rebuild policy and the next
 //! topology. The topology only decides speed; the bounds tracing uses are
 //! always this frame's.
 
@@ -34,6 +34,7 @@ use crate::gpu::origin::RenderOrigin;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::shared::{BVH_FLAT_ROOT, BVH_WIDE_HEADER};
 use crate::scene::{Aabb, Instance, Scene};
+use crate::vk::frame_ring::{FrameRing, Source, Uploads};
 use crate::vk::pipeline::{Binding, DescriptorSet};
 use crate::vk::{memory_barrier, Buffer, Context};
 
@@ -69,8 +70,6 @@ struct BlasRef {
 struct SkinnedBvh {
     blas: BlasRef,
     state: RefitState,
-    /// Its region in `staging` (nodes, then triangle order) for rebuilds.
-    staging_offset: u64,
 }
 
 pub struct ComputeBvh {
@@ -82,11 +81,6 @@ pub struct ComputeBvh {
     /// The top level's GPU fit; only with skinned trees (a rigid-only top
     /// level is exact from the host).
     top_refit: Option<TopLevelRefit>,
-    /// Host-visible copies of rebuilt skinned trees, copied into
-    /// `blas_nodes` / `blas_prims` by the frame's commands.
-    staging: Option<Buffer>,
-    /// Those copies for the next `record_refit`: into nodes, into prims.
-    uploads: (Vec<vk::BufferCopy>, Vec<vk::BufferCopy>),
     blas_nodes: Buffer,
     blas_prims: Buffer,
     /// The flat tree's triangles (`FlatTriangle`, leaf order).
@@ -157,10 +151,13 @@ struct TreeData<'a> {
     flat_tris: &'a [FlatTriangle],
 }
 
-/// Top-level buffers are host-visible and rewritten in place every frame
-/// something moves; sized for the worst case once.
+/// Top-level buffers are rewritten every frame something moves, through
+/// the frame's ring slot (never in place: a frame in flight reads them);
+/// sized for the worst case once. Host-visible only for the tests' reads
+/// of the GPU's fit (`gpu_top_level`).
 pub(super) fn host_buffer(ctx: &Context, name: &str, bytes: usize) -> Result<Buffer> {
-    Buffer::new(ctx, name, bytes as u64, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::CpuToGpu)
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    Buffer::new(ctx, name, bytes as u64, usage, MemoryLocation::CpuToGpu)
 }
 
 impl ComputeBvh {
@@ -223,7 +220,6 @@ impl ComputeBvh {
         // whole triangles).
         let world = scene.world_matrices();
         let mut skinned = Vec::new();
-        let mut staging_size = 0u64;
         for inst in &scene.instances {
             let Some(posed) = scene.skinned_pose(inst, &world) else { continue };
             let indices = &scene.meshes[inst.mesh].primitives[inst.primitive].indices;
@@ -233,8 +229,7 @@ impl ComputeBvh {
             let state = RefitState::new(&bvh.root_bounds());
             let capacity = (2 * aabbs.len()).saturating_sub(1);
             let blas = append(&mut nodes, &mut prims, bvh, capacity);
-            skinned.push(SkinnedBvh { blas, state, staging_offset: staging_size });
-            staging_size += (capacity * std::mem::size_of::<BvhNode>() + 4 * aabbs.len()) as u64;
+            skinned.push(SkinnedBvh { blas, state });
         }
         let blas_ms = t0.elapsed().as_secs_f64() * 1e3;
         // A descriptor needs a buffer.
@@ -248,8 +243,6 @@ impl ComputeBvh {
             skinned,
             refit: None,
             top_refit: None,
-            staging: None,
-            uploads: (Vec::new(), Vec::new()),
             blas_nodes: Buffer::null(),
             blas_prims: Buffer::null(),
             flat_tris: Buffer::null(),
@@ -272,21 +265,35 @@ impl ComputeBvh {
             origin: gpu.origin,
         };
         let data = TreeData { nodes: &nodes, prims: &prims, flat_tris: &flat.triangles };
-        if let Err(e) = bvh.create_buffers(ctx, scene, gpu, data, staging_size) {
+        if let Err(e) = bvh.create_buffers(ctx, scene, gpu, data) {
             bvh.destroy(ctx);
             return Err(e);
         }
         // Fit the skinned trees (and the top level) to the GPU's vertices:
         // the CPU pose they were built from may differ in the last bit. A
         // load-time submission, not part of any frame.
-        let fitted = bvh.write_top_level(scene).and_then(|()| {
-            ctx.one_shot("refit skinned BVHs", |cmd| {
-                bvh.record_update(ctx, cmd);
-                Ok(())
-            })
-        });
         let updates = vec![Update::Refit; bvh.skinned.len()];
-        if let Err(e) = fitted.and_then(|()| bvh.finish_update(&updates, &RebuildPolicy::default())) {
+        let mut ring = match FrameRing::new(1, "compute BVH load") {
+            Ok(r) => r,
+            Err(e) => {
+                bvh.destroy(ctx);
+                return Err(e);
+            }
+        };
+        let fitted = (|| {
+            ring.begin(0)?;
+            bvh.write_top_level(&mut Uploads { ring: &mut ring, slot: 0 }, scene)?;
+            let roots = bvh.roots_source().map(|r| ring.download(0, r)).transpose()?;
+            ctx.one_shot("refit skinned BVHs", |cmd| {
+                ring.record_uploads(ctx, cmd, 0)?;
+                bvh.record_update(ctx, cmd);
+                ring.record_downloads(ctx, cmd, 0)
+            })?;
+            let roots = roots.map(|d| ring.read(0, d)).transpose()?;
+            bvh.finish_update(&updates, &RebuildPolicy::default(), roots)
+        })();
+        ring.destroy(ctx);
+        if let Err(e) = fitted {
             bvh.destroy(ctx);
             return Err(e);
         }
@@ -322,9 +329,9 @@ impl ComputeBvh {
     /// skinned trees: the last roots read back, or a CPU rebuild's) and
     /// writes it with the per-instance records. With skinned trees the GPU
     /// fit recorded by `record_top_level` then sets this frame's bounds;
-    /// without, the host's bounds are exact. The GPU must not be reading the
-    /// top level (the previous frame is done).
-    fn write_top_level(&mut self, scene: &Scene) -> Result<()> {
+    /// without, the host's bounds are exact. Staged in the frame's ring
+    /// slot: a frame in flight keeps reading its own top level.
+    fn write_top_level(&mut self, up: &mut Uploads, scene: &Scene) -> Result<()> {
         // Only animation moves instances after loading, and the flat tree
         // holds none that it moves; a moved one would be traced where it was.
         for (i, (inst, at)) in scene.instances.iter().zip(&self.flattened).enumerate() {
@@ -335,12 +342,12 @@ impl ComputeBvh {
             );
         }
         let (tlas, instances) = top_level(scene, self.origin, |inst| self.blas_of(inst));
-        self.tlas_nodes.write(0, bytemuck::cast_slice(&tlas.nodes))?;
-        self.tlas_prims.write(0, bytemuck::cast_slice(&tlas.prim_indices))?;
-        self.instances.write(0, bytemuck::cast_slice(&instances))?;
+        up.write(&self.tlas_nodes, 0, bytemuck::cast_slice(&tlas.nodes))?;
+        up.write(&self.tlas_prims, 0, bytemuck::cast_slice(&tlas.prim_indices))?;
+        up.write(&self.instances, 0, bytemuck::cast_slice(&instances))?;
         if let Some(t) = &mut self.top_refit {
             // The placeholder of an empty top level must stay unenterable.
-            t.set_tree((tlas.nodes[0] != EMPTY_NODE).then_some(&tlas))?;
+            t.set_tree(up, (tlas.nodes[0] != EMPTY_NODE).then_some(&tlas))?;
         }
         self.tlas = tlas;
         Ok(())
@@ -351,63 +358,53 @@ impl ComputeBvh {
         self.skinned.len()
     }
 
-    /// Host work before a frame's update is recorded (the GPU done with the
-    /// previous frame): rebuilds on the CPU, from the scene's CPU pose, the
-    /// skinned trees the policy marks, staging them for the copy
-    /// `record_refit` records (the GPU refit after it fits them to the
-    /// GPU's skinned vertices); then writes the top level for `scene`'s
+    /// Host work before a frame's update is recorded (a frame may still be
+    /// in flight): rebuilds on the CPU, from the scene's CPU pose, the
+    /// skinned trees the policy marks, staging them in the frame's ring slot
+    /// (copied at the frame's start; the GPU refit then fits them to the
+    /// GPU's skinned vertices); then stages the top level for `scene`'s
     /// instance transforms. No submission, no wait. Returns what each
     /// skinned slot gets this frame, for `finish_update`.
-    pub fn prepare_update(&mut self, scene: &Scene, policy: &RebuildPolicy) -> Result<Vec<Update>> {
+    pub fn prepare_update(
+        &mut self,
+        up: &mut Uploads,
+        scene: &Scene,
+        policy: &RebuildPolicy,
+    ) -> Result<Vec<Update>> {
         let t0 = std::time::Instant::now();
         let updates: Vec<Update> = self.skinned.iter().map(|s| s.state.next(policy)).collect();
-        self.uploads.0.clear();
-        self.uploads.1.clear();
         if updates.contains(&Update::Rebuild) {
-            self.rebuild_skinned(scene, &updates)?;
+            self.rebuild_skinned(up, scene, &updates)?;
         }
         self.rebuild_ms = t0.elapsed().as_secs_f64() * 1e3;
         let t1 = std::time::Instant::now();
-        self.write_top_level(scene)?;
+        self.write_top_level(up, scene)?;
         self.top_level_ms = t1.elapsed().as_secs_f64() * 1e3;
         Ok(updates)
     }
 
-    fn rebuild_skinned(&mut self, scene: &Scene, updates: &[Update]) -> Result<()> {
+    fn rebuild_skinned(&mut self, up: &mut Uploads, scene: &Scene, updates: &[Update]) -> Result<()> {
         let world = scene.world_matrices();
-        let staging = self.staging.as_mut().expect("skinned trees have a staging buffer");
         for inst in &scene.instances {
             let Some(slot) = inst.skinned.filter(|s| updates[*s] == Update::Rebuild) else { continue };
             let posed = scene.skinned_pose(inst, &world).expect("skinned slot has a pose");
             let indices = &scene.meshes[inst.mesh].primitives[inst.primitive].indices;
             let bvh = Bvh::build(&triangle_aabbs(&posed, indices));
             let s = &mut self.skinned[slot];
-            let nodes: &[u8] = bytemuck::cast_slice(&bvh.nodes);
-            let prims: &[u8] = bytemuck::cast_slice(&bvh.prim_indices);
-            staging.write(s.staging_offset as usize, nodes)?;
-            let prims_at = s.staging_offset + nodes.len() as u64;
-            staging.write(prims_at as usize, prims)?;
-            let (b, size) = (&s.blas, std::mem::size_of::<BvhNode>() as u64);
-            self.uploads.0.push(vk::BufferCopy {
-                src_offset: s.staging_offset,
-                dst_offset: b.node_offset as u64 * size,
-                size: nodes.len() as u64,
-            });
-            self.uploads.1.push(vk::BufferCopy {
-                src_offset: prims_at,
-                dst_offset: b.prim_offset as u64 * 4,
-                size: prims.len() as u64,
-            });
+            let b = &s.blas;
+            let nodes_at = b.node_offset as usize * std::mem::size_of::<BvhNode>();
+            up.write(&self.blas_nodes, nodes_at, bytemuck::cast_slice(&bvh.nodes))?;
+            up.write(&self.blas_prims, b.prim_offset as usize * 4, bytemuck::cast_slice(&bvh.prim_indices))?;
             if let Some(refit) = &mut self.refit {
-                refit.set_levels(slot, &bvh)?;
+                refit.set_levels(up, slot, &bvh)?;
             }
             s.blas.bvh = bvh;
         }
         Ok(())
     }
 
-    /// Records the frame's scene update: the skinned trees' rebuild copies
-    /// and refit, then the top level's GPU fit, each followed by its
+    /// Records the frame's scene update: the skinned trees' refit (their
+    /// rebuilds were copied at the frame's start), then the top level's GPU fit, each followed by its
     /// barrier (the last one to the tracer's storage reads). Needs
     /// `prepare_update` first, and skinning recorded before it.
     pub fn record_update(&self, ctx: &Context, cmd: vk::CommandBuffer) {
@@ -424,23 +421,8 @@ impl ComputeBvh {
             ctx,
             cmd,
             (compute, vk::AccessFlags2::SHADER_STORAGE_READ),
-            (
-                compute | vk::PipelineStageFlags2::COPY,
-                vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::TRANSFER_WRITE,
-            ),
+            (compute, vk::AccessFlags2::SHADER_STORAGE_WRITE),
         );
-        if let (Some(staging), false) = (&self.staging, self.uploads.0.is_empty()) {
-            unsafe {
-                ctx.device.cmd_copy_buffer(cmd, staging.raw, self.blas_nodes.raw, &self.uploads.0);
-                ctx.device.cmd_copy_buffer(cmd, staging.raw, self.blas_prims.raw, &self.uploads.1);
-            }
-            memory_barrier(
-                ctx,
-                cmd,
-                (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
-                (compute, vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE),
-            );
-        }
         refit.record(ctx, cmd);
     }
 
@@ -451,18 +433,30 @@ impl ComputeBvh {
         }
     }
 
-    /// After the update's commands completed (its fence, never inside a
-    /// frame): reads the refit roots back and judges them for the rebuild
-    /// policy; they also shape the next frame's top-level topology.
-    pub fn finish_update(&mut self, updates: &[Update], policy: &RebuildPolicy) -> Result<()> {
-        if let Some(refit) = &self.refit {
-            for ((s, root), u) in self.skinned.iter_mut().zip(refit.roots()?).zip(updates) {
+    /// Where the ring's download at the frame's end reads the refit roots
+    /// from (None without skinned trees).
+    pub fn roots_source(&self) -> Option<Source> {
+        self.refit.as_ref().map(|r| r.roots_source())
+    }
+
+    /// After the update's frame completed (its slot's fence, never inside a
+    /// frame): judges the refit roots (`roots`: the bytes of
+    /// `roots_source`'s download) for the rebuild policy; they also shape
+    /// the next top-level topology. With frames in flight a later frame may
+    /// already have rebuilt a slot: its root then comes from the old tree
+    /// for one frame (topology only decides speed, the GPU fit the bounds).
+    pub fn finish_update(
+        &mut self,
+        updates: &[Update],
+        policy: &RebuildPolicy,
+        roots: Option<&[u8]>,
+    ) -> Result<()> {
+        if let (Some(refit), Some(roots)) = (&self.refit, roots) {
+            for ((s, root), u) in self.skinned.iter_mut().zip(refit.roots(roots)).zip(updates) {
                 s.blas.bvh.nodes[0] = root;
                 s.state.done(*u, &s.blas.bvh.root_bounds(), policy);
             }
         }
-        self.uploads.0.clear();
-        self.uploads.1.clear();
         Ok(())
     }
 
@@ -529,14 +523,7 @@ impl ComputeBvh {
 
     /// The GPU half of `build`: node and triangle-order buffers, refit
     /// passes, top-level buffers and the trace set.
-    fn create_buffers(
-        &mut self,
-        ctx: &Context,
-        scene: &Scene,
-        gpu: &GpuScene,
-        data: TreeData,
-        staging_size: u64,
-    ) -> Result<()> {
+    fn create_buffers(&mut self, ctx: &Context, scene: &Scene, gpu: &GpuScene, data: TreeData) -> Result<()> {
         let TreeData { nodes, prims, flat_tris } = data;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         self.blas_nodes = Buffer::with_data(ctx, "BVH BLAS nodes", bytemuck::cast_slice(nodes), storage)?;
@@ -548,9 +535,6 @@ impl ComputeBvh {
         self.flat_tris =
             Buffer::with_data(ctx, "BVH flat static triangles", bytemuck::cast_slice(flat_tris), storage)?;
         if !self.skinned.is_empty() {
-            let src = vk::BufferUsageFlags::TRANSFER_SRC;
-            self.staging =
-                Some(Buffer::new(ctx, "BVH rebuild staging", staging_size, src, MemoryLocation::CpuToGpu)?);
             let refs: Vec<_> =
                 self.skinned.iter().map(|s| (&s.blas.bvh, s.blas.node_offset, s.blas.prim_offset)).collect();
             self.refit = Some(ComputeRefit::new(ctx, gpu, &refs, &self.blas_nodes, &self.blas_prims)?);
@@ -603,9 +587,6 @@ impl ComputeBvh {
         }
         if let Some(t) = &mut self.top_refit {
             t.destroy(ctx);
-        }
-        if let Some(b) = &mut self.staging {
-            b.destroy(ctx);
         }
         self.set.destroy(ctx);
     }

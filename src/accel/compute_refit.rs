@@ -13,6 +13,7 @@ use crate::gpu::scene::{GpuScene, PrimitiveRange};
 use crate::gpu::shared::{
     REFIT_INDICES, REFIT_JOBS, REFIT_NODES, REFIT_ORDER, REFIT_PRIMS, REFIT_ROOTS, REFIT_VERTICES,
 };
+use crate::vk::frame_ring::{upload_now, Source, Uploads};
 use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
 use crate::vk::{memory_barrier, Buffer, Context};
 
@@ -81,10 +82,12 @@ impl ComputeRefit {
             pipeline: vk::Pipeline::null(),
         };
         let created = refit.create(ctx, gpu, nodes, prims, order_len).and_then(|()| {
-            for (slot, (bvh, _, _)) in bvhs.iter().enumerate() {
-                refit.set_levels(slot, bvh)?;
-            }
-            Ok(())
+            upload_now(ctx, "BVH refit levels", |up| {
+                for (slot, (bvh, _, _)) in bvhs.iter().enumerate() {
+                    refit.set_levels(up, slot, bvh)?;
+                }
+                Ok(())
+            })
         });
         if let Err(e) = created {
             refit.destroy(ctx);
@@ -101,16 +104,16 @@ impl ComputeRefit {
         prims: &Buffer,
         order_len: u32,
     ) -> Result<()> {
+        // Written through the frame ring, read through its downloads.
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let host = |name: &str, bytes: u64, location| Buffer::new(ctx, name, bytes, storage, location);
+        let (src, dst) = (vk::BufferUsageFlags::TRANSFER_SRC, vk::BufferUsageFlags::TRANSFER_DST);
+        let buffer =
+            |name: &str, bytes: u64, usage| Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly);
         let jobs = self.job_list.len();
-        self.jobs = host("BVH refit jobs", (jobs * 32) as u64, MemoryLocation::CpuToGpu)?;
-        self.order = host("BVH refit level order", order_len as u64 * 4, MemoryLocation::CpuToGpu)?;
-        self.roots = host(
-            "BVH refit roots",
-            (jobs * std::mem::size_of::<BvhNode>()) as u64,
-            MemoryLocation::GpuToCpu,
-        )?;
+        self.jobs = buffer("BVH refit jobs", (jobs * 32) as u64, storage | dst)?;
+        self.order = buffer("BVH refit level order", order_len as u64 * 4, storage | dst)?;
+        let roots_size = (jobs * std::mem::size_of::<BvhNode>()) as u64;
+        self.roots = buffer("BVH refit roots", roots_size, storage | src)?;
         self.set = DescriptorSet::storage_buffers(
             ctx,
             "BVH refit set",
@@ -129,19 +132,21 @@ impl ComputeRefit {
         Ok(())
     }
 
-    /// Writes the level order of `slot`'s (new) tree. The GPU must be idle.
-    pub fn set_levels(&mut self, slot: usize, bvh: &Bvh) -> Result<()> {
+    /// Writes the level order of `slot`'s (new) tree (through the frame's
+    /// ring slot).
+    pub fn set_levels(&mut self, up: &mut Uploads, slot: usize, bvh: &Bvh) -> Result<()> {
         let (order, bounds) = bvh.levels();
         let job = &mut self.job_list[slot];
         job.level_offset = job.order_offset + order.len() as u32;
         job.level_count = bounds.len() as u32 - 1;
-        self.order.write(job.order_offset as usize * 4, bytemuck::cast_slice(&order))?;
-        self.order.write(job.level_offset as usize * 4, bytemuck::cast_slice(&bounds))?;
-        self.jobs.write(slot * 32, bytemuck::bytes_of(job))
+        up.write(&self.order, job.order_offset as usize * 4, bytemuck::cast_slice(&order))?;
+        up.write(&self.order, job.level_offset as usize * 4, bytemuck::cast_slice(&bounds))?;
+        up.write(&self.jobs, slot * 32, bytemuck::bytes_of(job))
     }
 
     /// Records the refit of every skinned BVH (after the skinning barrier)
-    /// and the barrier to the tracer and to the host's read of the roots.
+    /// and the barrier to the tracer (the ring's download at the frame's
+    /// end waits for the roots itself).
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let d = &ctx.device;
         unsafe {
@@ -152,16 +157,19 @@ impl ComputeRefit {
             ctx,
             cmd,
             (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
-            (
-                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::HOST,
-                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::HOST_READ,
-            ),
+            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ),
         );
     }
 
-    /// Root nodes of the last completed refit, by slot.
-    pub fn roots(&self) -> Result<Vec<BvhNode>> {
-        Ok(bytemuck::pod_collect_to_vec(self.roots.read()?))
+    /// Where the ring's download reads the refit roots from.
+    pub fn roots_source(&self) -> Source {
+        let size = (self.job_list.len() * std::mem::size_of::<BvhNode>()) as u64;
+        Source::Buffer { buffer: self.roots.raw, offset: 0, size }
+    }
+
+    /// Root nodes by slot, from the bytes of `roots_source` of a completed frame.
+    pub fn roots(&self, bytes: &[u8]) -> Vec<BvhNode> {
+        bytemuck::pod_collect_to_vec(bytes)
     }
 
     pub fn destroy(&mut self, ctx: &Context) {

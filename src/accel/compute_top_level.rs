@@ -12,6 +12,7 @@ use crate::gpu::shared::{
 };
 
 use super::bvh::{Bvh, MAX_DEPTH};
+use crate::vk::frame_ring::Uploads;
 use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
 use crate::vk::{memory_barrier, Buffer, Context};
 
@@ -24,7 +25,7 @@ struct Levels {
 }
 
 pub struct TopLevelRefit {
-    /// Host-visible: rewritten with each new topology.
+    /// Rewritten with each new topology, through the frame's ring slot.
     order: Buffer,
     levels: Levels,
     set: DescriptorSet,
@@ -81,15 +82,15 @@ impl TopLevelRefit {
     }
 
     /// Takes the level order of a new top-level topology (None: the top
-    /// level holds no instance, nothing to fit). The GPU must be idle.
-    pub fn set_tree(&mut self, tlas: Option<&Bvh>) -> Result<()> {
+    /// level holds no instance, nothing to fit), staged in the frame's slot.
+    pub fn set_tree(&mut self, up: &mut Uploads, tlas: Option<&Bvh>) -> Result<()> {
         let Some(tlas) = tlas else {
             self.levels = Levels::default();
             return Ok(());
         };
         let (order, bounds) = tlas.levels();
-        self.order.write(0, bytemuck::cast_slice(&order))?;
-        self.order.write(order.len() * 4, bytemuck::cast_slice(&bounds))?;
+        up.write(&self.order, 0, bytemuck::cast_slice(&order))?;
+        up.write(&self.order, order.len() * 4, bytemuck::cast_slice(&bounds))?;
         self.levels = Levels { level_offset: order.len() as u32, level_count: bounds.len() as u32 - 1 };
         Ok(())
     }

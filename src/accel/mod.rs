@@ -19,6 +19,7 @@ use dynamic::{DynamicBlases, Update};
 
 use crate::gpu::scene::{GpuScene, PrimitiveRange};
 use crate::scene::{AlphaMode, Instance, Scene};
+use crate::vk::frame_ring::{upload_now, Uploads};
 use crate::vk::{memory_barrier, Buffer, Context};
 
 /// TLAS instance mask bits: what kind of ray may hit an instance.
@@ -362,8 +363,9 @@ impl SceneAccel {
             (scene.instances.len().max(1) * std::mem::size_of::<vk::AccelerationStructureInstanceKHR>())
                 as u64,
             vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
-                | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
-            MemoryLocation::CpuToGpu,
+                | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+                | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
         )?;
         if !gpu.skinned.is_empty() {
             self.dynamic = Some(DynamicBlases::new(ctx, gpu, &gpu.skinned_bounds, self.scratch.align)?);
@@ -383,9 +385,17 @@ impl SceneAccel {
 
     /// Writes the instance records and (re)builds the TLAS, waiting for it.
     pub fn build_tlas(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        upload_now(ctx, "TLAS instances", |up| self.write_instances(up, scene))?;
         let cmd = ctx.allocate_command_buffer("build TLAS")?;
         let r = (|| {
             unsafe { ctx.device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())? };
+            // The upload's copy (an earlier submission) before the build reads it.
+            memory_barrier(
+                ctx,
+                cmd,
+                (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+                (vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR, vk::AccessFlags2::SHADER_READ),
+            );
             self.record_tlas(ctx, cmd, scene)?;
             unsafe { ctx.device.end_command_buffer(cmd)? };
             ctx.submit_and_wait(cmd)
@@ -408,10 +418,9 @@ impl SceneAccel {
         );
     }
 
-    /// Writes the instance records (host; the GPU must not be reading them)
-    /// and records the TLAS build, growing the TLAS first if it must.
-    pub fn record_tlas(&mut self, ctx: &Context, cmd: vk::CommandBuffer, scene: &Scene) -> Result<()> {
-        let loader = ctx.accel.as_ref().context("acceleration structures are not enabled")?;
+    /// Stages the instance records in the frame's ring slot (copied at the
+    /// frame's start, before `record_tlas` reads them).
+    pub fn write_instances(&self, up: &mut Uploads, scene: &Scene) -> Result<()> {
         let dynamic = self.dynamic.as_ref();
         let records: Vec<vk::AccelerationStructureInstanceKHR> = scene
             .instances
@@ -450,7 +459,14 @@ impl SceneAccel {
                 std::mem::size_of_val(records.as_slice()),
             )
         };
-        self.instances.write(0, bytes)?;
+        up.write(&self.instances, 0, bytes)
+    }
+
+    /// Records the TLAS build over the instance records `write_instances`
+    /// staged, growing the TLAS first if it must.
+    pub fn record_tlas(&mut self, ctx: &Context, cmd: vk::CommandBuffer, scene: &Scene) -> Result<()> {
+        let loader = ctx.accel.as_ref().context("acceleration structures are not enabled")?;
+        let count = scene.instances.len() as u32;
 
         let geoms = [vk::AccelerationStructureGeometryKHR::default()
             .geometry_type(vk::GeometryTypeKHR::INSTANCES)
@@ -463,7 +479,6 @@ impl SceneAccel {
             .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
             .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
             .geometries(&geoms);
-        let count = records.len() as u32;
         let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
         unsafe {
             loader.get_acceleration_structure_build_sizes(
@@ -474,6 +489,9 @@ impl SceneAccel {
             )
         };
         if self.tlas.buffer.size < sizes.acceleration_structure_size {
+            // A frame in flight may still trace the old TLAS (the scene's
+            // instance count is fixed, so this is the load-time build).
+            unsafe { ctx.device.device_wait_idle() }.context("vkDeviceWaitIdle before growing the TLAS")?;
             self.tlas.destroy(ctx);
             self.tlas = AccelStruct::new(
                 ctx,
@@ -488,12 +506,7 @@ impl SceneAccel {
             .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch });
         let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
         let build = vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR;
-        memory_barrier(
-            ctx,
-            cmd,
-            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_WRITE),
-            (build, vk::AccessFlags2::SHADER_READ),
-        );
+        // (The ring's upload barrier made the instance records visible.)
         unsafe { loader.cmd_build_acceleration_structures(cmd, &[info], &[&range]) };
         // The tracing passes (this frame's or later submissions') read it.
         let mut tracers = vk::PipelineStageFlags2::COMPUTE_SHADER;

@@ -3,6 +3,7 @@
 //! the driver's ray query on the same rays, timed with GPU timestamps,
 //! compared ray by ray.
 
+use crate::vk::frame_ring::upload_now;
 use anyhow::{bail, Context as _, Result};
 
 use super::{load_posed, with_context, GpuOptions, RenderJob};
@@ -87,7 +88,7 @@ impl RayBench {
                 );
             }
             let frame = GpuFrame { light_count: bench.gpu.light_count, ..Default::default() };
-            bench.gpu.write_frame(&frame)?;
+            upload_now(ctx, "frame uniforms", |up| bench.gpu.write_frame(up, &frame))?;
             for backend in [Backend::Compute, Backend::Query] {
                 let mut t = tracer::create(ctx, backend, scene, &bench.gpu)?;
                 match RayRig::new(ctx, &bench.gpu, t.as_ref(), traversal) {

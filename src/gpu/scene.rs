@@ -22,9 +22,15 @@ use crate::scene::tangents::bounds_of;
 use crate::scene::{
     Aabb, AlphaMode, Filter, HdrImage, Instance, LightKind, SamplerDesc, Scene, TextureRef, Wrap,
 };
+use crate::vk::frame_ring::{upload_now, Uploads};
 use crate::vk::memory::TextureDesc;
 use crate::vk::pipeline::{Binding, DescriptorSet};
 use crate::vk::{Buffer, Context, Image};
+
+/// Written by the GPU and the frame ring, read through ring downloads.
+const TRANSFER_BOTH: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
+    vk::BufferUsageFlags::TRANSFER_SRC.as_raw() | vk::BufferUsageFlags::TRANSFER_DST.as_raw(),
+);
 
 /// Where one mesh primitive lives in the shared buffers.
 #[derive(Clone, Copy, Debug)]
@@ -48,17 +54,20 @@ pub struct GpuScene {
     pub vertices: Buffer,
     pub indices: Buffer,
     pub materials: Buffer,
+    /// Instances, lights and frame uniforms: device-local, written through
+    /// the frame ring (vk/frame_ring.rs) like every per-frame host write.
     pub instances: Buffer,
     pub lights: Buffer,
     pub frame: Buffer,
     /// Frame counters (RAY_COUNTER_*: rays by kind, truncated pixels, bad
-    /// pixels), host-visible.
+    /// pixels), reset and read back through the frame ring.
     pub ray_counters: Buffer,
     /// Auto-exposure state kept across frames, then the luminance
-    /// reduction's scratch (render/tone.rs), host-visible.
+    /// reduction's scratch (render/tone.rs), read back through the ring.
     pub exposure: Buffer,
     /// The ray-tracing budget's per-object statistics (written by the
-    /// `heuristic` pass, host-visible) and selection (written by the host),
+    /// `heuristic` pass, read back through the ring) and selection (written
+    /// by the host through the ring),
     /// BUDGET_STAT_WORDS + 1 words per object (render/budget).
     pub budget_stats: Buffer,
     pub budget_mask: Buffer,
@@ -187,55 +196,55 @@ impl GpuScene {
             ctx,
             "instances",
             (scene.instances.len().max(1) * std::mem::size_of::<GpuInstance>()) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
         )?;
         self.lights = Buffer::new(
             ctx,
             "lights",
             (scene.lights.len().max(1) * std::mem::size_of::<GpuLight>()) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
         )?;
         self.frame = Buffer::new(
             ctx,
             "frame uniforms",
             std::mem::size_of::<GpuFrame>() as u64,
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            MemoryLocation::CpuToGpu,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
         )?;
         self.ray_counters = Buffer::new(
             ctx,
             "ray counters",
             RAY_COUNTER_SLOTS as u64 * 4,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::GpuToCpu,
+            vk::BufferUsageFlags::STORAGE_BUFFER | TRANSFER_BOTH,
+            MemoryLocation::GpuOnly,
         )?;
         self.exposure = Buffer::new(
             ctx,
             "exposure state",
             exposure_buffer_bytes(),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::GpuToCpu,
+            vk::BufferUsageFlags::STORAGE_BUFFER | TRANSFER_BOTH,
+            MemoryLocation::GpuOnly,
         )?;
         let objects = scene.objects.len().max(1) as u64;
         self.budget_stats = Buffer::new(
             ctx,
             "budget statistics",
             objects * BUDGET_STAT_WORDS as u64 * 4,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::GpuToCpu,
+            vk::BufferUsageFlags::STORAGE_BUFFER | TRANSFER_BOTH,
+            MemoryLocation::GpuOnly,
         )?;
         self.budget_mask = Buffer::new(
             ctx,
             "budget selection",
             objects * 4,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
         )?;
         self.prt = super::prt_buffer::placeholder(ctx)?;
         // No history yet (`valid` 0): the first measured frame converges at once.
-        self.exposure.write(0, &[0u8; EXPOSURE_STATE_BYTES])?;
+        upload_now(ctx, "exposure state", |up| up.write(&self.exposure, 0, &[0u8; EXPOSURE_STATE_BYTES]))?;
         (self.env_map, self.env_mean, self.env_sh) = upload_environment(ctx, scene)?;
         self.shadow.create(ctx, scene)?;
         self.env_sampler = create_sampler(
@@ -299,14 +308,14 @@ impl GpuScene {
 
         self.draws = build_draws(scene, &self.ranges, &self.skinned);
         self.light_count = scene.lights.len() as u32;
-        write_instances(scene, self.origin, &self.ranges, &self.skinned, &mut self.instances)?;
-        write_lights(scene, self.origin, &mut self.lights)
+        upload_now(ctx, "instances and lights", |up| self.update_dynamic(up, scene))
     }
 
-    /// Re-writes instance transforms and lights (animation, later issues).
-    pub fn update_dynamic(&mut self, scene: &Scene) -> Result<()> {
-        write_instances(scene, self.origin, &self.ranges, &self.skinned, &mut self.instances)?;
-        write_lights(scene, self.origin, &mut self.lights)
+    /// Re-writes instance transforms and lights (animation, later issues)
+    /// through the frame's ring slot.
+    pub fn update_dynamic(&self, up: &mut Uploads, scene: &Scene) -> Result<()> {
+        write_instances(up, scene, self.origin, &self.ranges, &self.skinned, &self.instances)?;
+        write_lights(up, scene, self.origin, &self.lights)
     }
 
     /// Where `inst`'s vertices live: its own deformed range when skinned.
@@ -314,8 +323,8 @@ impl GpuScene {
         instance_range(&self.ranges, &self.skinned, inst)
     }
 
-    pub fn write_frame(&mut self, frame: &GpuFrame) -> Result<()> {
-        self.frame.write(0, bytemuck::bytes_of(frame))
+    pub fn write_frame(&self, up: &mut Uploads, frame: &GpuFrame) -> Result<()> {
+        up.write(&self.frame, 0, bytemuck::bytes_of(frame))
     }
 
     /// Replaces the PRT buffer (`words`: gpu/prt_buffer.rs `pack`; None: the
@@ -522,11 +531,12 @@ fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
 }
 
 fn write_instances(
+    up: &mut Uploads,
     scene: &Scene,
     origin: RenderOrigin,
     ranges: &[Vec<PrimitiveRange>],
     skinned: &[PrimitiveRange],
-    buf: &mut Buffer,
+    buf: &Buffer,
 ) -> Result<()> {
     let data: Vec<GpuInstance> = scene
         .instances
@@ -549,7 +559,7 @@ fn write_instances(
             }
         })
         .collect();
-    buf.write(0, bytemuck::cast_slice(&data))
+    up.write(buf, 0, bytemuck::cast_slice(&data))
 }
 
 /// Inverse transpose of the upper 3x3; a singular matrix (zero scale) keeps
@@ -561,9 +571,9 @@ fn normal_matrix(world: &Mat4) -> Mat4 {
     Mat4::from_mat3(n)
 }
 
-fn write_lights(scene: &Scene, origin: RenderOrigin, buf: &mut Buffer) -> Result<()> {
+fn write_lights(up: &mut Uploads, scene: &Scene, origin: RenderOrigin, buf: &Buffer) -> Result<()> {
     let data: Vec<GpuLight> = scene.lights.iter().map(|l| gpu_light(l, origin)).collect();
-    buf.write(0, bytemuck::cast_slice(&data))
+    up.write(buf, 0, bytemuck::cast_slice(&data))
 }
 
 fn gpu_light(l: &crate::scene::Light, origin: RenderOrigin) -> GpuLight {

@@ -19,6 +19,7 @@ use gpu_allocator::MemoryLocation;
 use super::origin::RenderOrigin;
 use super::shared::SHADOW_MAP_SIZE;
 use crate::scene::{Aabb, LightKind, Scene};
+use crate::vk::frame_ring::{upload_now, Uploads};
 use crate::vk::{image_barrier, Buffer, Context, Image};
 
 /// Floats per light in the views buffer (mat4, texel, perspective, 2 pad).
@@ -100,10 +101,10 @@ impl ShadowMaps {
             ctx,
             "shadow map views",
             bytes,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
         )?;
-        self.views.write(0, &vec![0u8; bytes as usize])?;
+        upload_now(ctx, "shadow map views", |up| up.write(&self.views, 0, &vec![0u8; bytes as usize]))?;
         // Readable before the first render: every shader that binds it
         // declares it SHADER_READ_ONLY_OPTIMAL (depth 1 = nothing occludes).
         let img = self.image.raw;
@@ -123,8 +124,9 @@ impl ShadowMaps {
     }
 
     /// Fits every mapped light's view to the scene's bounds (relative to
-    /// `origin`, like every GPU position) and writes the views.
-    pub fn write_views(&mut self, scene: &Scene, origin: RenderOrigin) -> Result<()> {
+    /// `origin`, like every GPU position) and writes the views (through the
+    /// frame's ring slot).
+    pub fn write_views(&self, up: &mut Uploads, scene: &Scene, origin: RenderOrigin) -> Result<()> {
         let bounds = scene_bounds(scene);
         if bounds.is_empty() || self.size <= 1 {
             return Ok(());
@@ -159,7 +161,7 @@ impl ShadowMaps {
             v[..16].copy_from_slice(&view_proj.to_cols_array());
             (v[16], v[17]) = (texel, perspective);
         }
-        self.views.write(0, bytemuck::cast_slice(&floats))
+        up.write(&self.views, 0, bytemuck::cast_slice(&floats))
     }
 
     pub fn destroy(&mut self, ctx: &Context) {

@@ -28,13 +28,12 @@ use anyhow::{Context as _, Result};
 use ash::vk;
 use glam::Mat4;
 
-use crate::accel::dynamic::RebuildPolicy;
-use crate::gpu::shared::{
-    FRAME_BUDGET, FRAME_FALLBACK_RASTER, RAY_COUNTER_BAD_PIXELS, RAY_COUNTER_SLOTS, RAY_COUNTER_TRUNCATED,
-};
+use crate::accel::dynamic::{RebuildPolicy, Update};
+use crate::gpu::shared::{FRAME_BUDGET, FRAME_FALLBACK_RASTER};
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
+use crate::vk::frame_ring::{FrameRing, Uploads};
 use crate::vk::timer::GpuTimer;
 use crate::vk::{Buffer, Context};
 use frame::{Access, Recorder, SharedBuffer, Use};
@@ -45,6 +44,7 @@ use targets::Targets;
 use tone::{ExposureState, ToneOperator, ToneSettings};
 use tracer::Tracer;
 
+pub use frame_results::Finished;
 pub use output::FrameOutput;
 pub use reference::ReferenceSettings;
 pub use settings::{AmbientMode, DebugView, EnvProjection, PrtOptions, RenderSettings};
@@ -109,14 +109,21 @@ pub struct Renderer {
     pub rebuild_policy: RebuildPolicy,
     update_cmd: vk::CommandBuffer,
     update_timer: GpuTimer,
-    /// GPU ms per pass of the last scene update (plus the host's share),
-    /// for benchmarks and the viewer.
+    /// GPU ms per pass of the last finished scene update (plus the host's
+    /// share), for benchmarks and the viewer (`finish_frame` sets it).
     pub update_timings: Vec<(&'static str, f64)>,
-    /// Skinned structures refit / rebuilt by the last scene update.
+    /// Skinned structures refit / rebuilt by the last finished scene update.
     pub update_counts: [usize; 2],
-    /// An update recorded into a frame by `record_scene_update`, awaiting
-    /// `finish_scene_update`.
-    pending_update: bool,
+    /// Per-slot staging of host writes and downloads (frames in flight):
+    /// one slot unless the viewer asks for more (`set_frames_in_flight`).
+    ring: FrameRing,
+    /// The frame being built: its slot, and whether its uploads were
+    /// recorded (`begin_frame` .. `record_downloads`).
+    open: Option<(usize, bool)>,
+    /// Per slot: what its frame left to read after its fence.
+    pending: Vec<frame_results::Pending>,
+    /// The budget selection the prepared frame traces (to its download).
+    budget_traced: Option<Vec<u32>>,
     readback_ldr: Buffer,
     readback_hdr: Buffer,
     frame_index: u32,
@@ -161,7 +168,10 @@ impl Renderer {
             update_timer: GpuTimer::empty(),
             update_timings: Vec::new(),
             update_counts: [0; 2],
-            pending_update: false,
+            ring: FrameRing::new(1, "frame ring")?,
+            open: None,
+            pending: vec![Default::default()],
+            budget_traced: None,
             gpu,
             targets: Targets::empty(extent),
             extent,
@@ -249,55 +259,48 @@ impl Renderer {
     /// moved (so a still scene rebuilds nothing). Pass times land in
     /// `update_timings`. The viewer uses `record_scene_update` instead.
     pub fn update_scene(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
-        self.plan_update(ctx, scene)?;
+        self.begin_frame(0)?;
         let cmd = self.update_cmd;
         ctx.begin_commands(cmd)?;
-        self.record_update(ctx, cmd, scene)?;
+        self.record_scene_update(ctx, cmd, scene)?;
+        self.record_downloads(ctx, cmd, false)?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
-        self.finish_update(ctx)
+        self.finish_frame(0).map(|_| ())
     }
 
-    /// `update_scene` without its own submission, for every backend:
-    /// records the update at the start of `cmd` (before `record`), so a
-    /// frame is one submission and the host never waits for the update.
-    /// Needs a GPU done with the previous frame, and `finish_scene_update`
-    /// once `cmd` has completed.
+    /// `update_scene` inside the open frame (`begin_frame`), for every
+    /// backend: stages its host writes in the frame's ring slot and records
+    /// the update at the start of `cmd` (before `record`), so a frame is one
+    /// submission and the host never waits for the update. Its results come
+    /// with `finish_frame` of the slot.
     pub fn record_scene_update(
         &mut self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         scene: &Scene,
     ) -> Result<()> {
-        self.plan_update(ctx, scene)?;
+        let plan = self.plan_update(scene)?;
+        self.record_uploads(ctx, cmd)?;
         self.record_update(ctx, cmd, scene)?;
-        if std::mem::replace(&mut self.pending_update, true) {
-            log::debug!("a recorded scene update was never finished; its statistics are lost");
-        }
-        Ok(())
+        self.download_update(plan)
     }
 
-    /// The host side of a recorded update, once its command buffer is done.
-    /// Does nothing when no update is pending.
-    pub fn finish_scene_update(&mut self, ctx: &Context) -> Result<()> {
-        if std::mem::take(&mut self.pending_update) {
-            self.finish_update(ctx)?;
-        }
-        Ok(())
-    }
-
-    /// Host work before an update is recorded: moved transforms and lights,
-    /// joint matrices, and the tracer's refit / rebuild decisions.
-    fn plan_update(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+    /// Host work before an update is recorded, staged in the open frame's
+    /// slot: moved transforms and lights, joint matrices, and the tracer's
+    /// refit / rebuild decisions (returned, for its finish).
+    fn plan_update(&mut self, scene: &Scene) -> Result<Vec<Update>> {
         self.reference.reset(); // the scene moved
-        self.gpu.update_dynamic(scene)?;
-        if let Some(s) = &mut self.skinning {
-            s.write(scene, self.gpu.origin)?;
+        let (slot, _) = self.open.context("begin_frame() must run before the scene update")?;
+        let up = &mut Uploads { ring: &mut self.ring, slot };
+        self.gpu.update_dynamic(up, scene)?;
+        if let Some(s) = &self.skinning {
+            s.write(up, scene, self.gpu.origin)?;
         }
-        if let Some(t) = &mut self.tracer {
-            t.prepare_update(ctx, scene, &self.gpu, &self.rebuild_policy)?;
+        match &mut self.tracer {
+            Some(t) => t.prepare_update(up, scene, &self.gpu, &self.rebuild_policy),
+            None => Ok(Vec::new()),
         }
-        Ok(())
     }
 
     /// The update's GPU passes, timed by `update_timer`.
@@ -312,22 +315,6 @@ impl Renderer {
         }
         if let Some(t) = &mut self.tracer {
             t.record_update(&mut rec, scene, &self.gpu)?;
-        }
-        Ok(())
-    }
-
-    /// Host work after the update's commands completed.
-    fn finish_update(&mut self, ctx: &Context) -> Result<()> {
-        self.update_timings = self.update_timer.results(ctx)?;
-        let bounds = match &self.skinning {
-            Some(s) => s.bounds()?,
-            None => Vec::new(),
-        };
-        self.update_counts = [0; 2];
-        if let Some(t) = &mut self.tracer {
-            let (counts, host) = t.finish_update(ctx, &bounds, &self.rebuild_policy)?;
-            self.update_timings.extend(host);
-            self.update_counts = [counts.refits, counts.rebuilds];
         }
         Ok(())
     }
@@ -453,7 +440,8 @@ impl Renderer {
         Ok(())
     }
 
-    /// Fills the frame uniforms for `camera` and builds the frame's passes.
+    /// Fills the frame uniforms for `camera` and builds the frame's passes;
+    /// its host writes are staged in the open frame's slot (`begin_frame`).
     pub fn prepare(
         &mut self,
         ctx: &Context,
@@ -461,13 +449,16 @@ impl Renderer {
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<()> {
+        let (slot, _) = self.open.context("begin_frame() must run before prepare()")?;
         self.ensure_frame(ctx, scene, settings)?;
+        let up = &mut Uploads { ring: &mut self.ring, slot };
+        frame_results::reset_counters(up, &self.gpu.ray_counters)?;
         let e = self.extent;
         let aspect = e.width as f32 / e.height.max(1) as f32;
         // The camera relative to the render origin, like every GPU transform.
         let budget_on = self.config.is_some_and(|c| c.budget);
         if let (true, Some(b)) = (budget_on, &settings.budget) {
-            self.budget.before_frame(&mut self.gpu, b, scene.objects.len())?;
+            self.budget_traced = Some(self.budget.before_frame(up, &self.gpu, b, scene.objects.len())?);
         }
         // The shadow maps render only when some visible object's shadows are
         // left out (a per-frame choice: the pass itself exists per config).
@@ -475,7 +466,7 @@ impl Renderer {
             false => None,
             true if !self.budget.shadows_left_out() => Some("every visible object's shadows are ray-traced"),
             true => {
-                self.gpu.shadow.write_views(scene, self.gpu.origin)?;
+                self.gpu.shadow.write_views(up, scene, self.gpu.origin)?;
                 None
             }
         };
@@ -551,7 +542,7 @@ impl Renderer {
             frame.reference_frame = self.reference.next(&frame);
         }
         debug_assert!(Mat4::from_cols_array(&frame.view).is_finite());
-        self.gpu.write_frame(&frame)
+        self.gpu.write_frame(&mut Uploads { ring: &mut self.ring, slot }, &frame)
     }
 
     /// Records every pass of one frame; the displayable result is in the
@@ -569,6 +560,7 @@ impl Renderer {
         tail: impl FnOnce(&mut Recorder, &Targets) -> Result<()>,
     ) -> Result<()> {
         anyhow::ensure!(self.config.is_some(), "prepare() must run before record()");
+        self.record_uploads(ctx, cmd)?;
         let (shadow_map_left_out, vis) = (self.shadow_map_left_out, &self.visibility);
         let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
         let cx = Cx {
@@ -593,7 +585,7 @@ impl Renderer {
         tail(&mut rec, &self.targets)?;
         self.frame_index = self.frame_index.wrapping_add(1);
         self.recorded_cold = std::mem::take(&mut self.passes_new);
-        Ok(())
+        self.record_downloads(ctx, cmd, true)
     }
 
     /// Renders one frame offscreen and reads back both outputs. With a
@@ -627,8 +619,8 @@ impl Renderer {
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<FrameOutput> {
+        self.begin_frame(0)?;
         self.prepare(ctx, scene, camera, settings)?;
-        self.gpu.ray_counters.write(0, &[0u8; RAY_COUNTER_SLOTS as usize * 4])?;
         let cmd = self.cmd;
         ctx.begin_commands(cmd)?;
         let (ldr_buf, hdr_buf) = (self.readback_ldr.raw, self.readback_hdr.raw);
@@ -670,27 +662,22 @@ impl Renderer {
         })?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
-        let timings = self.timer.results(ctx)?;
+        let done = self.finish_frame(0)?;
         let ldr = self.readback_ldr.read()?.to_vec();
         let hdr = bytemuck::pod_collect_to_vec::<u8, f32>(self.readback_hdr.read()?);
-        let counts: Vec<u32> = bytemuck::pod_collect_to_vec(self.gpu.ray_counters.read()?);
-        let ray_counts = [counts[0], counts[1], counts[2]];
-        let truncated_pixels = counts[RAY_COUNTER_TRUNCATED as usize];
-        let bad_pixels = counts[RAY_COUNTER_BAD_PIXELS as usize];
-        let exposure = self.exposure_state()?;
-        self.finish_budget(scene, camera, settings, &timings)?;
-        self.visibility.after_frame(&timings);
+        self.finish_budget(scene, camera, settings, &done)?;
+        self.visibility.after_frame(&done.timings);
         let e = self.extent;
         Ok(FrameOutput {
             width: e.width,
             height: e.height,
             ldr,
             hdr,
-            timings,
-            ray_counts,
-            truncated_pixels,
-            bad_pixels,
-            exposure,
+            timings: done.timings,
+            ray_counts: done.ray_counts,
+            truncated_pixels: done.truncated_pixels,
+            bad_pixels: done.bad_pixels,
+            exposure: done.exposure,
             cold: self.recorded_cold,
         })
     }
@@ -723,6 +710,7 @@ impl Renderer {
         }
         self.readback_ldr.destroy(ctx);
         self.readback_hdr.destroy(ctx);
+        self.ring.destroy(ctx);
         self.timer.destroy(ctx);
         for mut p in self.passes.drain(..) {
             p.pass.destroy(ctx);

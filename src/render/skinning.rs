@@ -13,8 +13,9 @@ use crate::gpu::origin::RenderOrigin;
 use crate::gpu::scene::GpuScene;
 use crate::gpu::shared::{SKIN_BOUNDS, SKIN_DEST, SKIN_JOINTS, SKIN_SOURCE};
 use crate::scene::{Aabb, Scene, Vertex};
+use crate::vk::frame_ring::{Source, Uploads};
 use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
-use crate::vk::{memory_barrier, Buffer, Context};
+use crate::vk::{Buffer, Context};
 
 /// Mirrors `SkinVertex` in glsl/anim/skinning.comp.
 #[repr(C)]
@@ -142,11 +143,13 @@ impl Skinning {
             ctx,
             "skinning joint matrices",
             joint_count as u64 * 64,
-            storage,
-            MemoryLocation::CpuToGpu,
+            storage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
         )?;
         let bounds_size = self.jobs.len() as u64 * 24;
-        self.bounds = Buffer::new(ctx, "skinned bounds", bounds_size, storage, MemoryLocation::GpuToCpu)?;
+        let transfer = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+        self.bounds =
+            Buffer::new(ctx, "skinned bounds", bounds_size, storage | transfer, MemoryLocation::GpuOnly)?;
         self.set = DescriptorSet::storage_buffers(
             ctx,
             "skinning set",
@@ -163,9 +166,9 @@ impl Skinning {
         Ok(())
     }
 
-    /// Writes this frame's joint matrices and resets the bounds accumulators.
-    /// The GPU must not be using them (the caller waited).
-    pub fn write(&mut self, scene: &Scene, origin: RenderOrigin) -> Result<()> {
+    /// Writes this frame's joint matrices and resets the bounds accumulators
+    /// (through the frame's ring slot).
+    pub fn write(&self, up: &mut Uploads, scene: &Scene, origin: RenderOrigin) -> Result<()> {
         // Node matrices relative to the render origin (joint matrices are
         // relative products, combined in f64 either way).
         let world: Vec<_> = scene.world_matrices().iter().map(|m| origin.relative(m)).collect();
@@ -173,15 +176,15 @@ impl Skinning {
         for &(node, skin) in &self.sources {
             m.extend(scene.joint_matrices(skin, node, &world));
         }
-        self.joints.write(0, bytemuck::cast_slice(&m))?;
+        up.write(&self.joints, 0, bytemuck::cast_slice(&m))?;
         let (lo, hi) = (orderable(f32::INFINITY), orderable(f32::NEG_INFINITY));
         let reset: Vec<u32> = (0..self.jobs.len()).flat_map(|_| [lo, lo, lo, hi, hi, hi]).collect();
-        self.bounds.write(0, bytemuck::cast_slice(&reset))
+        up.write(&self.bounds, 0, bytemuck::cast_slice(&reset))
     }
 
     /// Records the dispatches. The pass layer orders the vertex writes
-    /// before their readers (declared `Geometry` uses); the barrier here
-    /// only makes the bounds visible to the host once the frame is done.
+    /// before their readers (declared `Geometry` uses); the ring's download
+    /// at the frame's end waits for the bounds (`bounds_download`).
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let d = &ctx.device;
         unsafe {
@@ -191,17 +194,17 @@ impl Skinning {
                 d.cmd_dispatch(cmd, job.vertex_count.div_ceil(64), 1, 1);
             }
         }
-        memory_barrier(
-            ctx,
-            cmd,
-            (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
-            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
-        );
     }
 
-    /// Deformed bounds of each slot from the last completed skinning pass.
-    pub fn bounds(&self) -> Result<Vec<Aabb>> {
-        let raw: Vec<u32> = bytemuck::pod_collect_to_vec(self.bounds.read()?);
+    /// Where the ring's download reads the deformed bounds from.
+    pub fn bounds_source(&self) -> Source {
+        Source::Buffer { buffer: self.bounds.raw, offset: 0, size: self.bounds.size }
+    }
+
+    /// Deformed bounds of each slot, from the bytes of `bounds_source` of a
+    /// completed frame.
+    pub fn bounds(&self, bytes: &[u8]) -> Result<Vec<Aabb>> {
+        let raw: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..self.jobs.len() * 24]);
         Ok(raw
             .chunks_exact(6)
             .map(|b| Aabb {

@@ -15,7 +15,7 @@ use super::session::Viewer;
 use super::swapchain::Acquired;
 use super::{Flow, FRAMES_IN_FLIGHT};
 use crate::render::frame::{Access, Use};
-use crate::render::FrameOutput;
+use crate::render::{Finished, FrameOutput};
 use crate::vk::{image_barrier, memory_barrier, Buffer};
 
 pub(super) struct FrameSlot {
@@ -26,6 +26,8 @@ pub(super) struct FrameSlot {
 
 /// A frame copied to a host buffer, written to PNG once its fence is done.
 pub(super) struct PendingShot {
+    /// The frame slot whose fence it waits for.
+    pub(super) slot: usize,
     pub(super) buffer: Buffer,
     pub(super) extent: vk::Extent2D,
     pub(super) path: PathBuf,
@@ -52,25 +54,41 @@ impl Viewer {
         Ok(Flow::Continue)
     }
 
-    /// Reads the GPU pass times of the last submitted frame (its fence is
-    /// done); returns its passes' times (empty when none was pending).
-    fn collect_gpu_times(&mut self) -> Result<Vec<(&'static str, f64)>> {
-        if std::mem::take(&mut self.gpu_pending) {
-            let mut t = self.renderer.timer.results(&self.ctx)?;
-            let passes = t.clone();
-            // The scene update (skinning, refit, TLAS) of the frame, when it had one.
-            if self.animation.as_ref().is_some_and(|(_, _, paused)| !paused) {
+    /// The host's reads of frame slot `s`'s last frame (its fence is done;
+    /// with two frames in flight it is two frames old): GPU pass times (with
+    /// its scene update's), bad pixels, its screenshot. Empty when the slot
+    /// held no frame.
+    fn finish_slot(&mut self, s: usize) -> Result<Finished> {
+        let done = self.renderer.finish_frame(s)?;
+        if !done.timings.is_empty() {
+            let mut t = done.timings.clone();
+            if done.updated {
                 t.extend(self.renderer.update_timings.iter().copied());
             }
             self.stats.gpu(&t);
-            return Ok(passes);
         }
-        Ok(Vec::new())
+        if done.bad_pixels > 0 {
+            self.stats.bad_pixels(done.bad_pixels);
+        }
+        self.finish_screenshots(Some(s))?;
+        Ok(done)
     }
 
-    /// Writes a pending screenshot; its frame has completed.
-    pub(super) fn finish_screenshot(&mut self) -> Result<()> {
-        let Some(mut shot) = self.shot.take() else { return Ok(()) };
+    /// Writes the pending screenshots of frame slot `slot` (None: all, the
+    /// device is idle); their frames have completed.
+    pub(super) fn finish_screenshots(&mut self, slot: Option<usize>) -> Result<()> {
+        let (done, waiting) =
+            std::mem::take(&mut self.shots).into_iter().partition(|p| slot.is_none_or(|s| p.slot == s));
+        self.shots = waiting;
+        let mut result = Ok(());
+        for shot in done {
+            let r = self.write_screenshot(shot);
+            result = result.and(r);
+        }
+        result
+    }
+
+    fn write_screenshot(&mut self, mut shot: PendingShot) -> Result<()> {
         let r = (|| {
             let (w, h) = (shot.extent.width, shot.extent.height);
             let frame = FrameOutput::from_images(w, h, shot.buffer.read()?.to_vec(), Vec::new());
@@ -138,7 +156,8 @@ impl Viewer {
         let s = self.slot;
         let FrameSlot { fence, image_available, .. } = self.slots[s];
         // This slot's previous frame (two ago) must be done with its command
-        // buffer and image-available semaphore.
+        // buffer, image-available semaphore and ring slot. The other frame
+        // may still run: nothing below waits for it.
         unsafe { dev.wait_for_fences(&[fence], true, u64::MAX) }
             .context("waiting for a frame (device lost?)")?;
         let index = match self.presenter.acquire(image_available)? {
@@ -151,24 +170,16 @@ impl Viewer {
                 index
             }
         };
-        // One set of targets and frame uniforms in the renderer: the previous
-        // frame must finish before `prepare` rewrites them (and before its
-        // timestamps are read).
-        let prev = self.slots[(s + FRAMES_IN_FLIGHT - 1) % FRAMES_IN_FLIGHT].fence;
-        unsafe { dev.wait_for_fences(&[prev], true, u64::MAX) }
-            .context("waiting for a frame (device lost?)")?;
-        self.renderer.finish_scene_update(&self.ctx)?;
-        let passes = self.collect_gpu_times()?;
-        self.finish_screenshot()?;
-        let bad = self.renderer.take_bad_pixels()?;
-        if bad > 0 {
-            self.stats.bad_pixels(bad);
-        }
-        // The budget selects the next frame's objects from the finished
-        // frame's statistics (the camera has not moved since it).
+        // The renderer's host writes for this frame go through ring slot s
+        // (copied at the start of its command buffer), its reads come from
+        // slot s's last frame: the frame in flight is never touched.
+        let done = self.finish_slot(s)?;
+        // The budget selects this frame's objects from that frame's
+        // statistics (two frames old; the camera may have moved since, the
+        // selection follows a frame later).
         let camera = self.controller.camera();
-        self.renderer.finish_budget(&self.scene, &camera, &self.settings, &passes)?;
-        self.renderer.visibility.after_frame(&passes);
+        self.renderer.finish_budget(&self.scene, &camera, &self.settings, &done)?;
+        self.renderer.visibility.after_frame(&done.timings);
 
         // --capture-frame N or F9: this frame, from its uniforms to its
         // present, in a RenderDoc capture.
@@ -196,9 +207,10 @@ impl Viewer {
         }
         if last {
             unsafe { self.ctx.device.device_wait_idle() }.context("vkDeviceWaitIdle")?;
-            self.renderer.finish_scene_update(&self.ctx)?;
-            self.collect_gpu_times()?;
-            self.finish_screenshot()?;
+            // Both slots' frames, oldest first (`self.slot` is the next).
+            for k in 0..FRAMES_IN_FLIGHT {
+                self.finish_slot((self.slot + k) % FRAMES_IN_FLIGHT)?;
+            }
             return Ok(Flow::Exit);
         }
         Ok(Flow::Continue)
@@ -227,6 +239,7 @@ impl Viewer {
             }
         }
         let camera = self.controller.camera();
+        self.renderer.begin_frame(s)?;
         self.renderer.prepare(&self.ctx, &self.scene, &camera, &self.settings)?;
         // The scene update (skinning, refit, top level) goes into this
         // frame's command buffer, for every backend: no wait for it here.
@@ -250,7 +263,7 @@ impl Viewer {
         };
         let recorded = self.record(cmd, index, update_in_frame, shot_buffer.as_ref());
         if let (Some(buffer), Some(path)) = (shot_buffer, shot_path) {
-            self.shot = Some(PendingShot { buffer, extent: self.renderer.extent(), path });
+            self.shots.push(PendingShot { slot: s, buffer, extent: self.renderer.extent(), path });
         }
         recorded?;
 
@@ -269,7 +282,6 @@ impl Viewer {
             .signal_semaphore_infos(&signals);
         unsafe { dev.queue_submit2(self.ctx.queue, &[submit], fence) }
             .context("vkQueueSubmit2 (device lost?)")?;
-        self.gpu_pending = true;
         self.needs_recreate |= self.presenter.present(self.ctx.queue, index)?;
         self.presented += 1;
         self.slot = (s + 1) % FRAMES_IN_FLIGHT;

@@ -5,13 +5,12 @@
 //!
 //! Frames in flight: two slots, each with its own command buffer, fence and
 //! image-available semaphore; render-finished semaphores are per swapchain
-//! image (see `swapchain.rs`). The renderer owns one set of targets and one
-//! CPU-written frame-uniform buffer, so before `prepare` overwrites those
-//! uniforms the viewer waits for the previous frame's fence. What still
-//! overlaps: acquiring the next image (which may block on the presentation
-//! engine) and window-event handling run while the GPU finishes the previous
-//! frame. Full two-frame GPU overlap needs per-frame uniform buffers in the
-//! renderer.
+//! image (see `swapchain.rs`). The renderer stages every host write of a
+//! frame in the slot's frame ring slot (copied at the start of the frame's
+//! command buffer) and reads its results back through the same slot, so a
+//! frame waits only for its own slot's fence (two frames ago) and is
+//! prepared and recorded while the previous one runs. The results it reads
+//! (GPU times, bad pixels, the budget's statistics) are that older frame's.
 //!
 //! Keys: see README "Viewer".
 

@@ -30,7 +30,8 @@ pub(super) struct Viewer {
     pub(super) presenter: Presenter,
     pub(super) slots: Vec<FrameSlot>,
     pub(super) slot: usize,
-    pub(super) shot: Option<PendingShot>,
+    /// Screenshots copied by frames still in flight.
+    pub(super) shots: Vec<PendingShot>,
     pub(super) shot_request: Option<PathBuf>,
     pub(super) shots_taken: u32,
     /// F9: capture the next frame with RenderDoc.
@@ -46,8 +47,6 @@ pub(super) struct Viewer {
     /// command line's, then whatever the keys last set.
     pub(super) budget_keys: BudgetSettings,
     pub(super) stats: FrameStats,
-    /// The renderer's timestamps hold a submitted frame not yet read.
-    pub(super) gpu_pending: bool,
     pub(super) needs_recreate: bool,
     pub(super) paused: bool,
     pub(super) last_recreate_try: Instant,
@@ -123,6 +122,12 @@ impl Viewer {
             capture_frame: g.capture_frame,
         })?;
         let mut renderer = Renderer::new(&ctx, &scene, requested)?;
+        // The renderer stages host writes and reads results per frame slot,
+        // so a frame is recorded while the previous one runs.
+        if let Err(e) = renderer.set_frames_in_flight(&ctx, FRAMES_IN_FLIGHT) {
+            renderer.destroy(&ctx);
+            return Err(e);
+        }
         // An interactive view: auto primary visibility measures per view.
         renderer.visibility.measure = true;
         let presenter = match Presenter::new(&ctx, &window, opts.present_mode) {
@@ -139,7 +144,7 @@ impl Viewer {
             presenter,
             slots: Vec::new(),
             slot: 0,
-            shot: None,
+            shots: Vec::new(),
             shot_request: None,
             shots_taken: 0,
             capture_request: false,
@@ -150,7 +155,6 @@ impl Viewer {
             settings: job.settings,
             budget_keys: job.settings.budget.unwrap_or(BudgetSettings::effects(f64::INFINITY)),
             stats: FrameStats::new(now),
-            gpu_pending: false,
             needs_recreate: true,
             paused: false,
             last_recreate_try: now,
@@ -219,7 +223,7 @@ impl Viewer {
     /// Recreates the swapchain for the window's size (or pauses at zero).
     pub(super) fn recreate(&mut self) -> Result<()> {
         unsafe { self.ctx.device.device_wait_idle() }.context("vkDeviceWaitIdle (device lost?)")?;
-        self.finish_screenshot()?;
+        self.finish_screenshots(None)?;
         self.last_recreate_try = Instant::now();
         let was_paused = self.paused;
         let ok = self.presenter.recreate(&self.ctx, self.window_extent())?;
@@ -248,7 +252,7 @@ impl Drop for Viewer {
         unsafe {
             let _ = ctx.device.device_wait_idle();
         }
-        if let Some(mut shot) = self.shot.take() {
+        for mut shot in self.shots.drain(..) {
             shot.buffer.destroy(ctx);
         }
         for s in self.slots.drain(..) {

@@ -299,3 +299,32 @@ fn grow<'a>(
     }
     buf.as_mut().context("frame ring staging")
 }
+
+/// One frame's host writes, staged into its ring slot: the frame's
+/// command buffer copies them into the device buffers at its start
+/// (`FrameRing::record_uploads`), so the host never writes memory a frame
+/// still in flight reads.
+pub struct Uploads<'a> {
+    pub ring: &'a mut FrameRing,
+    pub slot: usize,
+}
+
+impl Uploads<'_> {
+    /// Stages `data` for `dst` (TRANSFER_DST usage) at byte `offset`.
+    pub fn write(&mut self, dst: &Buffer, offset: usize, data: &[u8]) -> Result<()> {
+        self.ring.upload(self.slot, dst, offset as u64, data)
+    }
+}
+
+/// Writes made outside any frame (loading, a rebuild after an idle wait):
+/// `f` stages them, one submission copies them, and this waits for it.
+pub fn upload_now(ctx: &Context, name: &str, f: impl FnOnce(&mut Uploads) -> Result<()>) -> Result<()> {
+    let mut ring = FrameRing::new(1, name)?;
+    let r = (|| {
+        ring.begin(0)?;
+        f(&mut Uploads { ring: &mut ring, slot: 0 })?;
+        ctx.one_shot(name, |cmd| ring.record_uploads(ctx, cmd, 0))
+    })();
+    ring.destroy(ctx);
+    r
+}

@@ -4,6 +4,7 @@
 use anyhow::Result;
 use ash::vk;
 
+use super::frame_ring::{Download, FrameRing, Source};
 use super::Context;
 
 /// Timestamps for up to `capacity` passes per frame.
@@ -67,29 +68,16 @@ impl GpuTimer {
         }
     }
 
-    /// Milliseconds per pass of the last completed frame (after its fence).
-    pub fn results(&self, ctx: &Context) -> Result<Vec<(&'static str, f64)>> {
-        if !self.enabled || self.names.is_empty() {
-            return Ok(self.names.iter().map(|n| (*n, f64::NAN)).collect());
-        }
-        let mut ticks = vec![0u64; self.names.len() * 2];
-        unsafe {
-            ctx.device.get_query_pool_results(
-                self.pool,
-                0,
-                &mut ticks,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-            )?
+    /// Registers the frame's timestamps as a download of ring slot `slot`
+    /// (copied on the GPU at the frame's end: the host never reads the pool
+    /// a later frame resets); `Readback::ms` turns them into pass times.
+    pub fn download(&self, ring: &mut FrameRing, slot: usize) -> Result<Readback> {
+        let count = self.names.len() as u32 * 2;
+        let download = match self.enabled && count > 0 {
+            true => Some(ring.download(slot, Source::Timestamps { pool: self.pool, first: 0, count })?),
+            false => None,
         };
-        Ok(self
-            .names
-            .iter()
-            .enumerate()
-            .map(|(i, n)| {
-                let dt = ticks[2 * i + 1].wrapping_sub(ticks[2 * i]);
-                (*n, dt as f64 * self.period_ns * 1e-6)
-            })
-            .collect())
+        Ok(Readback { names: self.names.clone(), download, period_ns: self.period_ns })
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
@@ -116,6 +104,29 @@ impl GpuTimer {
     pub fn end(&mut self, ctx: &Context, cmd: vk::CommandBuffer, slot: u32) {
         self.write(ctx, cmd, 2 * slot + 1, vk::PipelineStageFlags2::BOTTOM_OF_PIPE);
     }
+}
+
+/// A frame's pass names and where its timestamps land in its ring slot.
+pub struct Readback {
+    names: Vec<&'static str>,
+    download: Option<Download>,
+    period_ns: f64,
+}
+
+impl Readback {
+    /// Milliseconds per pass, after the fence of the slot's frame (NaN
+    /// without timestamps).
+    pub fn ms(&self, ring: &FrameRing, slot: usize) -> Result<Vec<(&'static str, f64)>> {
+        let Some(d) = self.download else {
+            return Ok(self.names.iter().map(|n| (*n, f64::NAN)).collect());
+        };
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(ring.read(slot, d)?);
+        Ok(self.names.iter().zip(ticks.chunks_exact(2)).map(|(n, t)| (*n, ms(t, self.period_ns))).collect())
+    }
+}
+
+fn ms(ticks: &[u64], period_ns: f64) -> f64 {
+    ticks[1].wrapping_sub(ticks[0]) as f64 * period_ns * 1e-6
 }
 
 /// A stable colour per pass name so captures are easy to scan.

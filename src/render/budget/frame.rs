@@ -15,6 +15,7 @@ use crate::gpu::shared::{
 };
 use crate::gpu::GpuScene;
 use crate::scene::{Aabb, Camera, Scene};
+use crate::vk::frame_ring::Uploads;
 
 const WORDS: usize = BUDGET_STAT_WORDS as usize;
 
@@ -120,21 +121,25 @@ impl BudgetState {
     }
 
     /// Resets the statistics and writes the selection for `objects`
-    /// objects: the current one, or, before there is one, everything
-    /// (a measuring frame; effects mode calibrates first with nothing).
+    /// objects (through the frame's ring slot): the current one, or, before
+    /// there is one, everything (a measuring frame; effects mode calibrates
+    /// first with nothing). Returns the selection, for `after_frame` of
+    /// this frame (with frames in flight, later frames select before it
+    /// completes).
     pub fn before_frame(
         &mut self,
-        gpu: &mut GpuScene,
+        up: &mut Uploads,
+        gpu: &GpuScene,
         settings: &BudgetSettings,
         objects: usize,
-    ) -> Result<()> {
+    ) -> Result<Vec<u32>> {
         let mut words = vec![0u32; objects.max(1) * WORDS];
         for w in words.chunks_exact_mut(WORDS) {
             // Count, maxima and ray counts 0, minima at the largest value:
             // atomicMin/Max/Add.
             (w[1], w[2]) = (u32::MAX, u32::MAX);
         }
-        gpu.budget_stats.write(0, bytemuck::cast_slice(&words))?;
+        up.write(&gpu.budget_stats, 0, bytemuck::cast_slice(&words))?;
         let measuring = match settings.mode {
             BudgetMode::Effects if !self.model.calibrated() => self.model.calibration_mask(),
             _ => EFFECT_ALL,
@@ -143,23 +148,26 @@ impl BudgetState {
             Some(m) => (0..objects.max(1)).map(|o| m.get(o).copied().unwrap_or(0)).collect(),
             None => vec![measuring; objects.max(1)],
         };
-        gpu.budget_mask.write(0, bytemuck::cast_slice(&self.in_flight))
+        up.write(&gpu.budget_mask, 0, bytemuck::cast_slice(&self.in_flight))?;
+        Ok(self.in_flight.clone())
     }
 
-    /// Reads the statistics of the frame that just completed (rendered
-    /// from `camera` at `screen`, its passes' GPU ms in `timings`, None
-    /// when they are not representative) and selects what the next frame
-    /// traces.
+    /// Takes the statistics (`words`, read back) of a completed frame that
+    /// traced `traced` (rendered from `camera` at `screen`, its passes' GPU
+    /// ms in `timings`, None when they are not representative) and selects
+    /// what the next frame traces. With frames in flight the selection is
+    /// one frame older than the frame it applies to.
+    #[allow(clippy::too_many_arguments)]
     pub fn after_frame(
         &mut self,
-        gpu: &GpuScene,
+        words: &[u32],
+        traced: &[u32],
         scene: &Scene,
         camera: &Camera,
         screen: Screen,
         settings: &BudgetSettings,
         timings: Option<&[(&'static str, f64)]>,
     ) -> Result<()> {
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(gpu.budget_stats.read()?);
         let n = scene.objects.len();
         let stage_ms = timings.map(|t| {
             effects::STAGES.map(|s| t.iter().filter(|(p, _)| *p == s).map(|(_, ms)| ms).sum::<f64>())
@@ -169,15 +177,10 @@ impl BudgetState {
         let pixels: Vec<u32> = (0..n).map(|o| stat(o)[0]).collect();
         let rays: Vec<[u32; effects::EFFECTS]> =
             (0..n).map(|o| std::array::from_fn(|e| stat(o)[BUDGET_STAT_RAYS as usize + e])).collect();
-        self.model.observe(&effects::Observation {
-            pixels: &pixels,
-            rays: &rays,
-            traced: &self.in_flight,
-            stage_ms,
-        });
+        self.model.observe(&effects::Observation { pixels: &pixels, rays: &rays, traced, stage_ms });
         let previous = self.mask_for(settings).map(|m| m.to_vec());
         let traced_before: Option<Vec<bool>> = previous.as_ref().map(|m| m.iter().map(|&b| b != 0).collect());
-        let objects = object_stats(scene, camera, &words, traced_before.as_deref());
+        let objects = object_stats(scene, camera, words, traced_before.as_deref());
         let lights = scene.lights.len() as u32;
         let shadow_lights = scene.lights.iter().filter(|l| l.casts_shadows).count() as u32;
         let params =

@@ -16,12 +16,12 @@ use crate::render::frame::{Access, Recorder, SharedBuffer, Use};
 use crate::render::kernel::Kernel;
 use crate::render::shading::Backend;
 use crate::scene::{Aabb, Scene};
+use crate::vk::frame_ring::{Source, Uploads};
 use crate::vk::pipeline::{DescriptorSet, Specialization};
 use crate::vk::Context;
 
 pub struct ComputeTracer {
     bvh: ComputeBvh,
-    plan: Vec<Update>,
 }
 
 impl ComputeTracer {
@@ -33,7 +33,7 @@ impl ComputeTracer {
                 ctx.caps.name
             );
         }
-        Ok(ComputeTracer { bvh: ComputeBvh::build(ctx, scene, gpu)?, plan: Vec::new() })
+        Ok(ComputeTracer { bvh: ComputeBvh::build(ctx, scene, gpu)? })
     }
 }
 
@@ -58,13 +58,12 @@ impl Tracer for ComputeTracer {
 
     fn prepare_update(
         &mut self,
-        _: &Context,
+        up: &mut Uploads,
         scene: &Scene,
         _: &GpuScene,
         policy: &RebuildPolicy,
-    ) -> Result<()> {
-        self.plan = self.bvh.prepare_update(scene, policy)?;
-        Ok(())
+    ) -> Result<Vec<Update>> {
+        self.bvh.prepare_update(up, scene, policy)
     }
 
     fn record_update(&mut self, rec: &mut Recorder, _: &Scene, _: &GpuScene) -> Result<()> {
@@ -88,19 +87,23 @@ impl Tracer for ComputeTracer {
         })
     }
 
+    fn readback(&self) -> Option<Source> {
+        self.bvh.roots_source()
+    }
+
     fn finish_update(
         &mut self,
-        _: &Context,
+        plan: &[Update],
         _: &[Aabb],
+        roots: Option<&[u8]>,
         policy: &RebuildPolicy,
     ) -> Result<(UpdateCounts, Vec<(&'static str, f64)>)> {
-        let plan = std::mem::take(&mut self.plan);
-        self.bvh.finish_update(&plan, policy)?;
+        self.bvh.finish_update(plan, policy, roots)?;
         let mut times = vec![("top level (CPU)", self.bvh.top_level_ms)];
         if plan.contains(&Update::Rebuild) {
             times.insert(0, ("bvh rebuild (CPU)", self.bvh.rebuild_ms));
         }
-        Ok((counts(&plan), times))
+        Ok((counts(plan), times))
     }
 
     fn destroy(&mut self, ctx: &Context) {

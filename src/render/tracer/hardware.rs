@@ -15,6 +15,7 @@ use crate::render::frame::{Access, Recorder, SharedBuffer, Use};
 use crate::render::kernel::Kernel;
 use crate::render::shading::Backend;
 use crate::scene::{Aabb, Scene};
+use crate::vk::frame_ring::{Source, Uploads};
 use crate::vk::pipeline::{Binding, DescriptorSet, Specialization};
 use crate::vk::Context;
 
@@ -23,9 +24,12 @@ type KernelFn = fn(&Context, &str, vk::PipelineLayout, &Specialization) -> Resul
 pub struct HardwareTracer {
     accel: SceneAccel,
     set: DescriptorSet,
+    /// The TLAS the set holds.
+    bound_tlas: vk::AccelerationStructureKHR,
     kernel: KernelFn,
     backend: Backend,
-    /// What the update being recorded does to each skinned BLAS.
+    /// What the update being recorded does to each skinned BLAS (its
+    /// `finish_update` gets a copy: frames in flight record later updates).
     plan: Vec<Update>,
 }
 
@@ -44,7 +48,8 @@ impl HardwareTracer {
             &[(TRACE_TLAS, Binding::one(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR))],
         )?;
         set.write_acceleration_structure(ctx, TRACE_TLAS, accel.tlas.raw);
-        Ok(HardwareTracer { accel, set, kernel, backend, plan: Vec::new() })
+        let bound_tlas = accel.tlas.raw;
+        Ok(HardwareTracer { accel, set, bound_tlas, kernel, backend, plan: Vec::new() })
     }
 }
 
@@ -67,12 +72,19 @@ impl Tracer for HardwareTracer {
         &self.set
     }
 
-    fn prepare_update(&mut self, _: &Context, _: &Scene, _: &GpuScene, policy: &RebuildPolicy) -> Result<()> {
+    fn prepare_update(
+        &mut self,
+        up: &mut Uploads,
+        scene: &Scene,
+        _: &GpuScene,
+        policy: &RebuildPolicy,
+    ) -> Result<Vec<Update>> {
         self.plan = match &self.accel.dynamic {
             Some(d) => d.blases.iter().map(|b| b.state.next(policy)).collect(),
             None => Vec::new(),
         };
-        Ok(())
+        self.accel.write_instances(up, scene)?;
+        Ok(self.plan.clone())
     }
 
     fn record_update(&mut self, rec: &mut Recorder, scene: &Scene, gpu: &GpuScene) -> Result<()> {
@@ -89,25 +101,34 @@ impl Tracer for HardwareTracer {
         rec.pass("tlas build", vk::PipelineStageFlags2::NONE, &[structures], |cmd| {
             accel.record_tlas(ctx, cmd, scene)
         })?;
-        // A TLAS that had to grow is a new object; nothing recorded so far
-        // binds the set, so rewriting it here is allowed.
-        self.set.write_acceleration_structure(ctx, TRACE_TLAS, self.accel.tlas.raw);
+        // A TLAS that had to grow is a new object (`record_tlas` waited for
+        // the device first); nothing recorded so far binds the set, so
+        // rewriting it here is allowed. Only then: a frame in flight may use
+        // the set, and updating it under that frame is undefined.
+        if self.bound_tlas != self.accel.tlas.raw {
+            self.set.write_acceleration_structure(ctx, TRACE_TLAS, self.accel.tlas.raw);
+            self.bound_tlas = self.accel.tlas.raw;
+        }
         Ok(())
+    }
+
+    fn readback(&self) -> Option<Source> {
+        None
     }
 
     fn finish_update(
         &mut self,
-        _: &Context,
+        plan: &[Update],
         skinned_bounds: &[Aabb],
+        _: Option<&[u8]>,
         policy: &RebuildPolicy,
     ) -> Result<(UpdateCounts, Vec<(&'static str, f64)>)> {
-        let plan = std::mem::take(&mut self.plan);
         if let Some(d) = &mut self.accel.dynamic {
-            for ((b, bounds), u) in d.blases.iter_mut().zip(skinned_bounds).zip(&plan) {
+            for ((b, bounds), u) in d.blases.iter_mut().zip(skinned_bounds).zip(plan) {
                 b.state.done(*u, bounds, policy);
             }
         }
-        Ok((counts(&plan), Vec::new()))
+        Ok((counts(plan), Vec::new()))
     }
 
     fn destroy(&mut self, ctx: &Context) {

@@ -16,9 +16,10 @@ use ash::vk;
 use super::frame::Recorder;
 use super::kernel::Kernel;
 use super::shading::Backend;
-use crate::accel::dynamic::RebuildPolicy;
+use crate::accel::dynamic::{RebuildPolicy, Update};
 use crate::gpu::GpuScene;
 use crate::scene::{Aabb, Scene};
+use crate::vk::frame_ring::{Source, Uploads};
 use crate::vk::pipeline::{DescriptorSet, Specialization};
 use crate::vk::Context;
 
@@ -47,25 +48,31 @@ pub trait Tracer {
 
     /// Host work before an update is recorded (instances moved, skinned
     /// meshes deformed): which structures refit or rebuild, CPU rebuilds,
-    /// top-level records. The GPU must be done with the previous frame.
+    /// top-level records, all staged in the frame's ring slot (a frame may
+    /// be in flight). Returns the plan, for `finish_update` of this frame.
     fn prepare_update(
         &mut self,
-        ctx: &Context,
+        up: &mut Uploads,
         scene: &Scene,
         gpu: &GpuScene,
         policy: &RebuildPolicy,
-    ) -> Result<()>;
+    ) -> Result<Vec<Update>>;
 
     /// Records the update's GPU passes (after skinning, before tracing).
     fn record_update(&mut self, rec: &mut Recorder, scene: &Scene, gpu: &GpuScene) -> Result<()>;
 
-    /// After the update's commands completed: feeds the rebuild policy
-    /// (`skinned_bounds`: the skinning pass's deformed bounds per slot).
+    /// What the update's finish reads back at the end of its frame.
+    fn readback(&self) -> Option<Source>;
+
+    /// After the update's frame completed: feeds the rebuild policy
+    /// (`plan`: `prepare_update`'s; `skinned_bounds`: the skinning pass's
+    /// deformed bounds per slot; `readback`: the bytes of `readback`).
     /// Returns the counts and host-side times of the update.
     fn finish_update(
         &mut self,
-        ctx: &Context,
+        plan: &[Update],
         skinned_bounds: &[Aabb],
+        readback: Option<&[u8]>,
         policy: &RebuildPolicy,
     ) -> Result<(UpdateCounts, Vec<(&'static str, f64)>)>;
 
