@@ -25,7 +25,7 @@ layout(set = SET_TRACE, binding = BVH_BLAS_NODES, scalar) readonly buffer BlasWi
 // ever dropped.
 #define WIDE_STACK 96
 
-// Compare-exchange of slots a < b (constants) by entry distance.
+// Compare-exchange of slots a < b (constants) by sort key (entry distance).
 #define WIDE_SORT2(a, b)                                 \
     if (ts[b] < ts[a]) {                                 \
         float t_ = ts[a];                                \
@@ -109,8 +109,9 @@ vec4 wide_entries(WideNode n, WideRay r, float tmax) {
 
 // Closest hit (any opaque hit for shadow rays) in the wide tree at
 // blas_wide[base...]: hit children sorted by entry distance, the nearest
-// visited next, the others pushed far to near with their entry distance, and
-// dropped when popped if a hit found since is nearer. `in_flat`: the flat static
+// (shadow rays: the farthest) visited next, the others pushed in reverse
+// order with their sort key, and dropped when popped if a hit found since is
+// nearer. `in_flat`: the flat static
 // tree (leaves index flat_tris; `mask` filters its triangles); otherwise
 // instance `inst_index`'s BLAS.
 bool trace_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint prim_offset, vec3 o, vec3 inv_d,
@@ -137,6 +138,16 @@ bool trace_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint p
             // array, which llvmpipe would keep in memory per lane.
             vec4 ts = wide_entries(n, wr4, tmax);
             uint cs[4] = uint[4](n.child[0], n.child[1], n.child[2], n.child[3]);
+            // Shadow rays: farthest child first. Any blocking hit ends the
+            // ray, so the order only decides how soon one is found; the
+            // nearest boxes of a ray leaving a surface hold mostly that
+            // surface's surroundings, which it grazes without hitting
+            // (measured on Sponza: 18.9 -> 12.3 nodes and 4.6 -> 3.1
+            // triangles per shadow ray; the armadillo view: 4.0 -> 4.3
+            // nodes). Sorting the negated entry distances does it; a shadow
+            // ray's tmax never shrinks before it stops, so the negated
+            // distances it pushes never drop a pending child.
+            if (shadow) ts = mix(vec4(1e38), -ts, lessThan(ts, vec4(1e37)));
             WIDE_SORT2(0, 1);
             WIDE_SORT2(2, 3);
             WIDE_SORT2(0, 2);
