@@ -76,7 +76,6 @@ WideRay wide_setup(vec3 o, vec3 inv_d) {
         tf = min(tf, qf * b + af);                                                           \
     }
 
-
 // Entry distance of each of node n's 4 child boxes (1e38: missed, or no such
 // child): one slab test over the 4 children per axis, in the quantized
 // frame. A child plane's distance is (origin + q * s - o) * inv = a + q * b
@@ -84,9 +83,9 @@ WideRay wide_setup(vec3 o, vec3 inv_d) {
 // plane costs one multiply-add; the sign of inv picks which byte is the near
 // plane, so no min/max per plane. Rounding: a is off by 2u|origin - o||inv|,
 // the host's decode (the box it proved conservative) by u|origin + q s||inv|,
-// q * b + a by u(|q b| + |t|) (u = 2^-24); w below bounds the first three,
-// the exit's relative widening (as in ray_box) the last. A (nearly) parallel
-// axis constrains nothing: conservative, and no 0 * inf.
+// q * b + a by u(|q b| + |t|) (u = 2^-24); w (WIDE_AXIS) bounds the first
+// three, the exit's relative widening (as in ray_box) the last. A (nearly)
+// parallel axis constrains nothing: conservative, and no 0 * inf.
 vec4 wide_entries(WideNode n, WideRay r, float tmax) {
     const uvec4 sh = uvec4(0u, 8u, 16u, 24u);
     vec4 tn = vec4(0.0);
