@@ -122,3 +122,60 @@ fn axis_aligned_and_grazing_rays_stay_finite() {
         assert!(f.radiance(W / 2, H / 2)[0] > 0.5, "{backend:?}: axis-aligned centre ray missed the box");
     }
 }
+
+/// Axis-parallel rays lying exactly in the planes of a cube's faces (and
+/// through its edges and corners), with +0.0 and -0.0 in their zero
+/// components: each must hit the face it enters through that face's edge.
+/// The compute tracer's 4-wide node test gives an axis the ray is parallel
+/// to no slab at all (its 1/d is not used: 0 * inf would be NaN, which
+/// GLSL's min/max need not ignore). With that rule removed (the slab from
+/// the zeroed 1/d, [0, 0]) every one of these rays misses.
+#[test]
+fn axis_parallel_rays_in_the_face_planes_of_a_cube_hit() {
+    use hybrid_rt::app::RayBench;
+    use hybrid_rt::render::rays::sets::RayKind;
+    use hybrid_rt::render::rays::{BenchRay, Traversal};
+
+    let s =
+        common::scene_from_toml("cube_planes", &scene("primitive = \"cube\"\nsize = 1.0", [4.0, 0.0, 0.0]));
+    let ctx = common::validated_context();
+    let bench = RayBench::with_traversal(&ctx, &s, Traversal::Lane).expect("set up both tracers");
+    let grid = [-0.5f64, -0.25, 0.0, 0.25, 0.5];
+    let mut rays = Vec::new();
+    for axis in 0..3 {
+        for sign in [1.0f64, -1.0] {
+            for (&u, &v) in grid.iter().flat_map(|u| grid.iter().map(move |v| (u, v))) {
+                for zeros in [[0.0f32, 0.0], [-0.0, -0.0], [0.0, -0.0]] {
+                    let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+                    let mut o = glam::DVec3::ZERO;
+                    o[axis] = -3.0 * sign;
+                    o[a] = u;
+                    o[b] = v;
+                    let mut d = [0.0f32; 3];
+                    d[axis] = sign as f32;
+                    d[a] = zeros[0];
+                    d[b] = zeros[1];
+                    let origin = bench.gpu.origin.point(o).to_array();
+                    rays.push(BenchRay { origin, tmax: 100.0, dir: d, pad: 0 });
+                }
+            }
+        }
+    }
+    let report = bench.kind(&ctx, RayKind::Primary, &rays, 1);
+    let mut bench = bench;
+    bench.destroy(&ctx);
+    let report = report.expect("trace the rays");
+    let missed: Vec<_> = rays
+        .iter()
+        .zip(&report.compute.results)
+        .filter(|(_, r)| r.hit == 0 || (r.t - 2.5).abs() > 1e-4)
+        .map(|(ray, r)| (ray.origin, ray.dir, r.hit, r.t))
+        .collect();
+    assert!(
+        missed.is_empty(),
+        "{} of {} rays missed the face they enter: {missed:?}",
+        missed.len(),
+        rays.len()
+    );
+    common::assert_validation_clean(&ctx);
+}
