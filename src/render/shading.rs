@@ -246,6 +246,9 @@ pub struct ShadingConfig {
     /// records one: render/visibility.rs). `Raster` in pure ray-traced mode
     /// (not used there).
     pub visibility: crate::render::settings::PrimaryVisibility,
+    /// The raster G-buffer culls occluded clusters (render/occlusion.rs):
+    /// asked for, and the device has multi-draw indirect with a first instance.
+    pub occlusion: bool,
 }
 
 impl ShadingConfig {
@@ -303,6 +306,7 @@ impl ShadingConfig {
             aa: settings.aa,
             reference,
             visibility,
+            occlusion: settings.occlusion_culling && ctx.caps.multi_draw_indirect,
         })
     }
 
