@@ -25,19 +25,28 @@ layout(push_constant) uniform Push {
     uint height;
 } pc;
 
+// Texels per side a test reads at most: a finer level than 2x2 texels
+// would allow, so a box is not kept only because a coarse texel also
+// covers the sky beside it.
+const int TEXELS = 8;
+
 // Whether a box whose nearest depth is `z_near` and whose pixels span
 // p0..p1 (inclusive) lies behind everything drawn over those pixels.
 bool occluded(ivec2 p0, ivec2 p1, float z_near) {
-    // The finest level where the rectangle spans at most 2x2 texels.
+    // The finest level where the rectangle spans at most TEXELS^2 texels.
     int k = 0;
-    while (k < int(pc.levels) && any(greaterThan((p1 >> (k + 1)) - (p0 >> (k + 1)), ivec2(1)))) k++;
+    while (k < int(pc.levels) && any(greaterThanEqual((p1 >> (k + 1)) - (p0 >> (k + 1)), ivec2(TEXELS)))) k++;
     if (k >= int(pc.levels)) return false;
     ivec2 t0 = p0 >> (k + 1), t1 = p1 >> (k + 1);
-    float a = texelFetch(hiz, t0, k).r, b = texelFetch(hiz, ivec2(t1.x, t0.y), k).r;
-    float c = texelFetch(hiz, ivec2(t0.x, t1.y), k).r, d = texelFetch(hiz, t1, k).r;
-    float far = min(min(a, b), min(c, d));
     // A relative margin for the rounding of the raster's transform.
-    return z_near * 1.0001 + 1e-7 < far;
+    float z = z_near * 1.0001 + 1e-7;
+    for (int y = t0.y; y <= t1.y; y++) {
+        for (int x = t0.x; x <= t1.x; x++) {
+            // The farthest depth drawn under this texel is not behind the box.
+            if (texelFetch(hiz, ivec2(x, y), k).r <= z) return false;
+        }
+    }
+    return true;
 }
 
 void main() {
