@@ -247,7 +247,8 @@ pub struct ShadingConfig {
     /// (not used there).
     pub visibility: crate::render::settings::PrimaryVisibility,
     /// The raster G-buffer culls occluded clusters (render/occlusion.rs):
-    /// asked for, and the device has multi-draw indirect with a first instance.
+    /// asked for, the pass rasterizes, and the device has multi-draw
+    /// indirect with a first instance.
     pub occlusion: bool,
 }
 
@@ -306,7 +307,11 @@ impl ShadingConfig {
             aa: settings.aa,
             reference,
             visibility,
-            occlusion: settings.occlusion_culling && ctx.caps.multi_draw_indirect,
+            // Only the raster G-buffer pass (hybrid, raster or auto visibility) culls.
+            occlusion: settings.occlusion_culling
+                && ctx.caps.multi_draw_indirect
+                && mode == Mode::Hybrid
+                && visibility != Pv::Traced,
         })
     }
 
