@@ -59,23 +59,43 @@ pub struct ClusterList {
     pub ranges: Vec<(u32, u32)>,
 }
 
-/// Splits every rigid draw into clusters of at most `per_cluster` triangles.
+/// Splits every rigid draw into runs of at most `per_cluster` triangles,
+/// ending a run early where the next triangle would stretch its box past
+/// 1/32 of the scene's diagonal (in world units, under the instance's
+/// largest scale): a mesh's index order is not always spatially coherent
+/// (Sponza's are not: 128-triangle runs had a median box of 2 m in a 51 m
+/// scene), and a long box is almost never hidden.
 pub fn build(scene: &Scene, draws: &[Draw], per_cluster: u32) -> ClusterList {
     let mut out = ClusterList::default();
+    let world_limit = (scene.bounds.max - scene.bounds.min).length() / 32.0;
     for d in draws {
         let inst = &scene.instances[d.instance as usize];
         let skinned = inst.skinned.is_some();
         let prim = &scene.meshes[inst.mesh].primitives[inst.primitive];
+        let m = inst.world;
+        let scale = [m.x_axis, m.y_axis, m.z_axis].iter().map(|a| a.truncate().length()).fold(0.0, f64::max);
+        let limit =
+            if scale > 0.0 && world_limit.is_finite() { world_limit / scale as f32 } else { f32::INFINITY };
         let first = out.clusters.len() as u32;
         let triangles = d.range.index_count / 3;
         let mut t = 0;
         while t < triangles {
-            let n = if skinned { triangles } else { per_cluster.min(triangles - t) };
+            let mut n = 0;
             let mut b = Aabb::EMPTY;
-            if !skinned {
-                for &i in &prim.indices[(t * 3) as usize..((t + n) * 3) as usize] {
-                    b.grow(Vec3::from(prim.vertices[i as usize].position));
+            while t + n < triangles && (skinned || n < per_cluster) {
+                if skinned {
+                    n = triangles - t;
+                    break;
                 }
+                let mut grown = b;
+                for &i in &prim.indices[((t + n) * 3) as usize..((t + n) * 3 + 3) as usize] {
+                    grown.grow(Vec3::from(prim.vertices[i as usize].position));
+                }
+                if n > 0 && (grown.max - grown.min).length() > limit {
+                    break;
+                }
+                b = grown;
+                n += 1;
             }
             out.commands.push(DrawCommand {
                 index_count: n * 3,
