@@ -8,8 +8,8 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 // Level 0 reads the depth buffer, the others the level below.
-layout(set = 0, binding = HIZ_SRC) uniform sampler2D src;
-layout(set = 0, binding = HIZ_DST, r32f) uniform writeonly image2D dst;
+layout(set = SET_HIZ, binding = HIZ_SRC) uniform sampler2D src;
+layout(set = SET_HIZ, binding = HIZ_DST, r32f) uniform writeonly image2D dst;
 
 void main() {
     ivec2 d = ivec2(gl_GlobalInvocationID.xy);

@@ -297,7 +297,9 @@ shared! {
     id OCC_COMMANDS = 2;
     id OCC_COUNTERS = 3;
     id OCC_HIZ = 4;
-    // Set 0 of the pyramid's reduction: the level read, the level written.
+    // The pyramid's reduction has one set (its only one, so number 0): the
+    // level read, the level written.
+    id SET_HIZ = 0;
     id HIZ_SRC = 0;
     id HIZ_DST = 1;
     // Counters: clusters drawn in phase 1, drawn in phase 2, occluded,
