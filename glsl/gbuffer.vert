@@ -11,13 +11,26 @@
 layout(location = 2) out vec2 v_uv;
 #endif
 layout(location = 3) flat out uint v_instance;
+#ifdef GB_CLUSTER
+// Occlusion culling draws clusters (render/occlusion.rs): firstInstance is
+// the cluster, which names the instance and its first triangle.
+#include "common/cluster.glsl"
+layout(location = 4) flat out uint v_first_primitive;
+#endif
 
 void main() {
-    Instance inst = instances[gl_InstanceIndex];
+#ifdef GB_CLUSTER
+    Cluster cluster = clusters[gl_InstanceIndex];
+    uint instance = cluster.instance;
+    v_first_primitive = cluster.first_primitive;
+#else
+    uint instance = gl_InstanceIndex;
+#endif
+    Instance inst = instances[instance];
     Vertex vtx = vertices[gl_VertexIndex];
     gl_Position = frame.view_proj * (inst.world * vec4(vtx.position, 1.0));
 #ifdef GB_UV
     v_uv = vtx.uv;
 #endif
-    v_instance = gl_InstanceIndex;
+    v_instance = instance;
 }

@@ -14,6 +14,12 @@ layout(location = 2) in vec2 v_uv;
 #endif
 
 layout(location = 3) flat in uint v_instance;
+#ifdef GB_CLUSTER
+// The cluster's first triangle within its draw (gbuffer.vert).
+layout(location = 4) flat in uint v_first_primitive;
+#else
+const uint v_first_primitive = 0u;
+#endif
 
 layout(location = 0) out uvec2 o_hit;  // instance + 1, primitive
 
@@ -27,5 +33,5 @@ void main() {
         discard;
     }
 #endif
-    o_hit = uvec2(v_instance + 1u, uint(gl_PrimitiveID));
+    o_hit = uvec2(v_instance + 1u, v_first_primitive + uint(gl_PrimitiveID));
 }

@@ -303,6 +303,10 @@ struct ViewArgs {
     /// the cheaper; render: raster, so images do not depend on timing).
     #[arg(long, value_enum, default_value_t = PrimaryVisibility::Auto)]
     primary_visibility: PrimaryVisibility,
+    /// Two-phase occlusion culling of the raster G-buffer's clusters (the
+    /// image is the same; off for measurement).
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    occlusion_culling: OnOff,
     /// Anti-aliasing after tone mapping: edge (G-buffer depth and normal
     /// discontinuities), fxaa (luminance edges) or none [default: edge].
     #[arg(long, value_enum)]
@@ -475,6 +479,7 @@ impl ViewArgs {
                 prt: self.env.prt_options(),
                 reference: self.env.reference(),
                 primary_visibility: self.primary_visibility,
+                occlusion_culling: self.occlusion_culling == OnOff::On,
             },
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),
@@ -775,4 +780,11 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// A switch on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum OnOff {
+    On,
+    Off,
 }

@@ -49,6 +49,12 @@ pub struct BenchReport {
     /// G-buffer draws of the last measured frame: recorded, and left out
     /// as outside the view frustum.
     pub raster_draws: (usize, u32),
+    /// Their triangles (before occlusion culling).
+    pub raster_triangles: u64,
+    /// Occlusion culling's counters of the last measured frame (None: off):
+    /// clusters drawn in phase 1, in phase 2, occluded, outside the
+    /// frustum; triangles drawn. And the scene's cluster count.
+    pub occlusion: Option<([u32; 5], usize)>,
     /// Auto primary visibility: what the last measured frame used and the
     /// times it chose by (None: raster or traced was fixed, or pure RT).
     pub visibility: Option<String>,
@@ -98,7 +104,15 @@ impl BenchReport {
         let (drawn, culled) = self.raster_draws;
         if drawn + culled as usize > 0 {
             s.push_str(&format!(
-                "gbuffer draws (last frame): {drawn} recorded, {culled} outside the view frustum\n"
+                "gbuffer draws (last frame): {drawn} recorded, {culled} outside the view frustum; {} triangles\n",
+                self.raster_triangles
+            ));
+        }
+        if let Some(([first, second, occluded, outside, triangles], clusters)) = self.occlusion {
+            s.push_str(&format!(
+                "occlusion culling (last frame): {} of {clusters} clusters drawn ({first} in phase 1, {second} in \
+                 phase 2), {occluded} occluded, {outside} outside the frustum; {triangles} triangles drawn\n",
+                first + second
             ));
         }
         if let Some(v) = &self.visibility {
@@ -473,6 +487,10 @@ pub fn bench(
                     .map(|b| (b.budget, budget_frames)),
                 gbuffer_bytes_per_pixel: crate::render::passes::gbuffer::bytes_per_pixel(renderer.targets()),
                 raster_draws: renderer.raster_draws(),
+                raster_triangles: renderer.raster_triangles(),
+                occlusion: renderer
+                    .occlusion_counts()
+                    .map(|c| (c, renderer.gpu.clusters.list.clusters.len())),
                 visibility: renderer.visibility.describe(),
             });
         }

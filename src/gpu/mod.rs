@@ -3,6 +3,7 @@
 //! types. Sits between `vk` and the layers that use the GPU scene (`accel`,
 //! `render`): it imports only `vk` and `scene`.
 
+pub mod clusters;
 pub mod env_sh;
 pub mod origin;
 pub mod prt_buffer;

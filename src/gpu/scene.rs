@@ -88,6 +88,8 @@ pub struct GpuScene {
     /// Bounds of each skinned slot's first pose (posed on the CPU).
     pub skinned_bounds: Vec<Aabb>,
     pub draws: Vec<Draw>,
+    /// The draws' clusters for occlusion culling (gpu/clusters.rs).
+    pub clusters: super::clusters::Clusters,
     pub light_count: u32,
     /// Mean environment radiance (solid-angle weighted), for the ambient term.
     pub env_mean: Vec3,
@@ -137,6 +139,7 @@ impl GpuScene {
             textures: Vec::new(),
             samplers: Vec::new(),
             env_map: Image::null(),
+            clusters: super::clusters::Clusters::null(),
             env_sampler: vk::Sampler::null(),
             shadow: ShadowMaps::null(),
             set: DescriptorSet::null(),
@@ -307,6 +310,7 @@ impl GpuScene {
         }
 
         self.draws = build_draws(scene, &self.ranges, &self.skinned);
+        self.clusters = super::clusters::Clusters::upload(ctx, scene, &self.draws)?;
         self.light_count = scene.lights.len() as u32;
         upload_now(ctx, "instances and lights", |up| self.update_dynamic(up, scene))
     }
@@ -368,6 +372,7 @@ impl GpuScene {
         }
         self.env_map.destroy(ctx);
         self.shadow.destroy(ctx);
+        self.clusters.destroy(ctx);
         unsafe {
             for (_, s) in &self.samplers {
                 ctx.device.destroy_sampler(*s, None);

@@ -285,6 +285,28 @@ shared! {
     uint LIGHT_STRIDE = 64;
     uint BVH_NODE_STRIDE = 32;
     uint BVH_INSTANCE_STRIDE = 144;
+    uint CLUSTER_STRIDE = 32;
+
+    // Two-phase occlusion culling of the G-buffer's clusters (gpu/clusters.rs,
+    // render/occlusion.rs). Set 1 of the cull pipeline and of the cluster
+    // raster pipelines: the clusters, each cluster's visibility in the
+    // previous frame, the indirect draws (phase 1's, then phase 2's), the
+    // counters, the depth pyramid (HiZ).
+    id OCC_CLUSTERS = 0;
+    id OCC_VISIBLE = 1;
+    id OCC_COMMANDS = 2;
+    id OCC_COUNTERS = 3;
+    id OCC_HIZ = 4;
+    // The pyramid's reduction has one set (its only one, so number 0): the
+    // level read, the level written.
+    id SET_HIZ = 0;
+    id HIZ_SRC = 0;
+    id HIZ_DST = 1;
+    // Counters: clusters drawn in phase 1, drawn in phase 2, occluded,
+    // outside the frustum; triangles drawn.
+    uint OCC_COUNTER_SLOTS = 5;
+    // At most this many triangles a cluster (bench/results/lavapipe-2core-vm-raster.md).
+    uint CLUSTER_TRIANGLES = 128;
 
     // 4-wide BLASes (src/accel/bvh/wide.rs): the `count` of the binary node
     // at a BLAS's node offset marks a wide tree after it (the node keeps the

@@ -9,6 +9,7 @@ pub mod frame;
 mod frame_results;
 pub mod inject;
 pub mod kernel;
+pub mod occlusion;
 pub mod output;
 pub mod passes;
 mod prt_state;
@@ -357,6 +358,24 @@ impl Renderer {
     /// as outside the view frustum). (0, 0) in pure ray-traced mode.
     pub fn raster_draws(&self) -> (usize, u32) {
         (self.draw_list.draws.len(), self.draw_list.culled)
+    }
+
+    /// The triangles of the draws the last prepared frame records (before
+    /// occlusion culling).
+    pub fn raster_triangles(&self) -> u64 {
+        self.draw_list
+            .draws
+            .iter()
+            .map(|d| self.gpu.draws[d.draw as usize].range.index_count as u64 / 3)
+            .sum()
+    }
+
+    /// Occlusion culling's counters of the last finished frame that culled
+    /// (render/occlusion.rs): clusters drawn in phase 1, drawn in phase 2,
+    /// occluded, outside the frustum; triangles drawn. None when culling is off.
+    pub fn occlusion_counts(&self) -> Option<[u32; crate::gpu::shared::OCC_COUNTER_SLOTS as usize]> {
+        let on = self.config.is_some_and(|c| c.occlusion) && !self.gpu.clusters.list.clusters.is_empty();
+        on.then(|| self.gpu.clusters.counts().ok()).flatten()
     }
 
     /// Starts the reference's accumulation over at the next frame.

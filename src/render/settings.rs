@@ -182,6 +182,10 @@ pub struct RenderSettings {
     pub reference: Option<super::ReferenceSettings>,
     /// How hybrid mode finds primary hits (--primary-visibility).
     pub primary_visibility: PrimaryVisibility,
+    /// Two-phase occlusion culling of the raster G-buffer's clusters
+    /// (render/occlusion.rs; --occlusion-culling). The image is the same
+    /// either way; off draws every cluster of the draws in the frustum.
+    pub occlusion_culling: bool,
 }
 
 impl Default for RenderSettings {
@@ -200,6 +204,7 @@ impl Default for RenderSettings {
             prt: PrtOptions::default(),
             reference: None,
             primary_visibility: PrimaryVisibility::Auto,
+            occlusion_culling: true,
         }
     }
 }

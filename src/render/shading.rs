@@ -246,6 +246,10 @@ pub struct ShadingConfig {
     /// records one: render/visibility.rs). `Raster` in pure ray-traced mode
     /// (not used there).
     pub visibility: crate::render::settings::PrimaryVisibility,
+    /// The raster G-buffer culls occluded clusters (render/occlusion.rs):
+    /// asked for, the pass rasterizes, and the device has multi-draw
+    /// indirect with a first instance.
+    pub occlusion: bool,
 }
 
 impl ShadingConfig {
@@ -303,6 +307,11 @@ impl ShadingConfig {
             aa: settings.aa,
             reference,
             visibility,
+            // Only the raster G-buffer pass (hybrid, raster or auto visibility) culls.
+            occlusion: settings.occlusion_culling
+                && ctx.caps.multi_draw_indirect
+                && mode == Mode::Hybrid
+                && visibility != Pv::Traced,
         })
     }
 

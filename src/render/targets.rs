@@ -70,7 +70,8 @@ fn usage(access: Access) -> vk::ImageUsageFlags {
         Access::Sampled => U::SAMPLED,
         Access::StorageRead | Access::StorageWrite => U::STORAGE,
         Access::ColorAttachment => U::COLOR_ATTACHMENT,
-        Access::DepthAttachment => U::DEPTH_STENCIL_ATTACHMENT,
+        // Sampled too: occlusion culling's depth pyramid reads it (render/occlusion.rs).
+        Access::DepthAttachment => U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED,
         Access::TransferRead => U::TRANSFER_SRC,
         _ => U::empty(),
     }

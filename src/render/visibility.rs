@@ -248,6 +248,7 @@ mod tests {
             aa: super::super::shading::AaMode::None,
             reference: false,
             visibility: PrimaryVisibility::Auto,
+            occlusion: false,
         }
     }
 

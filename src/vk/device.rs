@@ -35,6 +35,9 @@ pub struct Capabilities {
     /// the compute tracer's packet traversal (glsl/trace/compute_packet.glsl)
     /// needs them.
     pub subgroup_ops: bool,
+    /// multiDrawIndirect and drawIndirectFirstInstance: the occlusion-culled
+    /// G-buffer (render/occlusion.rs) draws clusters that way.
+    pub multi_draw_indirect: bool,
     pub graphics_queue_family: u32,
     pub limits: super::limits::Limits,
     /// Why the device is unusable, if it is.
@@ -219,6 +222,7 @@ pub fn query_capabilities(
         timestamp_period_ns: props.limits.timestamp_period,
         timestamps,
         subgroup_ops,
+        multi_draw_indirect: base.multi_draw_indirect != 0 && base.draw_indirect_first_instance != 0,
         graphics_queue_family: gfx.unwrap_or(0) as u32,
         limits: super::limits::Limits::query(instance, pd, has_as),
         unusable,
@@ -342,7 +346,10 @@ pub fn create_device(
     let path = caps.feature_path.as_ref().context("device has no usable feature path")?;
     exts.extend(path.extensions().iter().map(|e| e.as_ptr()));
 
-    let base = vk::PhysicalDeviceFeatures::default().geometry_shader(true);
+    let base = vk::PhysicalDeviceFeatures::default()
+        .geometry_shader(true)
+        .multi_draw_indirect(caps.multi_draw_indirect)
+        .draw_indirect_first_instance(caps.multi_draw_indirect);
     let mut v11 = vk::PhysicalDeviceVulkan11Features::default();
     let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
         .buffer_device_address(caps.buffer_device_address)

@@ -13,8 +13,10 @@ use ash::vk;
 
 use super::fullscreen::Io;
 use super::{Cx, Init, Pass, PassDesc};
+use crate::gpu::clusters::COMMAND_STRIDE;
 use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
 use crate::render::frame::{Access, SharedBuffer, Use};
+use crate::render::occlusion::Occlusion;
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::render::targets::{TargetDesc, Targets};
 use crate::scene::AlphaMode;
@@ -78,43 +80,116 @@ pub const PASS: PassDesc = PassDesc {
     name: "gbuffer",
     skip,
     uses,
-    create: |i: &Init| Ok(Box::new(GBufferPass::new(i.ctx, i.gpu.set.layout)?)),
+    create: |i: &Init| {
+        let mut p = GBufferPass::new(i.ctx, i.gpu.set.layout)?;
+        if i.config.occlusion && !i.gpu.clusters.list.clusters.is_empty() {
+            let o = Occlusion::new(i.ctx, i.gpu, i.gpu.set.layout)?;
+            let layout =
+                pipeline_layout(i.ctx, "gbuffer clusters layout", &[i.gpu.set.layout, o.set.layout], 0)?;
+            let opaque = create_pipeline(i.ctx, layout, false, true)?;
+            let masked = create_pipeline(i.ctx, layout, true, true)?;
+            p.clusters = Some(ClusterRaster { occlusion: o, layout, opaque, masked });
+            p.bind(i.ctx, i.targets);
+        }
+        Ok(Box::new(p))
+    },
 };
 
-pub struct GBufferPass {
+/// The pipelines that draw clusters, and the culling that picks them.
+struct ClusterRaster {
+    occlusion: Occlusion,
     layout: vk::PipelineLayout,
     opaque: vk::Pipeline,
     masked: vk::Pipeline,
 }
 
+pub struct GBufferPass {
+    layout: vk::PipelineLayout,
+    opaque: vk::Pipeline,
+    masked: vk::Pipeline,
+    /// Occlusion culling on (render/occlusion.rs).
+    clusters: Option<ClusterRaster>,
+}
+
 impl GBufferPass {
     pub fn new(ctx: &Context, scene_layout: vk::DescriptorSetLayout) -> Result<GBufferPass> {
         let layout = pipeline_layout(ctx, "gbuffer layout", &[scene_layout], 0)?;
-        let opaque = create_pipeline(ctx, layout, false)?;
-        let masked = create_pipeline(ctx, layout, true)?;
-        Ok(GBufferPass { layout, opaque, masked })
-    }
-}
-
-impl Pass for GBufferPass {
-    fn stage(&self) -> vk::PipelineStageFlags2 {
-        vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
+        let opaque = create_pipeline(ctx, layout, false, false)?;
+        let masked = create_pipeline(ctx, layout, true, false)?;
+        Ok(GBufferPass { layout, opaque, masked, clusters: None })
     }
 
-    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
-        let (d, t, scene) = (&cx.ctx.device, cx.targets, cx.gpu);
+    /// Records the draws of `cx.draws`: whole (phase 0), or the clusters
+    /// the cull pass picked for `phase` 1 or 2.
+    fn draw(&self, cx: &Cx, cmd: vk::CommandBuffer, phase: u32) {
+        let (d, scene) = (&cx.ctx.device, cx.gpu);
+        let (layout, pipelines, sets) = match (&self.clusters, phase) {
+            (Some(c), 1 | 2) => (c.layout, [c.opaque, c.masked], vec![scene.set.set, c.occlusion.set.set]),
+            _ => (self.layout, [self.opaque, self.masked], vec![scene.set.set]),
+        };
+        unsafe {
+            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, layout, 0, &sets, &[]);
+            d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
+            // Opaque first so masked geometry is depth-tested against it.
+            // Only the draws the frustum test kept (cx.draws); single-sided
+            // geometry is back-face culled, and a mirroring transform turns
+            // its front faces clockwise.
+            for (pipeline, masked) in [(pipelines[0], false), (pipelines[1], true)] {
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+                for fd in &cx.draws.draws {
+                    let draw = &scene.draws[fd.draw as usize];
+                    if (draw.alpha_mode != AlphaMode::Opaque) != masked {
+                        continue;
+                    }
+                    let cull =
+                        if draw.double_sided { vk::CullModeFlags::NONE } else { vk::CullModeFlags::BACK };
+                    d.cmd_set_cull_mode(cmd, cull);
+                    let front =
+                        if fd.mirrored { vk::FrontFace::CLOCKWISE } else { vk::FrontFace::COUNTER_CLOCKWISE };
+                    d.cmd_set_front_face(cmd, front);
+                    if phase == 0 {
+                        d.cmd_draw_indexed(
+                            cmd,
+                            draw.range.index_count,
+                            1,
+                            draw.range.first_index,
+                            draw.range.vertex_offset as i32,
+                            draw.instance,
+                        );
+                        continue;
+                    }
+                    // One indirect draw per cluster; the cull pass set
+                    // each one's instance count to 0 or 1.
+                    let (first, count) = scene.clusters.list.ranges[fd.draw as usize];
+                    let offset = Occlusion::command_offset(scene, phase, first);
+                    d.cmd_draw_indexed_indirect(
+                        cmd,
+                        scene.clusters.commands.raw,
+                        offset,
+                        count,
+                        COMMAND_STRIDE,
+                    );
+                }
+            }
+        }
+    }
+
+    /// Begins rendering into the hit and depth targets, cleared or kept.
+    fn begin(&self, cx: &Cx, cmd: vk::CommandBuffer, clear: bool) {
+        let (d, t) = (&cx.ctx.device, cx.targets);
         let (Some(hit), Some(depth_target)) = (t.get(&HIT), t.get(&DEPTH)) else { return };
+        let load = if clear { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
         // Hit id 0: the camera ray missed.
         let colors = [vk::RenderingAttachmentInfo::default()
             .image_view(hit.view)
             .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .load_op(load)
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } })];
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(depth_target.view)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .load_op(load)
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue {
                 depth_stencil: vk::ClearDepthStencilValue { depth: 0.0, stencil: 0 },
@@ -140,47 +215,56 @@ impl Pass for GBufferPass {
                 }],
             );
             d.cmd_set_scissor(cmd, 0, &[area]);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.layout,
-                0,
-                &[scene.set.set],
-                &[],
-            );
-            d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
-            // Opaque first so masked geometry is depth-tested against it.
-            // Only the draws the frustum test kept (cx.draws); single-sided
-            // geometry is back-face culled, and a mirroring transform turns
-            // its front faces clockwise.
-            for (pipeline, masked) in [(self.opaque, false), (self.masked, true)] {
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-                for fd in &cx.draws.draws {
-                    let draw = &scene.draws[fd.draw as usize];
-                    if (draw.alpha_mode != AlphaMode::Opaque) != masked {
-                        continue;
-                    }
-                    let cull =
-                        if draw.double_sided { vk::CullModeFlags::NONE } else { vk::CullModeFlags::BACK };
-                    d.cmd_set_cull_mode(cmd, cull);
-                    let front =
-                        if fd.mirrored { vk::FrontFace::CLOCKWISE } else { vk::FrontFace::COUNTER_CLOCKWISE };
-                    d.cmd_set_front_face(cmd, front);
-                    d.cmd_draw_indexed(
-                        cmd,
-                        draw.range.index_count,
-                        1,
-                        draw.range.first_index,
-                        draw.range.vertex_offset as i32,
-                        draw.instance,
-                    );
-                }
-            }
-            d.cmd_end_rendering(cmd);
         }
     }
+}
 
-    fn bind(&self, _: &Context, _: &Targets) {}
+impl Pass for GBufferPass {
+    fn stage(&self) -> vk::PipelineStageFlags2 {
+        vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
+    }
+
+    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
+        let (ctx, t) = (cx.ctx, cx.targets);
+        let (Some(_), Some(depth)) = (t.get(&HIT), t.get(&DEPTH)) else { return };
+        let d = &ctx.device;
+        let Some(c) = &self.clusters else {
+            self.begin(cx, cmd, true);
+            self.draw(cx, cmd, 0);
+            unsafe { d.cmd_end_rendering(cmd) };
+            return;
+        };
+        let o = &c.occlusion;
+        o.cull(ctx, cmd, cx.gpu, 1);
+        ctx.begin_label(cmd, "gbuffer phase 1 (visible last frame)", [0.2, 0.7, 0.2, 1.0]);
+        self.begin(cx, cmd, true);
+        self.draw(cx, cmd, 1);
+        unsafe { d.cmd_end_rendering(cmd) };
+        ctx.end_label(cmd);
+        o.pyramid(ctx, cmd, depth.raw);
+        o.cull(ctx, cmd, cx.gpu, 2);
+        // Phase 2 loads the hits phase 1 wrote (the depth's barrier is the pyramid's).
+        let color =
+            (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
+        let load =
+            (color.0, vk::AccessFlags2::COLOR_ATTACHMENT_READ | vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
+        crate::vk::memory_barrier(ctx, cmd, color, load);
+        ctx.begin_label(cmd, "gbuffer phase 2 (disoccluded)", [0.2, 0.7, 0.2, 1.0]);
+        self.begin(cx, cmd, false);
+        self.draw(cx, cmd, 2);
+        unsafe { d.cmd_end_rendering(cmd) };
+        ctx.end_label(cmd);
+    }
+
+    fn bind(&self, ctx: &Context, targets: &Targets) {
+        if let (Some(c), Some(depth)) = (&self.clusters, targets.get(&DEPTH)) {
+            // No error path in `bind`: a failed pyramid leaves culling off
+            // for the frame (cull and pyramid record nothing without one).
+            if let Err(e) = c.occlusion.bind(ctx, depth.view, targets.extent) {
+                log::error!("occlusion culling: depth pyramid: {e:#}");
+            }
+        }
+    }
 
     fn destroy(&mut self, ctx: &Context) {
         unsafe {
@@ -188,14 +272,29 @@ impl Pass for GBufferPass {
             ctx.device.destroy_pipeline(self.masked, None);
             ctx.device.destroy_pipeline_layout(self.layout, None);
         }
+        if let Some(mut c) = self.clusters.take() {
+            c.occlusion.destroy(ctx);
+            unsafe {
+                ctx.device.destroy_pipeline(c.opaque, None);
+                ctx.device.destroy_pipeline(c.masked, None);
+                ctx.device.destroy_pipeline_layout(c.layout, None);
+            }
+        }
     }
 }
 
-fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) -> Result<vk::Pipeline> {
+fn create_pipeline(
+    ctx: &Context,
+    layout: vk::PipelineLayout,
+    alpha_test: bool,
+    clusters: bool,
+) -> Result<vk::Pipeline> {
     let spec = Specialization::new(&[]);
-    let (name, vertex, fragment) = match alpha_test {
-        true => ("gbuffer alpha-masked", "gbuffer_uv", "visibility_masked"),
-        false => ("gbuffer opaque", "gbuffer.vert", "visibility.frag"),
+    let (name, vertex, fragment) = match (alpha_test, clusters) {
+        (true, false) => ("gbuffer alpha-masked", "gbuffer_uv", "visibility_masked"),
+        (false, false) => ("gbuffer opaque", "gbuffer.vert", "visibility.frag"),
+        (true, true) => ("gbuffer clusters alpha-masked", "gbuffer_uv_cluster", "visibility_masked_cluster"),
+        (false, true) => ("gbuffer clusters opaque", "gbuffer_cluster", "visibility_cluster"),
     };
     RasterPipeline {
         name,
