@@ -304,8 +304,9 @@ struct ViewArgs {
     #[arg(long, value_enum, default_value_t = PrimaryVisibility::Auto)]
     primary_visibility: PrimaryVisibility,
     /// Two-phase occlusion culling of the raster G-buffer's clusters (the
-    /// image is the same; off for measurement).
-    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    /// image is the same; off by default: the shipped camera paths hide
+    /// almost nothing, see README).
+    #[arg(long, value_enum, default_value_t = OnOff::Off)]
     occlusion_culling: OnOff,
     /// Anti-aliasing after tone mapping: edge (G-buffer depth and normal
     /// discontinuities), fxaa (luminance edges) or none [default: edge].
