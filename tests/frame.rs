@@ -50,11 +50,12 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
         assert_eq!(h[2..], p[1..]);
         assert!(!targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
         // Traced primary visibility: camera rays write the hit ids instead
-        // of the raster pass, and no depth buffer exists.
+        // of the raster pass and resolve them in the same pass (no
+        // `gbuffer resolve`), and no depth buffer exists.
         let traced = RenderSettings { primary_visibility: PrimaryVisibility::Traced, ..hybrid };
         let (t, targets) = frame_of(&ctx, &scene, &traced);
         assert_eq!(t[0], "visibility trace", "{backend:?} traced");
-        assert_eq!(t[1..], h[1..]);
+        assert_eq!(t[1..], h[2..]);
         assert!(!targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
     }
     // Auto's probe frame records both (the traced pass overwrites the

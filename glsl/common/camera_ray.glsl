@@ -4,6 +4,8 @@
 // the mip from the camera-ray cone (hit.glsl's g_camera_ray), so the two
 // passes put alpha-masked cut-outs where the raster's alpha test does.
 // Needs primary_hit.glsl and integrator.glsl (and a trace backend) first.
+#ifndef CAMERA_RAY_GLSL
+#define CAMERA_RAY_GLSL
 
 bool trace_camera_ray(ivec2 px, out vec3 dir, out RayHit h) {
     dir = camera_ray_dir(vec2(px) + 0.5);
@@ -14,3 +16,4 @@ bool trace_camera_ray(ivec2 px, out vec3 dir, out RayHit h) {
     g_camera_ray = false;
     return hit;
 }
+#endif

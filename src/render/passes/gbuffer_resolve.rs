@@ -11,6 +11,7 @@ use super::fullscreen::{self, FullScreen, Io, Shader};
 use super::{gbuffer, Init, PassDesc};
 use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
 use crate::render::frame::{Access, SharedBuffer, Use};
+use crate::render::settings::PrimaryVisibility;
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::vk::pipeline::Specialization;
 
@@ -25,7 +26,13 @@ fn io() -> Vec<Io> {
 }
 
 fn skip(c: &ShadingConfig) -> Option<&'static str> {
-    (c.mode == Mode::Rt).then_some("pure ray-traced mode: pass primary writes the whole G-buffer")
+    match (c.mode, c.visibility) {
+        (Mode::Rt, _) => Some("pure ray-traced mode: pass primary writes the whole G-buffer"),
+        (_, PrimaryVisibility::Traced) => {
+            Some("--primary-visibility traced: pass visibility trace resolves its hits")
+        }
+        _ => None,
+    }
 }
 
 pub const PASS: PassDesc = PassDesc {

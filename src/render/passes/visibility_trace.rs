@@ -2,8 +2,9 @@
 //! rays through the pixel centres, traced by the active backend exactly as
 //! pass `primary` traces them (alpha test included), write only the
 //! visibility buffer's hit ids (instance + 1, primitive; 0 on a miss) —
-//! what the raster `gbuffer` pass writes — so `gbuffer_resolve` and every
-//! later pass are unchanged (glsl/passes/visibility_trace.glsl). No depth
+//! what the raster `gbuffer` pass writes — and resolve the material targets
+//! from them with `gbuffer_resolve`'s code, so that pass is left out and
+//! every later pass is unchanged (glsl/passes/visibility_trace.glsl). No depth
 //! buffer: only the raster's depth test reads it. On lavapipe a mesh of
 //! many small triangles rasterizes slower than it traces (the armadillo:
 //! bench/results/lavapipe-2core-vm-raster.md), so `--primary-visibility
@@ -11,14 +12,20 @@
 
 use super::fullscreen::{self, FullScreen, Io, Shader};
 use super::{gbuffer, Init, PassDesc};
-use crate::gpu::shared::GB_HIT;
+use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
 use crate::render::frame::Access;
 use crate::render::settings::PrimaryVisibility;
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::vk::pipeline::Specialization;
 
 fn io() -> Vec<Io> {
-    vec![Io::new(GB_HIT, &gbuffer::HIT, Access::StorageWrite)]
+    let w = Access::StorageWrite;
+    vec![
+        Io::new(GB_HIT, &gbuffer::HIT, w),
+        Io::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
+        Io::new(GB_NORMAL, &gbuffer::NORMAL, w),
+        Io::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
+    ]
 }
 
 fn skip(c: &ShadingConfig) -> Option<&'static str> {
