@@ -59,6 +59,8 @@ pub struct GpuOptions {
     pub sync_validation: bool,
     pub device: DeviceSelector,
     pub disable_ray_tracing: bool,
+    /// `--no-ray-query`: ray tracing without VK_KHR_ray_query.
+    pub disable_ray_query: bool,
     /// `--vulkan-api 1.2`: use the device as a Vulkan 1.2 device.
     pub max_api_version: Option<u32>,
     /// `--capture-frame N` (render, bench, view): capture frame N with
@@ -73,6 +75,7 @@ impl GpuOptions {
             sync_validation: self.sync_validation,
             device: self.device.clone(),
             disable_ray_tracing: self.disable_ray_tracing,
+            disable_ray_query: self.disable_ray_query,
             surface_extensions: Vec::new(),
             swapchain: false,
             max_api_version: self.max_api_version,

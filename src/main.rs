@@ -45,6 +45,10 @@ struct GpuArgs {
     /// Do not enable any ray-tracing extension even if the device has them.
     #[arg(long, global = true)]
     no_rt: bool,
+    /// Do not enable VK_KHR_ray_query even if the device has it: the path of
+    /// drivers that offer only the ray-tracing pipeline.
+    #[arg(long, global = true)]
+    no_ray_query: bool,
     /// Highest Vulkan API version to use (1.2 or 1.3): 1.2 takes the path a
     /// 1.2 device takes (RenderDoc 1.24 shows lavapipe as one), the 1.3
     /// features through their extensions.
@@ -115,8 +119,9 @@ enum Command {
         /// Ray microbenchmark instead of frames: primary rays (one per pixel of
         /// --width x --height from the scene camera), shadow rays to the first light
         /// and cosine-sampled diffuse rays from the primary hits, traced by the compute
-        /// BVH tracer and the driver's ray query; prints Mrays/s per kind, their
-        /// mismatches and the compute tracer's node and triangle tests per ray.
+        /// BVH tracer and the driver's tracer (--backend query or pipeline; auto: the
+        /// ray query, else the pipeline); prints Mrays/s per kind, their mismatches
+        /// and the compute tracer's node and triangle tests per ray.
         #[arg(long, conflicts_with_all = ["compare_modes", "compare_backends", "compare_accel_updates", "csv", "capture_frame"])]
         rays: bool,
         /// With --rays: timed repetitions per ray set (after one untimed).
@@ -562,6 +567,7 @@ fn run(cli: Cli) -> Result<()> {
         sync_validation: cli.gpu.sync_validation,
         device: cli.gpu.device.parse::<DeviceSelector>().unwrap_or_default(),
         disable_ray_tracing: cli.gpu.no_rt,
+        disable_ray_query: cli.gpu.no_ray_query,
         max_api_version: cli.gpu.vulkan_api,
         capture_frame: None,
     };
@@ -592,7 +598,7 @@ fn run(cli: Cli) -> Result<()> {
             capture_frame,
         }) => {
             if rays {
-                return app::rays_command(&gpu, &view.job()?, ray_reps, ray_traversal);
+                return app::rays_command(&gpu, &view.job()?, ray_reps, ray_traversal, view.backend);
             }
             gpu.capture_frame = capture_frame;
             let modes = if compare_modes { vec![Mode::Hybrid, Mode::Rt] } else { vec![view.mode] };

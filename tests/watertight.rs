@@ -135,11 +135,13 @@ fn axis_parallel_rays_in_the_face_planes_of_a_cube_hit() {
     use hybrid_rt::app::RayBench;
     use hybrid_rt::render::rays::sets::RayKind;
     use hybrid_rt::render::rays::{BenchRay, Traversal};
+    use hybrid_rt::render::shading::Backend;
 
     let s =
         common::scene_from_toml("cube_planes", &scene("primitive = \"cube\"\nsize = 1.0", [4.0, 0.0, 0.0]));
     let ctx = common::validated_context();
-    let bench = RayBench::with_traversal(&ctx, &s, Traversal::Lane).expect("set up both tracers");
+    let bench =
+        RayBench::with_traversal(&ctx, &s, Traversal::Lane, Backend::Query).expect("set up both tracers");
     let grid = [-0.5f64, -0.25, 0.0, 0.25, 0.5];
     let mut rays = Vec::new();
     for axis in 0..3 {

@@ -1,7 +1,8 @@
 //! `bench --rays`: the ray microbenchmark. Fixed ray sets on the scene
 //! (render/rays/sets.rs) traced through our compute BVH tracer and through
-//! the driver's ray query on the same rays, timed with GPU timestamps,
-//! compared ray by ray.
+//! the driver's tracer (its ray query, or its ray-tracing pipeline where it
+//! has no ray query, as NVIDIA's driver on some machines) on the same rays,
+//! timed with GPU timestamps, compared ray by ray.
 
 use crate::vk::frame_ring::upload_now;
 use anyhow::{bail, Context as _, Result};
@@ -16,6 +17,9 @@ use crate::render::tracer::{self, Tracer};
 use crate::scene::Scene;
 use crate::vk::Context;
 
+/// `bench --rays` traces each set untimed for this long first (RayRig::warm_up).
+const WARM_UP_MS: u64 = 300;
+
 /// Seed of the diffuse-bounce directions (fixed: every run traces the same rays).
 pub const DIFFUSE_SEED: u32 = 1;
 
@@ -24,16 +28,24 @@ pub struct KindReport {
     pub kind: RayKind,
     pub rays: usize,
     pub compute: TraceRun,
-    pub query: TraceRun,
+    /// The driver's tracer: `driver_backend` (Query or Pipeline).
+    pub driver: TraceRun,
+    pub driver_backend: Backend,
     /// Indices of the rays on which the two disagree (sets::mismatches).
     pub mismatches: Vec<usize>,
 }
 
 impl KindReport {
-    /// `rays <kind>: compute <x> Mrays/s, query <y> Mrays/s, ratio <r>`.
+    /// `rays <kind>: compute <x> Mrays/s, query <y> Mrays/s, ratio <r>`
+    /// (`pipeline <y>` where the driver's pipeline traced them).
     pub fn line(&self) -> String {
-        let (c, q) = (self.compute.mrays_per_s(), self.query.mrays_per_s());
-        format!("rays {}: compute {c:.3} Mrays/s, query {q:.3} Mrays/s, ratio {:.2}", self.kind.name(), c / q)
+        let (c, q) = (self.compute.mrays_per_s(), self.driver.mrays_per_s());
+        format!(
+            "rays {}: compute {c:.3} Mrays/s, {} {q:.3} Mrays/s, ratio {:.2}",
+            self.kind.name(),
+            driver_name(self.driver_backend),
+            c / q
+        )
     }
 
     /// Ray count, agreement and the compute tracer's traversal statistics.
@@ -49,36 +61,81 @@ impl KindReport {
         // The first disagreement, so it can be looked into.
         if let Some(&i) = self.mismatches.first() {
             s.push_str(&format!(
-                "\n    first mismatch: ray {i}, compute {:?}, query {:?}",
-                self.compute.results[i], self.query.results[i]
+                "\n    first mismatch: ray {i}, compute {:?}, {} {:?}",
+                self.compute.results[i],
+                driver_name(self.driver_backend),
+                self.driver.results[i]
             ));
         }
         s
     }
 }
 
+fn driver_name(backend: Backend) -> &'static str {
+    match backend {
+        Backend::Pipeline => "pipeline",
+        _ => "query",
+    }
+}
+
+/// The driver's tracer `bench --rays` compares with for `--backend
+/// requested`: auto takes the ray query, else the ray-tracing pipeline.
+pub fn driver_backend(ctx: &Context, requested: Backend) -> Result<Backend> {
+    let why_not = |has: bool| if has { "has, but --no-rt disabled" } else { "lacks" };
+    Ok(match requested {
+        Backend::Query if !ctx.rt.ray_query => {
+            bail!(
+                "bench --rays --backend query: this device {} VK_KHR_ray_query",
+                why_not(ctx.caps.ray_query)
+            )
+        }
+        Backend::Pipeline if !ctx.rt.ray_tracing_pipeline => bail!(
+            "bench --rays --backend pipeline: this device {} VK_KHR_ray_tracing_pipeline",
+            why_not(ctx.caps.ray_tracing_pipeline)
+        ),
+        Backend::Query | Backend::Pipeline => requested,
+        Backend::Compute => bail!(
+            "bench --rays compares the compute tracer with the driver's: --backend query, pipeline or auto, \
+             not compute"
+        ),
+        Backend::Auto if ctx.rt.ray_query => Backend::Query,
+        Backend::Auto if ctx.rt.ray_tracing_pipeline => Backend::Pipeline,
+        Backend::Auto => bail!(
+            "bench --rays compares with the driver's ray query or ray-tracing pipeline, and this device {} \
+             both (use a device with VK_KHR_ray_query or VK_KHR_ray_tracing_pipeline, without --no-rt)",
+            if ctx.caps.ray_query || ctx.caps.ray_tracing_pipeline {
+                "has, but --no-rt disabled"
+            } else {
+                "lacks"
+            }
+        ),
+    })
+}
+
 /// The two tracers over one uploaded scene, with their pipelines.
 pub struct RayBench {
     pub gpu: GpuScene,
     tracers: Vec<(Box<dyn Tracer>, RayRig)>,
+    driver: Backend,
 }
 
 impl RayBench {
-    /// With the compute tracer's default traversal per ray kind.
+    /// With the compute tracer's default traversal per ray kind, against
+    /// the driver's ray query (else its pipeline).
     pub fn new(ctx: &Context, scene: &Scene) -> Result<RayBench> {
-        RayBench::with_traversal(ctx, scene, Traversal::Default)
+        RayBench::with_traversal(ctx, scene, Traversal::Default, Backend::Auto)
     }
 
-    pub fn with_traversal(ctx: &Context, scene: &Scene, traversal: Traversal) -> Result<RayBench> {
-        if !ctx.rt.ray_query {
-            bail!(
-                "bench --rays compares with the driver's ray query, which this device {} (use a device with \
-                 VK_KHR_ray_query, without --no-rt)",
-                if ctx.caps.ray_query { "has, but --no-rt disabled" } else { "lacks" }
-            );
-        }
+    /// `driver`: the driver's tracer to compare with (see `driver_backend`).
+    pub fn with_traversal(
+        ctx: &Context,
+        scene: &Scene,
+        traversal: Traversal,
+        driver: Backend,
+    ) -> Result<RayBench> {
+        let driver = driver_backend(ctx, driver)?;
         let gpu = GpuScene::upload(ctx, scene)?;
-        let mut bench = RayBench { gpu, tracers: Vec::new() };
+        let mut bench = RayBench { gpu, tracers: Vec::new(), driver };
         let filled = (|| {
             if !bench.gpu.skinned.is_empty() {
                 bail!(
@@ -89,7 +146,7 @@ impl RayBench {
             }
             let frame = GpuFrame { light_count: bench.gpu.light_count, ..Default::default() };
             upload_now(ctx, "frame uniforms", |up| bench.gpu.write_frame(up, &frame))?;
-            for backend in [Backend::Compute, Backend::Query] {
+            for backend in [Backend::Compute, driver] {
                 let mut t = tracer::create(ctx, backend, scene, &bench.gpu)?;
                 match RayRig::new(ctx, &bench.gpu, t.as_ref(), traversal) {
                     Ok(rig) => bench.tracers.push((t, rig)),
@@ -130,9 +187,9 @@ impl RayBench {
     /// Traces `rays` of `kind` through both tracers and compares them.
     pub fn kind(&self, ctx: &Context, kind: RayKind, rays: &[BenchRay], reps: usize) -> Result<KindReport> {
         let compute = self.run(ctx, Backend::Compute, rays, kind, reps)?;
-        let query = self.run(ctx, Backend::Query, rays, kind, reps)?;
-        let mismatches = sets::mismatches(kind, &compute.results, &query.results);
-        Ok(KindReport { kind, rays: rays.len(), compute, query, mismatches })
+        let driver = self.run(ctx, self.driver, rays, kind, reps)?;
+        let mismatches = sets::mismatches(kind, &compute.results, &driver.results);
+        Ok(KindReport { kind, rays: rays.len(), compute, driver, driver_backend: self.driver, mismatches })
     }
 
     /// Every kind in order: primary rays from the camera, then shadow and
@@ -150,6 +207,13 @@ impl RayBench {
         Ok(vec![p, s, d])
     }
 
+    /// Untimed tracing of each set before its timed repetitions.
+    pub fn warm_up(&mut self, d: std::time::Duration) {
+        for (_, rig) in &mut self.tracers {
+            rig.warm_up = d;
+        }
+    }
+
     pub fn destroy(&mut self, ctx: &Context) {
         for (t, rig) in &mut self.tracers {
             rig.destroy(ctx);
@@ -161,15 +225,22 @@ impl RayBench {
 
 /// `bench --rays`: prints one `rays <kind>:` line per kind, then the
 /// details (ray counts, mismatches, traversal statistics).
-pub fn rays_command(gpu: &GpuOptions, job: &RenderJob, reps: usize, traversal: Traversal) -> Result<()> {
+pub fn rays_command(
+    gpu: &GpuOptions,
+    job: &RenderJob,
+    reps: usize,
+    traversal: Traversal,
+    driver: Backend,
+) -> Result<()> {
     with_context(gpu, |ctx| {
         let (scene, _) = load_posed(job)?;
-        let mut bench = RayBench::with_traversal(ctx, &scene, traversal)?;
+        let mut bench = RayBench::with_traversal(ctx, &scene, traversal, driver)?;
+        bench.warm_up(std::time::Duration::from_millis(WARM_UP_MS));
         let reports = bench.all(ctx, &scene, job, reps);
         bench.destroy(ctx);
         let reports = reports?;
         println!(
-            "ray microbenchmark: {} at {}x{} primary rays, median of {reps} repetitions (GPU timestamps), \
+            "ray microbenchmark: {} at {}x{} primary rays, median of {reps} repetitions after {WARM_UP_MS} ms untimed (GPU timestamps), \
              compute traversal {traversal:?}",
             scene.source.display(),
             job.width,

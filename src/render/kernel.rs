@@ -40,6 +40,13 @@ impl Kernel {
         }
     }
 
+    pub fn pipeline(&self) -> vk::Pipeline {
+        match self {
+            Kernel::Compute(p) => *p,
+            Kernel::RayTracing(rt) => rt.pipeline,
+        }
+    }
+
     /// Binds the pipeline and `sets` (from set 0) and runs one invocation per pixel.
     pub fn dispatch(
         &self,
@@ -50,12 +57,8 @@ impl Kernel {
         extent: vk::Extent2D,
     ) {
         let d = &ctx.device;
-        let pipeline = match self {
-            Kernel::Compute(p) => *p,
-            Kernel::RayTracing(rt) => rt.pipeline,
-        };
         unsafe {
-            d.cmd_bind_pipeline(cmd, self.bind_point(), pipeline);
+            d.cmd_bind_pipeline(cmd, self.bind_point(), self.pipeline());
             d.cmd_bind_descriptor_sets(cmd, self.bind_point(), layout, 0, sets, &[]);
             match self {
                 Kernel::Compute(_) => {

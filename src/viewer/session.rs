@@ -110,6 +110,7 @@ impl Viewer {
             sync_validation: g.sync_validation,
             device: g.device.clone(),
             disable_ray_tracing: g.disable_ray_tracing,
+            disable_ray_query: g.disable_ray_query,
             surface_extensions,
             swapchain: true,
             max_api_version: g.max_api_version,

@@ -38,6 +38,9 @@ pub struct ContextOptions {
     /// Enable no ray-tracing extension even where the device has them
     /// (tests the compute-only path on RT-capable drivers).
     pub disable_ray_tracing: bool,
+    /// Enable no VK_KHR_ray_query: the path of drivers that offer only the
+    /// ray-tracing pipeline (NVIDIA's on some machines).
+    pub disable_ray_query: bool,
     pub surface_extensions: Vec<*const std::ffi::c_char>,
     pub swapchain: bool,
     /// At most this Vulkan API version (see `InstanceOptions`).
@@ -126,7 +129,7 @@ impl Context {
         } else {
             RtEnables {
                 acceleration_structure: caps.acceleration_structure,
-                ray_query: caps.ray_query,
+                ray_query: caps.ray_query && !opts.disable_ray_query,
                 ray_tracing_pipeline: caps.ray_tracing_pipeline,
             }
         };

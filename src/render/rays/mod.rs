@@ -1,5 +1,6 @@
 //! Ray microbenchmark (`bench --rays`): traces fixed ray sets (sets.rs)
-//! through one tracer with glsl/rays.comp, one invocation per ray, timed with
+//! through one tracer with glsl/passes/rays.glsl (rays.comp, or rays.rgen on
+//! the RT pipeline), one invocation per ray, timed with
 //! GPU timestamps, and reads back what every ray hit, so two tracers can be
 //! compared ray by ray. The compute tracer also has a statistics variant
 //! (nodes visited and triangles tested per ray).
@@ -110,6 +111,26 @@ impl Traversal {
     }
 }
 
+/// The first `bytes` of device-local `src`, copied through `readback`
+/// (host-visible, at least as large) after the work that wrote it.
+fn read_back(ctx: &Context, src: &Buffer, readback: &Buffer, bytes: usize) -> Result<Vec<u8>> {
+    if bytes == 0 {
+        return Ok(Vec::new());
+    }
+    ctx.one_shot("read back bench rays", |cmd| {
+        let region = [vk::BufferCopy::default().size(bytes as u64)];
+        unsafe { ctx.device.cmd_copy_buffer(cmd, src.raw, readback.raw, &region) };
+        memory_barrier(
+            ctx,
+            cmd,
+            (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+        );
+        Ok(())
+    })?;
+    Ok(readback.read()?[..bytes].to_vec())
+}
+
 /// The pipelines tracing ray sets through one tracer.
 pub struct RayRig {
     set: DescriptorSet,
@@ -119,6 +140,11 @@ pub struct RayRig {
     stats: Option<Kernel>,
     timestamps: vk::QueryPool,
     backend: Backend,
+    /// Untimed tracing before the timed repetitions of each set (none by
+    /// default). A GPU idles at a low clock: an H200 idled at 345 MHz, and
+    /// the first set a `bench --rays` process timed read 2.2x slower than
+    /// the same set timed after other work.
+    pub warm_up: std::time::Duration,
 }
 
 impl RayRig {
@@ -131,6 +157,7 @@ impl RayRig {
             stats: None,
             timestamps: vk::QueryPool::null(),
             backend,
+            warm_up: std::time::Duration::ZERO,
         };
         match rig.fill(ctx, gpu, tracer, traversal) {
             Ok(()) => Ok(rig),
@@ -177,7 +204,7 @@ impl RayRig {
     }
 
     /// Traces `rays` (shadow: any-hit transmittance rays, else closest
-    /// hit) once unmeasured, then `reps` times timed; with `stats` (compute
+    /// hit) unmeasured (once, and for `warm_up`), then `reps` times timed; with `stats` (compute
     /// tracer only) one more pass through the statistics variant.
     #[allow(clippy::too_many_arguments)]
     pub fn trace(
@@ -192,14 +219,29 @@ impl RayRig {
     ) -> Result<TraceRun> {
         let n = rays.len().max(1);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        // The tracers write device-local memory, as a frame's passes do;
+        // host-visible memory would time the bus on a discrete GPU (on an
+        // H200, 48-byte results written to host memory capped every tracer
+        // at 0.2-0.5 Grays/s). Copied to `readback` after the timed dispatches.
+        let out = storage | vk::BufferUsageFlags::TRANSFER_SRC;
+        let result_bytes = (n * std::mem::size_of::<BenchResult>()) as u64;
         let mut bufs: Vec<Buffer> = Vec::new();
         let run = (|| {
             bufs.push(Buffer::with_data(ctx, "bench rays", bytemuck::cast_slice(rays), storage)?);
-            let size = (n * std::mem::size_of::<BenchResult>()) as u64;
-            bufs.push(Buffer::new(ctx, "bench ray results", size, storage, MemoryLocation::GpuToCpu)?);
-            let size = (n * 16) as u64;
-            bufs.push(Buffer::new(ctx, "bench ray stats", size, storage, MemoryLocation::GpuToCpu)?);
-            self.run(ctx, gpu, tracer, rays.len(), (&bufs[0], &bufs[1], &bufs[2]), shadow, reps, stats)
+            bufs.push(Buffer::new(ctx, "bench ray results", result_bytes, out, MemoryLocation::GpuOnly)?);
+            bufs.push(Buffer::new(ctx, "bench ray stats", (n * 16) as u64, out, MemoryLocation::GpuOnly)?);
+            let usage = vk::BufferUsageFlags::TRANSFER_DST;
+            bufs.push(Buffer::new(ctx, "bench ray readback", result_bytes, usage, MemoryLocation::GpuToCpu)?);
+            self.run(
+                ctx,
+                gpu,
+                tracer,
+                rays.len(),
+                (&bufs[0], &bufs[1], &bufs[2], &bufs[3]),
+                shadow,
+                reps,
+                stats,
+            )
         })();
         for b in &mut bufs {
             b.destroy(ctx);
@@ -214,7 +256,7 @@ impl RayRig {
         gpu: &GpuScene,
         tracer: &dyn Tracer,
         count: usize,
-        (input, output, counters): (&Buffer, &Buffer, &Buffer),
+        (input, output, counters, readback): (&Buffer, &Buffer, &Buffer, &Buffer),
         shadow: bool,
         reps: usize,
         stats: bool,
@@ -222,21 +264,32 @@ impl RayRig {
         self.set.write_buffer(ctx, RAYS_IN, input.raw);
         self.set.write_buffer(ctx, RAYS_OUT, output.raw);
         self.set.write_buffer(ctx, RAYS_STATS, counters.raw);
-        let mut gpu_ms = Vec::new();
-        for rep in 0..=reps {
-            let ms = self.dispatch(ctx, gpu, tracer, &self.kernel, count, shadow)?;
-            if rep > 0 {
-                gpu_ms.push(ms);
-            }
+        // Untimed: once, then on for `warm_up`, so that a GPU's clock has
+        // left idle before the timed repetitions.
+        let start = std::time::Instant::now();
+        self.dispatch(ctx, gpu, tracer, &self.kernel, count, shadow)?;
+        while start.elapsed() < self.warm_up {
+            self.dispatch(ctx, gpu, tracer, &self.kernel, count, shadow)?;
         }
-        let read = |b: &Buffer| -> Result<Vec<u8>> { Ok(b.read()?.to_vec()) };
-        let results: Vec<BenchResult> = bytemuck::pod_collect_to_vec::<u8, BenchResult>(
-            &read(output)?[..count * std::mem::size_of::<BenchResult>()],
-        );
+        let mut gpu_ms = Vec::new();
+        for _ in 0..reps {
+            gpu_ms.push(self.dispatch(ctx, gpu, tracer, &self.kernel, count, shadow)?);
+        }
+        let results: Vec<BenchResult> = bytemuck::pod_collect_to_vec(&read_back(
+            ctx,
+            output,
+            readback,
+            count * size_of::<BenchResult>(),
+        )?);
         let stats = match (&self.stats, stats) {
             (Some(k), true) => {
                 self.dispatch(ctx, gpu, tracer, k, count, shadow)?;
-                Some(bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(&read(counters)?[..count * 16]))
+                Some(bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(&read_back(
+                    ctx,
+                    counters,
+                    readback,
+                    count * 16,
+                )?))
             }
             _ => None,
         };
@@ -253,12 +306,8 @@ impl RayRig {
         count: usize,
         shadow: bool,
     ) -> Result<f64> {
-        let pipeline = match kernel {
-            Kernel::Compute(p) => *p,
-            Kernel::RayTracing(_) => anyhow::bail!("the ray microbenchmark runs compute kernels only"),
-        };
         let timed = self.timestamps != vk::QueryPool::null();
-        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let stage = kernel.stage();
         ctx.one_shot("trace bench rays", |cmd| {
             let d = &ctx.device;
             let push = [count as u32, shadow as u32];
@@ -266,10 +315,10 @@ impl RayRig {
                 if timed {
                     d.cmd_reset_query_pool(cmd, self.timestamps, 0, 2);
                 }
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
+                d.cmd_bind_pipeline(cmd, kernel.bind_point(), kernel.pipeline());
                 d.cmd_bind_descriptor_sets(
                     cmd,
-                    vk::PipelineBindPoint::COMPUTE,
+                    kernel.bind_point(),
                     self.layout,
                     0,
                     &[gpu.set.set, self.set.set, tracer.set().set],
@@ -283,18 +332,24 @@ impl RayRig {
                     bytemuck::cast_slice(&push),
                 );
                 if timed {
-                    d.cmd_write_timestamp2(cmd, compute, self.timestamps, 0);
+                    d.cmd_write_timestamp2(cmd, stage, self.timestamps, 0);
                 }
-                d.cmd_dispatch(cmd, (count as u32).div_ceil(64), 1, 1);
+                match kernel {
+                    Kernel::Compute(_) => d.cmd_dispatch(cmd, (count as u32).div_ceil(64), 1, 1),
+                    // One launch along x: within the width limits
+                    // (maxComputeWorkGroupCount[0] x maxComputeWorkGroupSize[0],
+                    // at least 65535 x 128) for sets up to 8.3M rays (4K).
+                    Kernel::RayTracing(rt) => rt.trace(ctx, cmd, count as u32, 1),
+                }
                 if timed {
-                    d.cmd_write_timestamp2(cmd, compute, self.timestamps, 1);
+                    d.cmd_write_timestamp2(cmd, stage, self.timestamps, 1);
                 }
             }
             memory_barrier(
                 ctx,
                 cmd,
-                (compute, vk::AccessFlags2::SHADER_WRITE),
-                (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+                (stage, vk::AccessFlags2::SHADER_WRITE),
+                (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_READ),
             );
             Ok(())
         })?;
