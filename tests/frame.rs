@@ -58,13 +58,15 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
         assert_eq!(t[1..], h[2..]);
         assert!(!targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
     }
-    // Auto's probe frame records both (the traced pass overwrites the
-    // raster's hit ids: a write after a colour-attachment write).
+    // Under auto a frame records one technique: the first probe frame, the
+    // raster and its resolve.
     let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: 48, height: 27 }).unwrap();
     r.visibility.measure = true;
     let s = RenderSettings { backend: Backend::Compute, ..Default::default() };
-    r.render(&ctx, &scene, &scene.cameras[0], &s).unwrap();
-    assert_eq!(r.pass_names()[..3], ["gbuffer", "visibility trace", "gbuffer resolve"]);
+    let out = r.render(&ctx, &scene, &scene.cameras[0], &s).unwrap();
+    assert_eq!(r.pass_names()[..3], ["gbuffer", "gbuffer resolve", "direct"]);
+    let ran: Vec<_> = out.timings.iter().map(|(n, _)| *n).collect();
+    assert_eq!(ran[..3], r.pass_names()[..3], "{ran:?}");
     r.destroy(&ctx);
     common::assert_validation_clean(&ctx);
 }
