@@ -13,12 +13,18 @@
 layout(location = 2) in vec2 v_uv;
 #endif
 
-layout(location = 3) flat in uint v_instance;
 #ifdef GB_CLUSTER
+layout(location = 3) flat in uint v_instance;
 // The cluster's first triangle within its draw (gbuffer.vert).
 layout(location = 4) flat in uint v_first_primitive;
+#define PRIMITIVE (v_first_primitive + uint(gl_PrimitiveID))
 #else
-const uint v_first_primitive = 0u;
+// One draw per instance: its index is a push constant, the triangle a flat
+// varying (gbuffer.vert; not gl_PrimitiveID: common/gbuffer_draw.glsl).
+#include "common/gbuffer_draw.glsl"
+#define v_instance gb_draw.instance
+layout(location = 4) flat in uint v_primitive;
+#define PRIMITIVE v_primitive
 #endif
 
 layout(location = 0) out uvec2 o_hit;  // instance + 1, primitive
@@ -33,5 +39,5 @@ void main() {
         discard;
     }
 #endif
-    o_hit = uvec2(v_instance + 1u, v_first_primitive + uint(gl_PrimitiveID));
+    o_hit = uvec2(v_instance + 1u, PRIMITIVE);
 }

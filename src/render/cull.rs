@@ -16,12 +16,17 @@ use crate::gpu::origin::RenderOrigin;
 use crate::gpu::scene::GpuScene;
 use crate::scene::{Aabb, Scene};
 
-/// One draw of the frame: an index into `GpuScene::draws` and its winding.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// One draw of the frame: an index into `GpuScene::draws`, its winding and
+/// its instance's transform.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameDraw {
     pub draw: u32,
     /// The instance's transform mirrors: its front faces wind clockwise.
     pub mirrored: bool,
+    /// The instance's world matrix relative to the render origin, as the
+    /// instance buffer holds it: the G-buffer's vertex stage takes it as a
+    /// push constant instead of fetching the instance per vertex.
+    pub world: glam::Mat4,
 }
 
 /// The frame's draws after culling.
@@ -83,7 +88,11 @@ pub fn draw_list(scene: &Scene, gpu: &GpuScene, origin: RenderOrigin, view_proj:
             list.culled += 1;
             continue;
         }
-        list.draws.push(FrameDraw { draw: k as u32, mirrored: world.determinant() < 0.0 });
+        list.draws.push(FrameDraw {
+            draw: k as u32,
+            mirrored: world.determinant() < 0.0,
+            world: world.as_mat4(),
+        });
     }
     list
 }

@@ -6,7 +6,11 @@
 //! for many tiny triangles was most of this pass's time (measured in
 //! bench/results/lavapipe-2core-vm-raster.md). Alpha-masked materials use a
 //! pipeline that interpolates uv and runs the alpha test; opaque ones keep
-//! early depth testing.
+//! early depth testing. Each instance is one non-indexed draw with its
+//! world matrix and index range as push constants: the vertex
+//! stage pulls its index and vertex and hands on the triangle number, so no
+//! stage reads gl_PrimitiveID or an instance per vertex (both slow on
+//! llvmpipe; glsl/common/gbuffer_draw.glsl).
 
 use anyhow::Result;
 use ash::vk;
@@ -95,6 +99,17 @@ pub const PASS: PassDesc = PassDesc {
     },
 };
 
+/// The push constants of a draw without clusters (glsl/common/gbuffer_draw.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GBufferDraw {
+    /// The instance's world matrix (cull::FrameDraw::world), column-major.
+    world: [f32; 16],
+    instance: u32,
+    first_index: u32,
+    vertex_offset: i32,
+}
+
 /// The pipelines that draw clusters, and the culling that picks them.
 struct ClusterRaster {
     occlusion: Occlusion,
@@ -113,7 +128,8 @@ pub struct GBufferPass {
 
 impl GBufferPass {
     pub fn new(ctx: &Context, scene_layout: vk::DescriptorSetLayout) -> Result<GBufferPass> {
-        let layout = pipeline_layout(ctx, "gbuffer layout", &[scene_layout], 0)?;
+        let push = std::mem::size_of::<GBufferDraw>() as u32;
+        let layout = pipeline_layout(ctx, "gbuffer layout", &[scene_layout], push)?;
         let opaque = create_pipeline(ctx, layout, false, false)?;
         let masked = create_pipeline(ctx, layout, true, false)?;
         Ok(GBufferPass { layout, opaque, masked, clusters: None })
@@ -148,14 +164,20 @@ impl GBufferPass {
                         if fd.mirrored { vk::FrontFace::CLOCKWISE } else { vk::FrontFace::COUNTER_CLOCKWISE };
                     d.cmd_set_front_face(cmd, front);
                     if phase == 0 {
-                        d.cmd_draw_indexed(
+                        let push = GBufferDraw {
+                            world: fd.world.to_cols_array(),
+                            instance: draw.instance,
+                            first_index: draw.range.first_index,
+                            vertex_offset: draw.range.vertex_offset as i32,
+                        };
+                        d.cmd_push_constants(
                             cmd,
-                            draw.range.index_count,
-                            1,
-                            draw.range.first_index,
-                            draw.range.vertex_offset as i32,
-                            draw.instance,
+                            layout,
+                            vk::ShaderStageFlags::ALL,
+                            0,
+                            bytemuck::bytes_of(&push),
                         );
+                        d.cmd_draw(cmd, draw.range.index_count, 1, draw.range.first_index, draw.instance);
                         continue;
                     }
                     // One indirect draw per cluster; the cull pass set
