@@ -35,7 +35,7 @@ use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::animation::find_animation;
 use hybrid_rt::scene::{Camera, Scene};
 use hybrid_rt::vk::frame_ring::{FrameRing, Uploads};
-use hybrid_rt::vk::{memory_barrier, Buffer, Context};
+use hybrid_rt::vk::{copy_to_host_barrier, memory_barrier, Buffer, Context};
 
 const W: u32 = 320;
 const H: u32 = 180;
@@ -201,12 +201,7 @@ fn render_in_one_submission(
                     &region,
                 );
             }
-            memory_barrier(
-                ctx,
-                cmd,
-                (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
-                (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
-            );
+            copy_to_host_barrier(ctx, cmd);
             Ok(())
         })
     })

@@ -16,7 +16,7 @@ use hybrid_rt::render::frame::{Access, Use};
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::animation::find_animation;
 use hybrid_rt::scene::Scene;
-use hybrid_rt::vk::{memory_barrier, Buffer, Context};
+use hybrid_rt::vk::{copy_to_host_barrier, Buffer, Context};
 
 const W: u32 = 160;
 const H: u32 = 90;
@@ -73,12 +73,7 @@ fn in_flight(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettin
                     .image_extent(vk::Extent3D { width: W, height: H, depth: 1 })];
                 let src = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
                 unsafe { ctx.device.cmd_copy_image_to_buffer(cmd, ldr.raw, src, readback.raw, &region) };
-                memory_barrier(
-                    ctx,
-                    cmd,
-                    (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
-                    (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
-                );
+                copy_to_host_barrier(ctx, cmd);
                 Ok(())
             })
         })

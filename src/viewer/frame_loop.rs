@@ -16,7 +16,7 @@ use super::swapchain::Acquired;
 use super::{Flow, FRAMES_IN_FLIGHT};
 use crate::render::frame::{Access, Use};
 use crate::render::{Finished, FrameOutput};
-use crate::vk::{image_barrier, memory_barrier, Buffer};
+use crate::vk::{copy_to_host_barrier, image_barrier, Buffer};
 
 pub(super) struct FrameSlot {
     pub(super) cmd: vk::CommandBuffer,
@@ -361,12 +361,7 @@ impl Viewer {
                             &copy,
                         )
                     };
-                    memory_barrier(
-                        ctx,
-                        cmd,
-                        (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
-                        (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
-                    );
+                    copy_to_host_barrier(ctx, cmd);
                 }
                 image_barrier(
                     ctx,

@@ -25,7 +25,7 @@ use anyhow::{ensure, Context as _, Result};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::{memory_barrier, Buffer, Context};
+use super::{copy_to_host_barrier, memory_barrier, Buffer, Context};
 
 /// Where a download comes from.
 #[derive(Clone, Copy, Debug)]
@@ -247,12 +247,7 @@ impl FrameRing {
                 },
             }
         }
-        memory_barrier(
-            ctx,
-            cmd,
-            (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
-            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
-        );
+        copy_to_host_barrier(ctx, cmd);
         ctx.end_label(cmd);
         Ok(())
     }

@@ -391,6 +391,17 @@ pub fn image_barrier(
 }
 
 /// A global memory barrier (buffers, and images that keep their layout).
+/// The copies recorded before it become visible to the host (read after
+/// the submission's fence).
+pub fn copy_to_host_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+        (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+    );
+}
+
 pub fn memory_barrier(
     ctx: &Context,
     cmd: vk::CommandBuffer,

@@ -21,7 +21,7 @@ use crate::gpu::shared::{
 };
 use crate::gpu::GpuScene;
 use crate::vk::pipeline::{pipeline_layout, DescriptorSet, Specialization};
-use crate::vk::{memory_barrier, Buffer, Context};
+use crate::vk::{copy_to_host_barrier, memory_barrier, Buffer, Context};
 
 /// One ray (glsl/rays.comp `BenchRay`), in render-origin-relative world space.
 #[repr(C)]
@@ -120,12 +120,7 @@ fn read_back(ctx: &Context, src: &Buffer, readback: &Buffer, bytes: usize) -> Re
     ctx.one_shot("read back bench rays", |cmd| {
         let region = [vk::BufferCopy::default().size(bytes as u64)];
         unsafe { ctx.device.cmd_copy_buffer(cmd, src.raw, readback.raw, &region) };
-        memory_barrier(
-            ctx,
-            cmd,
-            (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
-            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
-        );
+        copy_to_host_barrier(ctx, cmd);
         Ok(())
     })?;
     Ok(readback.read()?[..bytes].to_vec())
