@@ -1,11 +1,13 @@
 //! `--primary-visibility auto`: the hybrid frame's primary hits come from
 //! the raster visibility buffer (pass `gbuffer`) or from camera rays (pass
 //! `visibility_trace`), whichever the GPU timestamps say is cheaper for the
-//! current view. On lavapipe neither always wins: Sponza's many instances
-//! rasterize about as fast as they trace, the armadillo's 345k small
-//! triangles rasterize ~3x slower than they trace
-//! (bench/results/lavapipe-2core-vm-raster.md). Both passes write the same
-//! hit ids, so everything after them is the same either way.
+//! current view. Neither always wins: on lavapipe the aa_edges scene's few
+//! large triangles rasterize cheaper than they trace, while Sponza's raster
+//! (+ resolve) costs ~1.6x its camera rays and the armadillo's 345k small
+//! triangles ~3x (bench/results/lavapipe-2core-vm-raster.md); on an H200
+//! the raster costs ~2x the camera rays on Sponza (bench/results/
+//! h200-1080p.md). Both passes write the same hit ids, so everything after
+//! them is the same either way.
 //!
 //! How: with nothing measured for the view, probe frames each record one
 //! technique, as any frame does, and its GPU timestamps give that pass's
