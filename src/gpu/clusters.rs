@@ -1,11 +1,12 @@
 //! The G-buffer's clusters for occlusion culling (render/occlusion.rs):
 //! each rigid draw's index range split into runs of at most
-//! CLUSTER_TRIANGLES triangles, with the object-space box of each run,
-//! built once at scene upload. On the GPU: the clusters, one indirect draw
+//! CLUSTER_TRIANGLES triangles, with the object-space box of each run. On
+//! the GPU: the clusters, one indirect draw
 //! per cluster and phase (the cull pass sets its instance count to 0 or 1;
 //! its first instance is the cluster's index, through which the vertex
 //! stage finds the instance and the primitive offset), each cluster's
-//! visibility in the previous frame, and the counters.
+//! visibility in the previous frame, and the counters. Built when a frame
+//! first culls (GpuScene::ensure_clusters), not at scene upload.
 //!
 //! A skinned instance is one cluster with an empty box: its vertices move
 //! every frame, so bind-pose boxes would be wrong; the cull pass draws it

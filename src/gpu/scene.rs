@@ -88,7 +88,8 @@ pub struct GpuScene {
     /// Bounds of each skinned slot's first pose (posed on the CPU).
     pub skinned_bounds: Vec<Aabb>,
     pub draws: Vec<Draw>,
-    /// The draws' clusters for occlusion culling (gpu/clusters.rs).
+    /// The draws' clusters for occlusion culling (gpu/clusters.rs): built
+    /// by `ensure_clusters` when a frame first culls (none before).
     pub clusters: super::clusters::Clusters,
     pub light_count: u32,
     /// Mean environment radiance (solid-angle weighted), for the ambient term.
@@ -310,7 +311,6 @@ impl GpuScene {
         }
 
         self.draws = build_draws(scene, &self.ranges, &self.skinned);
-        self.clusters = super::clusters::Clusters::upload(ctx, scene, &self.draws)?;
         self.light_count = scene.lights.len() as u32;
         upload_now(ctx, "instances and lights", |up| self.update_dynamic(up, scene))
     }
@@ -348,6 +348,16 @@ impl GpuScene {
         let mut old = std::mem::replace(&mut self.prt, new);
         old.destroy(ctx);
         self.set.write_buffer(ctx, SCENE_PRT, self.prt.raw);
+        Ok(())
+    }
+
+    /// Builds and uploads the draws' clusters unless they exist: only
+    /// occlusion culling (off by default) reads them, so a scene that is
+    /// never culled pays neither the build nor the buffers.
+    pub fn ensure_clusters(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
+        if self.clusters.clusters.raw == vk::Buffer::null() {
+            self.clusters = super::clusters::Clusters::upload(ctx, scene, &self.draws)?;
+        }
         Ok(())
     }
 

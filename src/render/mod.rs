@@ -423,6 +423,9 @@ impl Renderer {
                 None => chosen.push(desc),
             }
         }
+        if config.occlusion {
+            self.gpu.ensure_clusters(ctx, scene)?;
+        }
         // Targets first (passes bind them), from what the passes declare.
         self.passes = Vec::new();
         let uses: Vec<Vec<Use>> = chosen.iter().map(|d| (d.uses)(&config)).collect();
