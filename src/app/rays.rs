@@ -43,7 +43,7 @@ impl KindReport {
         format!(
             "rays {}: compute {c:.3} Mrays/s, {} {q:.3} Mrays/s, ratio {:.2}",
             self.kind.name(),
-            driver_name(self.driver_backend),
+            self.driver_backend.name(),
             c / q
         )
     }
@@ -63,18 +63,11 @@ impl KindReport {
             s.push_str(&format!(
                 "\n    first mismatch: ray {i}, compute {:?}, {} {:?}",
                 self.compute.results[i],
-                driver_name(self.driver_backend),
+                self.driver_backend.name(),
                 self.driver.results[i]
             ));
         }
         s
-    }
-}
-
-fn driver_name(backend: Backend) -> &'static str {
-    match backend {
-        Backend::Pipeline => "pipeline",
-        _ => "query",
     }
 }
 

@@ -51,6 +51,18 @@ pub enum AaMode {
     Fxaa,
 }
 
+impl Backend {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Auto => "auto",
+            Backend::Query => "query",
+            Backend::Pipeline => "pipeline",
+            Backend::Compute => "compute",
+        }
+    }
+}
+
 impl AaMode {
     pub const ALL: [AaMode; 3] = [AaMode::None, AaMode::Edge, AaMode::Fxaa];
 
@@ -360,7 +372,7 @@ impl ShadingConfig {
         format!(
             "mode {:?}, backend {}, secondary effects: {}{}, aa {aa}",
             self.mode,
-            self.backend.map(|b| format!("{b:?}").to_lowercase()).unwrap_or_else(|| "none".into()),
+            self.backend.map_or("none", Backend::name),
             if on.is_empty() { "none".to_string() } else { on.join(", ") },
             if self.budget { " (per-object budget)" } else { "" }
         ) + if self.reference { ", ray-traced ambient reference" } else { "" }
