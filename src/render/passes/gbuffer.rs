@@ -145,7 +145,11 @@ impl GBufferPass {
         };
         unsafe {
             d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, layout, 0, &sets, &[]);
-            d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
+            if phase != 0 {
+                // Cluster draws are indexed; whole draws fetch their indices
+                // in the vertex stage.
+                d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
+            }
             // Opaque first so masked geometry is depth-tested against it.
             // Only the draws the frustum test kept (cx.draws); single-sided
             // geometry is back-face culled, and a mirroring transform turns
@@ -177,7 +181,8 @@ impl GBufferPass {
                             0,
                             bytemuck::bytes_of(&push),
                         );
-                        d.cmd_draw(cmd, draw.range.index_count, 1, draw.range.first_index, draw.instance);
+                        // The instance is a push constant, not firstInstance.
+                        d.cmd_draw(cmd, draw.range.index_count, 1, draw.range.first_index, 0);
                         continue;
                     }
                     // One indirect draw per cluster; the cull pass set
