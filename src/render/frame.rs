@@ -71,14 +71,22 @@ pub enum Resource {
 pub struct Use {
     pub resource: Resource,
     pub access: Access,
+    /// The pass also samples the image in between its own barriers (the
+    /// G-buffer pass's occlusion pyramid reads its depth): the target is
+    /// allocated with SAMPLED usage too, only where a pass says so.
+    pub sampled_within: bool,
 }
 
 impl Use {
     pub const fn image(t: &'static TargetDesc, access: Access) -> Use {
-        Use { resource: Resource::Image(t), access }
+        Use { resource: Resource::Image(t), access, sampled_within: false }
     }
     pub const fn buffer(b: SharedBuffer, access: Access) -> Use {
-        Use { resource: Resource::Buffer(b), access }
+        Use { resource: Resource::Buffer(b), access, sampled_within: false }
+    }
+    /// This use, with the pass sampling the image itself (`sampled_within`).
+    pub const fn sampled_within(self) -> Use {
+        Use { sampled_within: true, ..self }
     }
 }
 

@@ -64,17 +64,18 @@ pub struct Targets {
     targets: Vec<Target>,
 }
 
-fn usage(access: Access) -> vk::ImageUsageFlags {
+fn usage(u: &Use) -> vk::ImageUsageFlags {
     use vk::ImageUsageFlags as U;
-    match access {
-        Access::Sampled => U::SAMPLED,
-        Access::StorageRead | Access::StorageWrite => U::STORAGE,
-        Access::ColorAttachment => U::COLOR_ATTACHMENT,
-        // Sampled too: occlusion culling's depth pyramid reads it (render/occlusion.rs).
-        Access::DepthAttachment => U::DEPTH_STENCIL_ATTACHMENT | U::SAMPLED,
-        Access::TransferRead => U::TRANSFER_SRC,
-        _ => U::empty(),
-    }
+    let within = if u.sampled_within { U::SAMPLED } else { U::empty() };
+    within
+        | match u.access {
+            Access::Sampled => U::SAMPLED,
+            Access::StorageRead | Access::StorageWrite => U::STORAGE,
+            Access::ColorAttachment => U::COLOR_ATTACHMENT,
+            Access::DepthAttachment => U::DEPTH_STENCIL_ATTACHMENT,
+            Access::TransferRead => U::TRANSFER_SRC,
+            _ => U::empty(),
+        }
 }
 
 impl Targets {
@@ -89,8 +90,8 @@ impl Targets {
         for u in uses {
             let Resource::Image(t) = u.resource else { continue };
             match wanted.iter_mut().find(|(d, _)| d.name == t.name) {
-                Some((_, flags)) => *flags |= usage(u.access),
-                None => wanted.push((t, usage(u.access))),
+                Some((_, flags)) => *flags |= usage(u),
+                None => wanted.push((t, usage(u))),
             }
         }
         let mut out = Targets::empty(extent);

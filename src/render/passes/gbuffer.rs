@@ -62,10 +62,12 @@ pub fn reads() -> Vec<Io> {
     ]
 }
 
-fn uses(_: &ShadingConfig) -> Vec<Use> {
+fn uses(c: &ShadingConfig) -> Vec<Use> {
+    let depth = Use::image(&DEPTH, Access::DepthAttachment);
     vec![
         Use::image(&HIT, Access::ColorAttachment),
-        Use::image(&DEPTH, Access::DepthAttachment),
+        // Occlusion culling builds its pyramid from the depth (render/occlusion.rs).
+        if c.occlusion { depth.sampled_within() } else { depth },
         Use::buffer(SharedBuffer::Geometry, Access::VertexInput),
     ]
 }
