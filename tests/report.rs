@@ -168,13 +168,26 @@ fn bench_csv_and_ratio_words() {
         .unwrap();
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{stderr}");
-    assert!(stderr.contains("bench: warming up 2/2") && stderr.contains("bench: measuring 2/2"), "{stderr}");
+    assert!(
+        stderr.contains("bench: warming up 2/2")
+            && stderr.contains("bench: measuring 2 variants interleaved"),
+        "{stderr}"
+    );
     let side: Vec<&str> = stdout.lines().skip_while(|l| !l.starts_with("side by side")).skip(1).collect();
-    assert!(side[0].contains("1.00x baseline"), "{stdout}");
+    assert!(side[0].contains("1.00x baseline") && !side[0].contains("paired"), "{stdout}");
     assert!(
         side[1].contains(" slower ") || side[1].contains(" faster ") || side[1].contains(" as fast "),
         "{stdout}"
     );
+    // Two frame pairs: the per-frame ratios' median and quartiles.
+    let paired = side[1].split("paired ").nth(1).unwrap_or_else(|| panic!("no paired ratio: {stdout}"));
+    let nums: Vec<f64> = paired
+        .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .filter(|t| !t.is_empty())
+        .take(3)
+        .map(|t| t.parse().unwrap())
+        .collect();
+    assert!(nums.len() == 3 && nums[1] <= nums[0] && nums[0] <= nums[2] && nums[1] > 0.0, "{stdout}");
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();

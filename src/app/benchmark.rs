@@ -35,6 +35,8 @@ pub struct BenchReport {
     pub frames: usize,
     pub passes: Vec<PassStats>,
     pub frame_total: PassStats,
+    /// GPU ms of each measured frame, in path order.
+    pub frame_totals: Vec<f64>,
     /// Camera, shadow and secondary rays of the first camera's frame.
     pub rays_first_frame: [u32; 3],
     /// NaN/Inf pixels tone mapping met, over the measured frames.
@@ -319,12 +321,15 @@ fn bench_frame_inner(
     })
 }
 
-/// `bench`: every variant is warmed up first (one ray-counting frame, then
-/// `warmup` unmeasured frames along the path's start, so no variant absorbs
-/// the process's warm-up), then each is measured over `frames` frames
-/// along the scene's camera path (or from its camera), after one more
-/// unmeasured frame when another variant ran in between. One renderer and
-/// one scene upload for all; per-pass GPU times. Progress goes to stderr.
+/// `bench`: every variant gets a renderer of its own and is warmed up first
+/// (one ray-counting frame, then `warmup` unmeasured frames along the
+/// path's start, so no variant absorbs the process's warm-up). Then the
+/// variants are measured interleaved, frame by frame along the scene's
+/// camera path (or from its camera), each frame of the path once per
+/// variant and the order rotating: a drift of the device's speed (a CPU's
+/// clock, other load) falls on every variant alike, and the frames pair up
+/// for per-frame ratios (`paired_ratios`). Per-pass GPU times. Progress goes
+/// to stderr.
 pub fn bench(
     ctx: &Context,
     job: &RenderJob,
@@ -356,17 +361,14 @@ pub fn bench(
     // warm-up, then per variant (after one re-warm frame when several
     // alternate) the measured frames; `--capture-frame` counts the same way.
     let n = variants.len();
-    let rewarm = usize::from(n > 1 && warmup > 0);
-    let total = n * (1 + warmup) + n * (rewarm + frames);
+    // Frames in the order rendered: per variant a ray-counting frame and the
+    // warm-up, then the measured frames, one per variant for each frame of
+    // the path; `--capture-frame` counts the same way.
+    let total = n * (1 + warmup + frames);
     if let Some(c) = ctx.capture_frame.filter(|&c| c >= total as u64) {
         bail!("--capture-frame {c}: this bench renders {total} frames (0..={})", total - 1);
     }
-    let mut renderer = Renderer::new(ctx, &scene, extent)?;
-    // Auto primary visibility measures like the viewer's does.
-    renderer.visibility.measure = true;
-    // The camera path adapts like a played-back animation: 1 / fps per frame
-    // (the first frame converges at once).
-    renderer.adapt_dt = Some(1.0 / job.fps.max(1e-3));
+    let mut renderers: Vec<Renderer> = Vec::new();
     let mut reports = Vec::new();
     let mut frame_no = 0u64;
     let result: Result<()> = (|| {
@@ -379,6 +381,13 @@ pub fn bench(
                 v.backend,
                 v.accel
             );
+            renderers.push(Renderer::new(ctx, &scene, extent)?);
+            let renderer = renderers.last_mut().context("just pushed")?;
+            // Auto primary visibility measures like the viewer's does.
+            renderer.visibility.measure = true;
+            // The camera path adapts like a played-back animation: 1 / fps
+            // per frame (the first frame converges at once).
+            renderer.adapt_dt = Some(1.0 / job.fps.max(1e-3));
             // One counted frame: the atomics would distort the timings.
             let settings = RenderSettings { mode: v.mode, backend: v.backend, ..job.settings };
             let counting =
@@ -393,7 +402,7 @@ pub fn bench(
             for i in 0..warmup {
                 bench_frame(
                     ctx,
-                    &mut renderer,
+                    renderer,
                     &mut scene,
                     anim,
                     job,
@@ -405,55 +414,37 @@ pub fn bench(
                 )?;
             }
         }
-        for (k, &v) in variants.iter().enumerate() {
-            eprintln!("bench: measuring {}/{n} ({frames} frames)", k + 1);
-            if n > 1 && warmup > 0 {
-                // The frame's passes follow the variant: rebuilt since its warm-up.
-                bench_frame(
-                    ctx,
-                    &mut renderer,
-                    &mut scene,
-                    anim,
-                    job,
-                    &base_camera,
-                    v,
-                    warmup - 1,
-                    (warmup, frames),
-                    &mut frame_no,
-                )?;
+        if n > 1 {
+            eprintln!("bench: measuring {n} variants interleaved, {frames} frames each");
+        } else {
+            eprintln!("bench: measuring {frames} frames");
+        }
+        let mut acc: Vec<Measured> = (0..n).map(|_| Measured::default()).collect();
+        let step = (frames / 10).max(1);
+        for (j, i) in (warmup..warmup + frames).enumerate() {
+            if j % step == 0 && frames >= 20 {
+                eprintln!("bench: frame {}/{frames}", j + 1);
             }
-            let mut per_pass: Vec<(&'static str, Vec<f64>)> = Vec::new();
-            let mut totals = Vec::new();
-            let mut counts = [0usize; 2];
-            let (mut bad_pixels, mut exposure) = (0u64, None);
-            let mut budget_frames = Vec::new();
-            for i in warmup..warmup + frames {
+            for r in 0..n {
+                // The order rotates: no variant always follows the same one.
+                let k = (r + j) % n;
                 let f = bench_frame(
                     ctx,
-                    &mut renderer,
+                    &mut renderers[k],
                     &mut scene,
                     anim,
                     job,
                     &base_camera,
-                    v,
+                    variants[k],
                     i,
                     (warmup, frames),
                     &mut frame_no,
                 )?;
-                counts = [counts[0] + f.counts[0], counts[1] + f.counts[1]];
-                bad_pixels += f.bad_pixels as u64;
-                exposure = f.exposure;
-                budget_frames.extend(f.budget);
-                let mut total = 0.0;
-                for &(name, ms) in f.update.iter().chain(&f.timings).filter(|(n, _)| *n != "readback") {
-                    total += ms;
-                    match per_pass.iter_mut().find(|(n, _)| *n == name) {
-                        Some((_, v)) => v.push(ms),
-                        None => per_pass.push((name, vec![ms])),
-                    }
-                }
-                totals.push(total);
+                acc[k].add(f);
             }
+        }
+        for (k, (m, renderer)) in acc.into_iter().zip(&renderers).enumerate() {
+            let v = variants[k];
             let c = renderer.shading_config().map(|c| c.describe()).unwrap_or_default();
             let config = match anim {
                 Some(_) if v.accel == AccelUpdate::Full => {
@@ -461,7 +452,7 @@ pub fn bench(
                 }
                 Some(_) => format!(
                     "{c}; AS update: {:?} ({} refits, {} rebuilds of skinned structures)",
-                    v.accel, counts[0], counts[1]
+                    v.accel, m.counts[0], m.counts[1]
                 ),
                 None => c,
             };
@@ -473,18 +464,19 @@ pub fn bench(
                 width: job.width,
                 height: job.height,
                 frames,
-                passes: per_pass.into_iter().map(|(n, v)| stats(n, v)).collect(),
-                frame_total: stats("frame", totals),
+                passes: m.per_pass.into_iter().map(|(n, v)| stats(n, v)).collect(),
+                frame_total: stats("frame", m.totals.clone()),
+                frame_totals: m.totals,
                 rays_first_frame: rays[k],
-                bad_pixels,
-                exposure,
+                bad_pixels: m.bad_pixels,
+                exposure: m.exposure,
                 budget: job
                     .settings
                     .budget
                     .filter(|b| {
-                        b.mode == crate::render::budget::BudgetMode::Effects && !budget_frames.is_empty()
+                        b.mode == crate::render::budget::BudgetMode::Effects && !m.budget_frames.is_empty()
                     })
-                    .map(|b| (b.budget, budget_frames)),
+                    .map(|b| (b.budget, m.budget_frames)),
                 gbuffer_bytes_per_pixel: crate::render::passes::gbuffer::bytes_per_pixel(renderer.targets()),
                 raster_draws: renderer.raster_draws(),
                 raster_triangles: renderer.raster_triangles(),
@@ -496,9 +488,63 @@ pub fn bench(
         }
         Ok(())
     })();
-    renderer.destroy(ctx);
+    for mut r in renderers {
+        r.destroy(ctx);
+    }
     result?;
     Ok(reports)
+}
+
+/// One variant's measured frames, accumulated.
+#[derive(Default)]
+struct Measured {
+    per_pass: Vec<(&'static str, Vec<f64>)>,
+    /// GPU ms per frame, in path order.
+    totals: Vec<f64>,
+    counts: [usize; 2],
+    bad_pixels: u64,
+    exposure: Option<crate::render::tone::ExposureState>,
+    budget_frames: Vec<BudgetFrame>,
+}
+
+impl Measured {
+    fn add(&mut self, f: BenchFrame) {
+        self.counts = [self.counts[0] + f.counts[0], self.counts[1] + f.counts[1]];
+        self.bad_pixels += f.bad_pixels as u64;
+        self.exposure = f.exposure;
+        self.budget_frames.extend(f.budget);
+        let mut total = 0.0;
+        for &(name, ms) in f.update.iter().chain(&f.timings).filter(|(n, _)| *n != "readback") {
+            total += ms;
+            match self.per_pass.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, v)) => v.push(ms),
+                None => self.per_pass.push((name, vec![ms])),
+            }
+        }
+        self.totals.push(total);
+    }
+}
+
+/// Per-frame ratios of frame times `r` to `base` (frames of the same path
+/// position, rendered next to each other): quartiles and median, as
+/// [first quartile, median, third quartile]. None where the runs differ in
+/// length or a base frame took no time.
+pub fn paired_ratios(r: &[f64], base: &[f64]) -> Option<[f64; 3]> {
+    if r.len() != base.len() || r.is_empty() {
+        return None;
+    }
+    let mut q: Vec<f64> = r.iter().zip(base).map(|(a, b)| a / b).collect();
+    if q.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    q.sort_by(f64::total_cmp);
+    let at = |p: f64| {
+        // Linear interpolation between order statistics.
+        let x = p * (q.len() - 1) as f64;
+        let (lo, hi) = (x.floor() as usize, x.ceil() as usize);
+        q[lo] + (q[hi] - q[lo]) * (x - lo as f64)
+    };
+    Some([at(0.25), at(0.5), at(0.75)])
 }
 
 pub fn bench_command(
@@ -584,13 +630,22 @@ fn bench_with(
     }
     if reports.len() > 1 {
         println!(
-            "side by side (median GPU ms per frame; ratio to the first row, every variant warmed up first):"
+            "side by side (median GPU ms per frame; ratio of the medians to the first row; paired: median \
+             [quartiles] of the per-frame ratios, the variants interleaved frame by frame):"
         );
-        let base = reports[0].frame_total.median;
+        let base = &reports[0];
         for (i, r) in reports.iter().enumerate() {
-            let ratio = r.frame_total.median / base;
+            let ratio = r.frame_total.median / base.frame_total.median;
             let word = if i == 0 { "baseline" } else { ratio_word(ratio) };
-            println!("  {:>10.3} ms  {ratio:>5.2}x {word:<8}  {}", r.frame_total.median, r.config);
+            let paired = match paired_ratios(&r.frame_totals, &base.frame_totals) {
+                Some(_) if i == 0 => String::new(),
+                Some([lo, mid, hi]) => format!("paired {mid:.3} [{lo:.3}, {hi:.3}]"),
+                None => "paired -".into(),
+            };
+            println!(
+                "  {:>10.3} ms  {ratio:>5.2}x {word:<8} {paired:<30} {}",
+                r.frame_total.median, r.config
+            );
         }
     }
     if let Some(path) = csv {
@@ -669,4 +724,27 @@ fn refit_quality(job: &RenderJob, frames: usize) -> Result<Option<RefitQuality>>
         last_sah_ratio: last,
         worst_area_growth: growth,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::paired_ratios;
+
+    #[test]
+    fn paired_ratios_pair_frames_by_position() {
+        // A drift that doubles both variants' times cancels frame by frame:
+        // the ratio of the medians would read 1.5 here, the pairs read 0.5.
+        let base = [10.0, 20.0, 40.0, 80.0, 160.0];
+        let r = [5.0, 10.0, 20.0, 40.0, 80.0];
+        assert_eq!(paired_ratios(&r, &base), Some([0.5, 0.5, 0.5]));
+        // Quartiles interpolate between the sorted ratios (1, 2, 3, 4, 5).
+        let r = [10.0, 60.0, 80.0, 320.0, 800.0];
+        assert_eq!(paired_ratios(&r, &base), Some([2.0, 3.0, 4.0]));
+        assert_eq!(paired_ratios(&[1.0, 2.0], &[2.0, 4.0]), Some([0.5, 0.5, 0.5]));
+        assert_eq!(paired_ratios(&[1.0, 2.0, 3.0], &[1.0, 1.0, 1.0]), Some([1.5, 2.0, 2.5]));
+        // Unpaired or degenerate runs give no ratio.
+        assert_eq!(paired_ratios(&[1.0], &[1.0, 2.0]), None);
+        assert_eq!(paired_ratios(&[], &[]), None);
+        assert_eq!(paired_ratios(&[1.0], &[0.0]), None);
+    }
 }
