@@ -13,19 +13,12 @@
 layout(location = 2) in vec2 v_uv;
 #endif
 
-#ifdef GB_CLUSTER
-layout(location = 3) flat in uint v_instance;
-// The cluster's first triangle within its draw (gbuffer.vert).
-layout(location = 4) flat in uint v_first_primitive;
-#define PRIMITIVE (v_first_primitive + uint(gl_PrimitiveID))
-#else
-// One draw per instance: its index is a push constant, the triangle a flat
-// varying (gbuffer.vert; not gl_PrimitiveID: common/gbuffer_draw.glsl).
+// Draws of one instance (a whole one or clusters of it): its index is a
+// push constant, the triangle a flat varying (gbuffer.vert; not
+// gl_PrimitiveID: common/gbuffer_draw.glsl).
 #include "common/gbuffer_draw.glsl"
 #define v_instance gb_draw.instance
 layout(location = 4) flat in uint v_primitive;
-#define PRIMITIVE v_primitive
-#endif
 
 layout(location = 0) out uvec2 o_hit;  // instance + 1, primitive
 
@@ -39,5 +32,5 @@ void main() {
         discard;
     }
 #endif
-    o_hit = uvec2(v_instance + 1u, PRIMITIVE);
+    o_hit = uvec2(v_instance + 1u, v_primitive);
 }

@@ -1,5 +1,5 @@
 // The G-buffer's clusters and their indirect draws (gpu/clusters.rs,
-// render/occlusion.rs): set 1 of the cull pass and the cluster raster.
+// render/occlusion.rs): set 1 of the cull pass.
 #ifndef CLUSTER_GLSL
 #define CLUSTER_GLSL
 #include "types.glsl"
@@ -8,16 +8,15 @@ struct Cluster {
     vec3 lo;  // object-space box of the cluster's triangles
     uint instance;
     vec3 hi;
-    uint first_primitive;  // within its draw: added to gl_PrimitiveID
 };
 
-// VkDrawIndexedIndirectCommand; the cull pass writes instance_count only.
+// VkDrawIndirectCommand (the raster draws clusters like whole draws: not
+// indexed, common/gbuffer_draw.glsl); the cull pass writes instance_count only.
 struct DrawCommand {
-    uint index_count;
+    uint vertex_count;
     uint instance_count;
-    uint first_index;
-    int vertex_offset;
-    uint first_instance;  // the cluster's index
+    uint first_vertex;
+    uint first_instance;
 };
 
 layout(set = SET_PASS, binding = OCC_CLUSTERS, scalar) readonly buffer Clusters { Cluster clusters[]; };

@@ -1,5 +1,5 @@
-// Per-draw constants of the G-buffer raster drawn without clusters
-// (render/passes/gbuffer.rs, GBufferDraw): the instance's world matrix, so
+// Per-draw constants of the G-buffer raster, whole draws and cluster draws
+// alike (render/passes/gbuffer.rs, GBufferDraw): the instance's world matrix, so
 // the vertex stage fetches no instance per vertex (the same f32 matrix the
 // instance buffer holds, applied the same way: the same positions as the
 // fetch, to the bit); the instance, which the fragment stage writes into the hit target (no

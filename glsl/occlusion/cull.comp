@@ -64,7 +64,7 @@ void main() {
             visible[c] = 1u;
             commands[pc.count + c].instance_count = 0u;
             atomicAdd(counters[0], 1u);
-            atomicAdd(counters[4], commands[c].index_count / 3u);
+            atomicAdd(counters[4], commands[c].vertex_count / 3u);
         }
         return;
     }
@@ -110,5 +110,5 @@ void main() {
     commands[pc.count + c].instance_count = (vis && !drawn_first) ? 1u : 0u;
     uint slot = !in_frustum ? 3u : drawn_first ? 0u : vis ? 1u : 2u;
     atomicAdd(counters[slot], 1u);
-    if (slot <= 1u) atomicAdd(counters[4], commands[c].index_count / 3u);
+    if (slot <= 1u) atomicAdd(counters[4], commands[c].vertex_count / 3u);
 }

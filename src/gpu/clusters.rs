@@ -30,20 +30,18 @@ pub struct GpuCluster {
     pub min: [f32; 3],
     pub instance: u32,
     pub max: [f32; 3],
-    /// The cluster's first triangle within its draw: added to
-    /// gl_PrimitiveID so the visibility buffer stores the draw's primitive.
-    pub first_primitive: u32,
 }
 const _: () = assert!(std::mem::size_of::<GpuCluster>() == CLUSTER_STRIDE as usize);
 
-/// VkDrawIndexedIndirectCommand.
+/// VkDrawIndirectCommand: a cluster is drawn like a whole draw, not
+/// indexed, its vertex stage fetching index and vertex (glsl/common/
+/// gbuffer_draw.glsl), from its first index in the scene's index buffer.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct DrawCommand {
-    pub index_count: u32,
+    pub vertex_count: u32,
     pub instance_count: u32,
-    pub first_index: u32,
-    pub vertex_offset: i32,
+    pub first_vertex: u32,
     pub first_instance: u32,
 }
 
@@ -99,18 +97,12 @@ pub fn build(scene: &Scene, draws: &[Draw], per_cluster: u32) -> ClusterList {
                 n += 1;
             }
             out.commands.push(DrawCommand {
-                index_count: n * 3,
+                vertex_count: n * 3,
                 instance_count: 0,
-                first_index: d.range.first_index + t * 3,
-                vertex_offset: d.range.vertex_offset as i32,
-                first_instance: out.clusters.len() as u32,
+                first_vertex: d.range.first_index + t * 3,
+                first_instance: 0,
             });
-            out.clusters.push(GpuCluster {
-                min: b.min.into(),
-                instance: d.instance,
-                max: b.max.into(),
-                first_primitive: t,
-            });
+            out.clusters.push(GpuCluster { min: b.min.into(), instance: d.instance, max: b.max.into() });
             t += n;
         }
         out.ranges.push((first, out.clusters.len() as u32 - first));

@@ -285,11 +285,10 @@ shared! {
     uint LIGHT_STRIDE = 64;
     uint BVH_NODE_STRIDE = 32;
     uint BVH_INSTANCE_STRIDE = 144;
-    uint CLUSTER_STRIDE = 32;
+    uint CLUSTER_STRIDE = 28;
 
     // Two-phase occlusion culling of the G-buffer's clusters (gpu/clusters.rs,
-    // render/occlusion.rs). Set 1 of the cull pipeline and of the cluster
-    // raster pipelines: the clusters, each cluster's visibility in the
+    // render/occlusion.rs). Set 1 of the cull pipeline: the clusters, each cluster's visibility in the
     // previous frame, the indirect draws (phase 1's, then phase 2's), the
     // counters, the depth pyramid (HiZ).
     id OCC_CLUSTERS = 0;

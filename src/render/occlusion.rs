@@ -150,7 +150,7 @@ impl Pyramid {
 
 /// The culling pipelines and the depth pyramid.
 pub struct Occlusion {
-    /// Set 1 of the cull pass and of the cluster raster (glsl/common/cluster.glsl).
+    /// Set 1 of the cull pass (glsl/common/cluster.glsl).
     pub set: DescriptorSet,
     cull_layout: vk::PipelineLayout,
     cull: vk::Pipeline,

@@ -6,8 +6,9 @@
 //! for many tiny triangles was most of this pass's time (measured in
 //! bench/results/lavapipe-2core-vm-raster.md). Alpha-masked materials use a
 //! pipeline that interpolates uv and runs the alpha test; opaque ones keep
-//! early depth testing. Each instance is one non-indexed draw with its
-//! world matrix and index range as push constants: the vertex
+//! early depth testing. Each instance is one non-indexed draw (with
+//! occlusion culling on, one indirect draw per cluster of it, the same
+//! pipelines) with its world matrix and index range as push constants: the vertex
 //! stage pulls its index and vertex and hands on the triangle number, so no
 //! stage reads gl_PrimitiveID or an instance per vertex (both slow on
 //! llvmpipe; glsl/common/gbuffer_draw.glsl).
@@ -89,19 +90,15 @@ pub const PASS: PassDesc = PassDesc {
     create: |i: &Init| {
         let mut p = GBufferPass::new(i.ctx, i.gpu.set.layout)?;
         if i.config.occlusion && !i.gpu.clusters.list.clusters.is_empty() {
-            let o = Occlusion::new(i.ctx, i.gpu, i.gpu.set.layout)?;
-            let layout =
-                pipeline_layout(i.ctx, "gbuffer clusters layout", &[i.gpu.set.layout, o.set.layout], 0)?;
-            let opaque = create_pipeline(i.ctx, layout, false, true)?;
-            let masked = create_pipeline(i.ctx, layout, true, true)?;
-            p.clusters = Some(ClusterRaster { occlusion: o, layout, opaque, masked });
+            // The cluster draws use the whole draws' pipelines (gbuffer.vert).
+            p.clusters = Some(Occlusion::new(i.ctx, i.gpu, i.gpu.set.layout)?);
             p.bind(i.ctx, i.targets);
         }
         Ok(Box::new(p))
     },
 };
 
-/// The push constants of a draw without clusters (glsl/common/gbuffer_draw.glsl).
+/// The push constants of a draw, whole or of clusters (glsl/common/gbuffer_draw.glsl).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct GBufferDraw {
@@ -112,28 +109,21 @@ struct GBufferDraw {
     vertex_offset: i32,
 }
 
-/// The pipelines that draw clusters, and the culling that picks them.
-struct ClusterRaster {
-    occlusion: Occlusion,
-    layout: vk::PipelineLayout,
-    opaque: vk::Pipeline,
-    masked: vk::Pipeline,
-}
-
 pub struct GBufferPass {
     layout: vk::PipelineLayout,
     opaque: vk::Pipeline,
     masked: vk::Pipeline,
-    /// Occlusion culling on (render/occlusion.rs).
-    clusters: Option<ClusterRaster>,
+    /// Occlusion culling on (render/occlusion.rs): the culling that picks
+    /// the clusters to draw.
+    clusters: Option<Occlusion>,
 }
 
 impl GBufferPass {
     pub fn new(ctx: &Context, scene_layout: vk::DescriptorSetLayout) -> Result<GBufferPass> {
         let push = std::mem::size_of::<GBufferDraw>() as u32;
         let layout = pipeline_layout(ctx, "gbuffer layout", &[scene_layout], push)?;
-        let opaque = create_pipeline(ctx, layout, false, false)?;
-        let masked = create_pipeline(ctx, layout, true, false)?;
+        let opaque = create_pipeline(ctx, layout, false)?;
+        let masked = create_pipeline(ctx, layout, true)?;
         Ok(GBufferPass { layout, opaque, masked, clusters: None })
     }
 
@@ -141,22 +131,21 @@ impl GBufferPass {
     /// the cull pass picked for `phase` 1 or 2.
     fn draw(&self, cx: &Cx, cmd: vk::CommandBuffer, phase: u32) {
         let (d, scene) = (&cx.ctx.device, cx.gpu);
-        let (layout, pipelines, sets) = match (&self.clusters, phase) {
-            (Some(c), 1 | 2) => (c.layout, [c.opaque, c.masked], vec![scene.set.set, c.occlusion.set.set]),
-            _ => (self.layout, [self.opaque, self.masked], vec![scene.set.set]),
-        };
+        let layout = self.layout;
         unsafe {
-            d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, layout, 0, &sets, &[]);
-            if phase != 0 {
-                // Cluster draws are indexed; whole draws fetch their indices
-                // in the vertex stage.
-                d.cmd_bind_index_buffer(cmd, scene.indices.raw, 0, vk::IndexType::UINT32);
-            }
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                layout,
+                0,
+                &[scene.set.set],
+                &[],
+            );
             // Opaque first so masked geometry is depth-tested against it.
             // Only the draws the frustum test kept (cx.draws); single-sided
             // geometry is back-face culled, and a mirroring transform turns
             // its front faces clockwise.
-            for (pipeline, masked) in [(pipelines[0], false), (pipelines[1], true)] {
+            for (pipeline, masked) in [(self.opaque, false), (self.masked, true)] {
                 d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
                 for fd in &cx.draws.draws {
                     let draw = &scene.draws[fd.draw as usize];
@@ -169,35 +158,29 @@ impl GBufferPass {
                     let front =
                         if fd.mirrored { vk::FrontFace::CLOCKWISE } else { vk::FrontFace::COUNTER_CLOCKWISE };
                     d.cmd_set_front_face(cmd, front);
+                    let push = GBufferDraw {
+                        world: fd.world.to_cols_array(),
+                        instance: draw.instance,
+                        first_index: draw.range.first_index,
+                        vertex_offset: draw.range.vertex_offset as i32,
+                    };
+                    d.cmd_push_constants(
+                        cmd,
+                        layout,
+                        vk::ShaderStageFlags::ALL,
+                        0,
+                        bytemuck::bytes_of(&push),
+                    );
                     if phase == 0 {
-                        let push = GBufferDraw {
-                            world: fd.world.to_cols_array(),
-                            instance: draw.instance,
-                            first_index: draw.range.first_index,
-                            vertex_offset: draw.range.vertex_offset as i32,
-                        };
-                        d.cmd_push_constants(
-                            cmd,
-                            layout,
-                            vk::ShaderStageFlags::ALL,
-                            0,
-                            bytemuck::bytes_of(&push),
-                        );
                         // The instance is a push constant, not firstInstance.
                         d.cmd_draw(cmd, draw.range.index_count, 1, draw.range.first_index, 0);
                         continue;
                     }
-                    // One indirect draw per cluster; the cull pass set
-                    // each one's instance count to 0 or 1.
+                    // One indirect draw per cluster, from its first index;
+                    // the cull pass set each one's instance count to 0 or 1.
                     let (first, count) = scene.clusters.list.ranges[fd.draw as usize];
                     let offset = Occlusion::command_offset(scene, phase, first);
-                    d.cmd_draw_indexed_indirect(
-                        cmd,
-                        scene.clusters.commands.raw,
-                        offset,
-                        count,
-                        COMMAND_STRIDE,
-                    );
+                    d.cmd_draw_indirect(cmd, scene.clusters.commands.raw, offset, count, COMMAND_STRIDE);
                 }
             }
         }
@@ -257,13 +240,12 @@ impl Pass for GBufferPass {
         let (ctx, t) = (cx.ctx, cx.targets);
         let (Some(_), Some(depth)) = (t.get(&HIT), t.get(&DEPTH)) else { return };
         let d = &ctx.device;
-        let Some(c) = &self.clusters else {
+        let Some(o) = &self.clusters else {
             self.begin(cx, cmd, true);
             self.draw(cx, cmd, 0);
             unsafe { d.cmd_end_rendering(cmd) };
             return;
         };
-        let o = &c.occlusion;
         o.cull(ctx, cmd, cx.gpu, 1);
         ctx.begin_label(cmd, "gbuffer phase 1 (visible last frame)", [0.2, 0.7, 0.2, 1.0]);
         self.begin(cx, cmd, true);
@@ -286,10 +268,10 @@ impl Pass for GBufferPass {
     }
 
     fn bind(&self, ctx: &Context, targets: &Targets) {
-        if let (Some(c), Some(depth)) = (&self.clusters, targets.get(&DEPTH)) {
+        if let (Some(o), Some(depth)) = (&self.clusters, targets.get(&DEPTH)) {
             // No error path in `bind`: a failed pyramid leaves culling off
             // for the frame (cull and pyramid record nothing without one).
-            if let Err(e) = c.occlusion.bind(ctx, depth.view, targets.extent) {
+            if let Err(e) = o.bind(ctx, depth.view, targets.extent) {
                 log::error!("occlusion culling: depth pyramid: {e:#}");
             }
         }
@@ -301,29 +283,18 @@ impl Pass for GBufferPass {
             ctx.device.destroy_pipeline(self.masked, None);
             ctx.device.destroy_pipeline_layout(self.layout, None);
         }
-        if let Some(mut c) = self.clusters.take() {
-            c.occlusion.destroy(ctx);
-            unsafe {
-                ctx.device.destroy_pipeline(c.opaque, None);
-                ctx.device.destroy_pipeline(c.masked, None);
-                ctx.device.destroy_pipeline_layout(c.layout, None);
-            }
+        if let Some(mut o) = self.clusters.take() {
+            o.destroy(ctx);
         }
     }
 }
 
-fn create_pipeline(
-    ctx: &Context,
-    layout: vk::PipelineLayout,
-    alpha_test: bool,
-    clusters: bool,
-) -> Result<vk::Pipeline> {
+fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, alpha_test: bool) -> Result<vk::Pipeline> {
     let spec = Specialization::new(&[]);
-    let (name, vertex, fragment) = match (alpha_test, clusters) {
-        (true, false) => ("gbuffer alpha-masked", "gbuffer_uv", "visibility_masked"),
-        (false, false) => ("gbuffer opaque", "gbuffer.vert", "visibility.frag"),
-        (true, true) => ("gbuffer clusters alpha-masked", "gbuffer_uv_cluster", "visibility_masked_cluster"),
-        (false, true) => ("gbuffer clusters opaque", "gbuffer_cluster", "visibility_cluster"),
+    let (name, vertex, fragment) = if alpha_test {
+        ("gbuffer alpha-masked", "gbuffer_uv", "visibility_masked")
+    } else {
+        ("gbuffer opaque", "gbuffer.vert", "visibility.frag")
     };
     RasterPipeline {
         name,
