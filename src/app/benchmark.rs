@@ -357,9 +357,6 @@ pub fn bench(
     if !unavailable.is_empty() {
         bail!("bench: not every variant asked for can run on {}: {}", ctx.caps.name, unavailable.join("; "));
     }
-    // Frames in the order rendered: per variant a ray-counting frame and the
-    // warm-up, then per variant (after one re-warm frame when several
-    // alternate) the measured frames; `--capture-frame` counts the same way.
     let n = variants.len();
     // Frames in the order rendered: per variant a ray-counting frame and the
     // warm-up, then the measured frames, one per variant for each frame of
