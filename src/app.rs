@@ -61,6 +61,8 @@ pub struct GpuOptions {
     pub disable_ray_tracing: bool,
     /// `--no-ray-query`: ray tracing without VK_KHR_ray_query.
     pub disable_ray_query: bool,
+    /// No indirect ray-tracing launch even where the device has one (tests).
+    pub disable_trace_rays_indirect: bool,
     /// `--vulkan-api 1.2`: use the device as a Vulkan 1.2 device.
     pub max_api_version: Option<u32>,
     /// `--capture-frame N` (render, bench, view): capture frame N with
@@ -76,6 +78,7 @@ impl GpuOptions {
             device: self.device.clone(),
             disable_ray_tracing: self.disable_ray_tracing,
             disable_ray_query: self.disable_ray_query,
+            disable_trace_rays_indirect: self.disable_trace_rays_indirect,
             surface_extensions: Vec::new(),
             swapchain: false,
             max_api_version: self.max_api_version,

@@ -568,6 +568,7 @@ fn run(cli: Cli) -> Result<()> {
         device: cli.gpu.device.parse::<DeviceSelector>().unwrap_or_default(),
         disable_ray_tracing: cli.gpu.no_rt,
         disable_ray_query: cli.gpu.no_ray_query,
+        disable_trace_rays_indirect: false,
         max_api_version: cli.gpu.vulkan_api,
         capture_frame: None,
     };

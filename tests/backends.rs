@@ -136,6 +136,34 @@ fn the_pipeline_backend_runs_without_ray_queries() {
     );
 }
 
+/// Drivers without rayTracingPipelineTraceRaysIndirect: the pipeline
+/// backend's compacted pass (specular) launches one ray-generation
+/// invocation per pixel instead of one per listed pixel, the spare ones
+/// finding no entry (render/kernel.rs); the image is the indirect launch's.
+#[test]
+fn the_pipeline_backend_runs_without_indirect_launches() {
+    let scene = common::scene_from_toml("backends_noindirect", AGREEMENT);
+    let ctx = common::validated(
+        GpuOptions { validation: true, disable_trace_rays_indirect: true, ..Default::default() }
+            .context()
+            .unwrap(),
+    );
+    assert!(!ctx.caps.trace_rays_indirect && ctx.rt.ray_tracing_pipeline);
+    let settings = RenderSettings { backend: Backend::Pipeline, ..Default::default() };
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: 160, height: 90 }).unwrap();
+    let frame = r.render(&ctx, &scene, &scene.cameras[0], &settings).unwrap();
+    assert_eq!(r.shading_config().unwrap().backend, Some(Backend::Pipeline));
+    r.destroy(&ctx);
+    common::assert_validation_clean(&ctx);
+    drop(ctx);
+    let reference = common::render_scene(&scene, 160, 90, &settings);
+    assert_agree(
+        "pipeline with a full-frame vs an indirect launch",
+        &[(Backend::Pipeline, frame), (Backend::Pipeline, reference)],
+        Identical,
+    );
+}
+
 /// Debian 12's stock lavapipe has no ray-tracing extension: with them
 /// switched off the program must pick the compute backend, create no
 /// acceleration structure, and still produce the ray-traced image.

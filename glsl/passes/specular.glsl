@@ -2,15 +2,19 @@
 // primary hit (Fresnel-weighted branches on an explicit stack, recursion up
 // to MAX_DEPTH, importance cutoff MIN_WEIGHT, environment on miss). The
 // secondary hits are shaded in full here, direct light and shadow rays
-// included.
+// included. Two kernels (render/passes/compacted.rs): `specular_select`
+// finds the pixels whose primary hit spawns a branch and lists them
+// (common/work_list.glsl); the chain kernel traces the listed pixels.
 #include "../common/gbuffer_read.glsl"
 #include "../common/integrator.glsl"
+#include "../common/work_list.glsl"
 
 layout(set = SET_PASS, binding = SPECULAR_OUT, rgba32f) uniform writeonly image2D specular_out;
 
-void specular_pixel(ivec2 px) {
-    PrimaryHit p;
-    if (outside_frame(px) || !read_primary(px, p)) return;
+// Pushes the branches of the primary hit at `px` (with the budget's effects
+// for its object); false where the pixel has no primary hit.
+bool specular_root(ivec2 px, out PrimaryHit p) {
+    if (!read_primary(px, p)) return false;
     vec3 v = -p.dir;
     float nv = face_viewer(p.s, v);
     g_effects = budget_effects(p.instance, px);
@@ -18,6 +22,27 @@ void specular_pixel(ivec2 px) {
     float spread = pixel_spread_angle();
     Cone cone = Cone(spread * distance(frame.camera_pos, p.s.position), spread);
     push_branches(p.s, v, nv, p.gn, p.back_face, vec3(1.0), 0u, cone);
+    return true;
+}
+
+// Select kernel, one invocation per pixel: a hit without branches gets no
+// specular radiance now, a hit with some is listed.
+void specular_select(ivec2 px) {
+    PrimaryHit p;
+    if (outside_frame(px) || !specular_root(px, p)) return;
+    if (g_sp == 0) {
+        imageStore(specular_out, px, vec4(0.0, 0.0, 0.0, 1.0));
+    } else {
+        work_append(px);
+    }
+}
+
+// Listed kernel, entry `i`: the pixel's branches pushed again from its
+// primary hit (cheaper than storing them), traced to completion.
+void specular_listed(uint i) {
+    ivec2 px;
+    PrimaryHit p;
+    if (!work_item(i, px) || !specular_root(px, p)) return;
     // A chain the selection started is traced whole.
     g_effects = EFFECT_ALL;
     imageStore(specular_out, px, vec4(trace_branches(), 1.0));

@@ -108,6 +108,15 @@ shared! {
     id DIRECT_IN = 5;
     id SPECULAR_IN = 6;
     id HDR_OUT = 7;
+    // A pass's compacted work list (glsl/common/work_list.glsl,
+    // render/passes/compacted.rs): its header (indirect commands and count)
+    // and the list of pixels; WORK_GROUP_SIZE invocations a workgroup.
+    id WORK_HEADER = 12;
+    id WORK_LIST = 13;
+    uint WORK_GROUPS_X = 0;
+    uint WORK_COUNT = 3;
+    uint WORK_HEADER_WORDS = 6;
+    uint WORK_GROUP_SIZE = 64;
     // The ray-traced ambient reference (render/passes/reference.rs): its
     // accumulation (rgb: radiance sum, a: samples) written by `reference`,
     // read by `composite`; samples per pixel per frame.

@@ -6,6 +6,8 @@
 use anyhow::Result;
 use ash::vk;
 
+use crate::gpu::shared::{WORK_COUNT, WORK_GROUPS_X};
+use crate::vk::memory::Buffer;
 use crate::vk::pipeline::{compute_pipeline, Specialization};
 use crate::vk::rt_pipeline::RtPipeline;
 use crate::vk::Context;
@@ -63,6 +65,34 @@ impl Kernel {
             match self {
                 Kernel::Compute(_) => {
                     d.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1)
+                }
+                Kernel::RayTracing(rt) => rt.trace(ctx, cmd, extent.width, extent.height),
+            }
+        }
+    }
+
+    /// Binds like `dispatch` and runs the invocations `work`'s header asks
+    /// for (glsl/common/work_list.glsl): WORK_GROUP_SIZE-wide workgroups, or
+    /// a (count, 1, 1) ray-generation launch; without an indirect launch on
+    /// the device, one invocation per pixel of `extent` (the spare ones find
+    /// no entry).
+    pub fn dispatch_indirect(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        layout: vk::PipelineLayout,
+        sets: &[vk::DescriptorSet],
+        work: &Buffer,
+        extent: vk::Extent2D,
+    ) {
+        let d = &ctx.device;
+        unsafe {
+            d.cmd_bind_pipeline(cmd, self.bind_point(), self.pipeline());
+            d.cmd_bind_descriptor_sets(cmd, self.bind_point(), layout, 0, sets, &[]);
+            match self {
+                Kernel::Compute(_) => d.cmd_dispatch_indirect(cmd, work.raw, 4 * u64::from(WORK_GROUPS_X)),
+                Kernel::RayTracing(rt) if work.address != 0 => {
+                    rt.trace_indirect(ctx, cmd, work.address + 4 * u64::from(WORK_COUNT))
                 }
                 Kernel::RayTracing(rt) => rt.trace(ctx, cmd, extent.width, extent.height),
             }

@@ -111,6 +111,7 @@ impl Viewer {
             device: g.device.clone(),
             disable_ray_tracing: g.disable_ray_tracing,
             disable_ray_query: g.disable_ray_query,
+            disable_trace_rays_indirect: g.disable_trace_rays_indirect,
             surface_extensions,
             swapchain: true,
             max_api_version: g.max_api_version,

@@ -29,6 +29,9 @@ pub struct Capabilities {
     pub acceleration_structure: bool,
     pub ray_query: bool,
     pub ray_tracing_pipeline: bool,
+    /// rayTracingPipelineTraceRaysIndirect: a compacted pass launches its
+    /// ray-generation shader over its listed pixels (render/passes/compacted.rs).
+    pub trace_rays_indirect: bool,
     pub timestamp_period_ns: f32,
     pub timestamps: bool,
     /// Subgroup ballot and broadcast operations in compute shaders:
@@ -219,6 +222,7 @@ pub fn query_capabilities(
         acceleration_structure: as_ok,
         ray_query: as_ok && has_rq && rqf.ray_query != 0,
         ray_tracing_pipeline: as_ok && has_rt && rtf.ray_tracing_pipeline != 0,
+        trace_rays_indirect: as_ok && has_rt && rtf.ray_tracing_pipeline_trace_rays_indirect != 0,
         timestamp_period_ns: props.limits.timestamp_period,
         timestamps,
         subgroup_ops,
@@ -375,7 +379,9 @@ pub fn create_device(
         .shader_demote_to_helper_invocation(true);
     let mut asf = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
     let mut rqf = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
-    let mut rtf = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true);
+    let mut rtf = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default()
+        .ray_tracing_pipeline(true)
+        .ray_tracing_pipeline_trace_rays_indirect(caps.trace_rays_indirect);
 
     let mut f2 =
         vk::PhysicalDeviceFeatures2::default().features(base).push_next(&mut v11).push_next(&mut v12);

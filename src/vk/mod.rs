@@ -41,6 +41,9 @@ pub struct ContextOptions {
     /// Enable no VK_KHR_ray_query: the path of drivers that offer only the
     /// ray-tracing pipeline (NVIDIA's on some machines).
     pub disable_ray_query: bool,
+    /// Leave rayTracingPipelineTraceRaysIndirect off (tests the full-frame
+    /// launch of drivers without it: render/kernel.rs).
+    pub disable_trace_rays_indirect: bool,
     pub surface_extensions: Vec<*const std::ffi::c_char>,
     pub swapchain: bool,
     /// At most this Vulkan API version (see `InstanceOptions`).
@@ -123,7 +126,8 @@ impl Context {
         for (_, c) in &devices {
             log::debug!("found {}", c.report().trim_end());
         }
-        let (pd, caps) = device::select(&devices, &opts.device)?;
+        let (pd, mut caps) = device::select(&devices, &opts.device)?;
+        caps.trace_rays_indirect &= !opts.disable_trace_rays_indirect;
         let rt = if opts.disable_ray_tracing {
             RtEnables::default()
         } else {

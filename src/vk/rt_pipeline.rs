@@ -183,6 +183,15 @@ impl RtPipeline {
         }
     }
 
+    /// Launches with the VkTraceRaysIndirectCommandKHR at device address
+    /// `command` (needs rayTracingPipelineTraceRaysIndirect).
+    pub fn trace_indirect(&self, ctx: &Context, cmd: vk::CommandBuffer, command: vk::DeviceAddress) {
+        if let Some(loader) = ctx.rt_pipeline.as_ref() {
+            let [rg, miss, hit, call] = &self.regions;
+            unsafe { loader.cmd_trace_rays_indirect(cmd, rg, miss, hit, call, command) };
+        }
+    }
+
     pub fn destroy(&mut self, ctx: &Context) {
         unsafe { ctx.device.destroy_pipeline(self.pipeline, None) };
         self.sbt.destroy(ctx);

@@ -1,11 +1,15 @@
 //! A full-screen pass: set 0 the scene, set 1 its images (each binding
 //! number tied to one declared use), set 2 the tracer's when it traces, and
-//! one kernel invocation per pixel. Every pass but `gbuffer` is one.
+//! one kernel invocation per pixel, or per listed pixel where a select
+//! kernel compacts the work first (compacted.rs). Every pass but `gbuffer`
+//! is one.
 
 use anyhow::Result;
 use ash::vk;
 
+use super::compacted::WorkList;
 use super::{Cx, Init, Pass};
+use crate::gpu::shared::WORK_HEADER;
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::kernel::Kernel;
 use crate::render::targets::{TargetDesc, Targets};
@@ -32,6 +36,9 @@ pub enum Shader {
     Compute(&'static str),
     /// A tracing pass: the tracer supplies `{name}_query`, `.rgen`, ...
     Traced(&'static str),
+    /// A tracing pass over the pixels the compute shader `select` lists
+    /// (compacted.rs; the pass's io has `compacted::list_io()`).
+    Listed { select: &'static str, traced: &'static str },
 }
 
 /// The declared uses of a full-screen pass with `io`; a traced one also
@@ -50,9 +57,11 @@ pub fn uses(io: &[Io], traced: bool) -> Vec<Use> {
 fn check_formats(name: &str, shader: &Shader, io: &[Io]) -> Result<()> {
     use crate::gpu::shared::SET_PASS;
     use crate::vk::reflect::{spirv_image_format, storage_image_formats};
+    let traced = |s: &str| vec![format!("{s}_query"), format!("{s}_compute"), format!("{s}.rgen")];
     let variants: Vec<String> = match shader {
         Shader::Compute(s) => vec![s.to_string()],
-        Shader::Traced(s) => vec![format!("{s}_query"), format!("{s}_compute"), format!("{s}.rgen")],
+        Shader::Traced(s) => traced(s),
+        Shader::Listed { select, traced: s } => [vec![select.to_string()], traced(s)].concat(),
     };
     for v in variants {
         let Ok(words) = crate::vk::pipeline::spirv(&v) else { continue };
@@ -81,6 +90,8 @@ pub struct FullScreen {
     kernel: Kernel,
     sampler: vk::Sampler,
     traced: bool,
+    /// The select kernel and header of a `Shader::Listed` pass.
+    work: Option<WorkList>,
 }
 
 impl FullScreen {
@@ -94,7 +105,7 @@ impl FullScreen {
     ) -> Result<Box<dyn Pass>> {
         let ctx = init.ctx;
         check_formats(name, &shader, &io)?;
-        let bindings: Vec<(u32, Binding)> = io
+        let mut bindings: Vec<(u32, Binding)> = io
             .iter()
             .map(|i| {
                 let ty = match i.access {
@@ -104,11 +115,18 @@ impl FullScreen {
                 (i.binding, Binding::one(ty))
             })
             .collect();
+        let (shader, select) = match shader {
+            Shader::Listed { select, traced } => {
+                bindings.push((WORK_HEADER, Binding::one(vk::DescriptorType::STORAGE_BUFFER)));
+                (Shader::Traced(traced), Some(select))
+            }
+            s => (s, None),
+        };
         let tracer = match shader {
             Shader::Traced(_) => Some(
                 init.tracer.ok_or_else(|| anyhow::anyhow!("pass {name} traces rays but no tracer exists"))?,
             ),
-            Shader::Compute(_) => None,
+            _ => None,
         };
         let mut set = DescriptorSet::numbered(ctx, &format!("{name} set"), &bindings)?;
         let mut sets = vec![init.gpu.set.layout, set.layout];
@@ -124,6 +142,7 @@ impl FullScreen {
         let kernel = match (shader, tracer) {
             (Shader::Traced(s), Some(t)) => t.kernel(ctx, s, layout, spec),
             (Shader::Compute(s), _) | (Shader::Traced(s), None) => Kernel::compute(ctx, s, layout, spec),
+            (Shader::Listed { .. }, _) => unreachable!("a listed pass's shader was split above"),
         };
         let kernel = match kernel {
             Ok(k) => k,
@@ -143,8 +162,15 @@ impl FullScreen {
                 None,
             )
         };
-        let mut pass =
-            FullScreen { io, set, layout, kernel, sampler: vk::Sampler::null(), traced: tracer.is_some() };
+        let mut pass = FullScreen {
+            io,
+            set,
+            layout,
+            kernel,
+            sampler: vk::Sampler::null(),
+            traced: tracer.is_some(),
+            work: None,
+        };
         match sampler {
             Ok(s) => pass.sampler = s,
             Err(e) => {
@@ -153,6 +179,15 @@ impl FullScreen {
             }
         }
         ctx.name(pass.sampler, &format!("{name} point sampler"));
+        if let Some(select) = select {
+            match WorkList::create(ctx, name, select, pass.layout, spec, &pass.set) {
+                Ok(w) => pass.work = Some(w),
+                Err(e) => {
+                    pass.destroy(ctx);
+                    return Err(e);
+                }
+            }
+        }
         pass.bind(ctx, init.targets);
         Ok(Box::new(pass))
     }
@@ -160,7 +195,11 @@ impl FullScreen {
 
 impl Pass for FullScreen {
     fn stage(&self) -> vk::PipelineStageFlags2 {
-        self.kernel.stage()
+        match self.work {
+            // The select kernel is a compute shader whatever the backend.
+            Some(_) => self.kernel.stage() | vk::PipelineStageFlags2::COMPUTE_SHADER,
+            None => self.kernel.stage(),
+        }
     }
 
     fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
@@ -168,7 +207,10 @@ impl Pass for FullScreen {
         if self.traced {
             sets.extend(cx.tracer.map(|t| t.set().set));
         }
-        self.kernel.dispatch(cx.ctx, cmd, self.layout, &sets, cx.targets.extent);
+        match &self.work {
+            Some(w) => w.record(cx.ctx, cmd, &self.kernel, self.layout, &sets, cx.targets.extent),
+            None => self.kernel.dispatch(cx.ctx, cmd, self.layout, &sets, cx.targets.extent),
+        }
     }
 
     fn bind(&self, ctx: &Context, targets: &Targets) {
@@ -196,6 +238,9 @@ impl Pass for FullScreen {
     }
 
     fn destroy(&mut self, ctx: &Context) {
+        if let Some(w) = &mut self.work {
+            w.destroy(ctx);
+        }
         self.kernel.destroy(ctx);
         unsafe {
             ctx.device.destroy_pipeline_layout(self.layout, None);

@@ -4,6 +4,7 @@
 //! line in `FRAME`.
 
 pub mod antialias;
+pub mod compacted;
 pub mod composite;
 pub mod direct;
 pub mod edge_aa;

@@ -1,12 +1,13 @@
 //! Pass `specular`: the reflection / refraction chain from the primary hit
 //! (Fresnel, total internal reflection, recursion to the max depth,
-//! environment on miss; glsl/passes/specular.glsl). Left out when nothing
-//! in the scene mirrors or transmits, or both effects are off.
+//! environment on miss; glsl/passes/specular.glsl), traced only for the
+//! pixels whose primary hit spawns a branch (compacted.rs). Left out when
+//! nothing in the scene mirrors or transmits, or both effects are off.
 
 use ash::vk;
 
 use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{gbuffer, Init, PassDesc};
+use super::{compacted, gbuffer, Init, PassDesc};
 use crate::gpu::shared::SPECULAR_OUT;
 use crate::render::frame::Access;
 use crate::render::shading::ShadingConfig;
@@ -19,6 +20,7 @@ pub static SPECULAR: TargetDesc = TargetDesc::new("specular chain", vk::Format::
 fn io(_: &ShadingConfig) -> Vec<Io> {
     let mut io = gbuffer::reads();
     io.push(Io::new(SPECULAR_OUT, &SPECULAR, Access::StorageWrite));
+    io.push(compacted::list_io());
     io
 }
 
@@ -40,6 +42,12 @@ pub const PASS: PassDesc = PassDesc {
     uses: |c| fullscreen::uses(&io(c), true),
     create: |i: &Init| {
         let spec = Specialization::new(&i.config.specialization());
-        FullScreen::create(i, "specular", io(i.config), Shader::Traced("specular"), &spec)
+        FullScreen::create(
+            i,
+            "specular",
+            io(i.config),
+            Shader::Listed { select: "specular_select.comp", traced: "specular" },
+            &spec,
+        )
     },
 };
