@@ -109,18 +109,16 @@ fn alpha_mask_and_transmission_models_agree_across_backends() {
     }
 }
 
-/// Drivers that offer the ray-tracing pipeline but no ray queries (NVIDIA's
-/// on some machines): with VK_KHR_ray_query left off, the pipeline backend
-/// must not touch it (validation would name a shader or call that does) and
-/// renders the image it renders with the extension on. (Seen failing with
-/// the frame's passes taking their ray-query variants on that device.)
-#[test]
-fn the_pipeline_backend_runs_without_ray_queries() {
-    let scene = common::scene_from_toml("backends_noquery", AGREEMENT);
-    let ctx = common::validated(
-        GpuOptions { validation: true, disable_ray_query: true, ..Default::default() }.context().unwrap(),
-    );
-    assert!(!ctx.rt.ray_query && ctx.rt.ray_tracing_pipeline);
+/// The pipeline backend's image on a context made with `opts` (checked by
+/// `check`) must be its image on the default context: renders `AGREEMENT`.
+fn pipeline_matches_default_context(
+    name: &str,
+    opts: GpuOptions,
+    check: fn(&hybrid_rt::vk::Context) -> bool,
+) {
+    let scene = common::scene_from_toml(name, AGREEMENT);
+    let ctx = common::validated(opts.context().unwrap());
+    assert!(check(&ctx) && ctx.rt.ray_tracing_pipeline);
     let settings = RenderSettings { backend: Backend::Pipeline, ..Default::default() };
     let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: 160, height: 90 }).unwrap();
     let frame = r.render(&ctx, &scene, &scene.cameras[0], &settings).unwrap();
@@ -129,11 +127,18 @@ fn the_pipeline_backend_runs_without_ray_queries() {
     common::assert_validation_clean(&ctx);
     drop(ctx);
     let reference = common::render_scene(&scene, 160, 90, &settings);
-    assert_agree(
-        "pipeline without vs with ray queries",
-        &[(Backend::Pipeline, frame), (Backend::Pipeline, reference)],
-        Identical,
-    );
+    assert_agree(name, &[(Backend::Pipeline, frame), (Backend::Pipeline, reference)], Identical);
+}
+
+/// Drivers that offer the ray-tracing pipeline but no ray queries (NVIDIA's
+/// on some machines): with VK_KHR_ray_query left off, the pipeline backend
+/// must not touch it (validation would name a shader or call that does) and
+/// renders the image it renders with the extension on. (Seen failing with
+/// the frame's passes taking their ray-query variants on that device.)
+#[test]
+fn the_pipeline_backend_runs_without_ray_queries() {
+    let opts = GpuOptions { validation: true, disable_ray_query: true, ..Default::default() };
+    pipeline_matches_default_context("backends_noquery", opts, |ctx| !ctx.rt.ray_query);
 }
 
 /// Drivers without rayTracingPipelineTraceRaysIndirect: the pipeline
@@ -142,26 +147,8 @@ fn the_pipeline_backend_runs_without_ray_queries() {
 /// finding no entry (render/kernel.rs); the image is the indirect launch's.
 #[test]
 fn the_pipeline_backend_runs_without_indirect_launches() {
-    let scene = common::scene_from_toml("backends_noindirect", AGREEMENT);
-    let ctx = common::validated(
-        GpuOptions { validation: true, disable_trace_rays_indirect: true, ..Default::default() }
-            .context()
-            .unwrap(),
-    );
-    assert!(!ctx.caps.trace_rays_indirect && ctx.rt.ray_tracing_pipeline);
-    let settings = RenderSettings { backend: Backend::Pipeline, ..Default::default() };
-    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: 160, height: 90 }).unwrap();
-    let frame = r.render(&ctx, &scene, &scene.cameras[0], &settings).unwrap();
-    assert_eq!(r.shading_config().unwrap().backend, Some(Backend::Pipeline));
-    r.destroy(&ctx);
-    common::assert_validation_clean(&ctx);
-    drop(ctx);
-    let reference = common::render_scene(&scene, 160, 90, &settings);
-    assert_agree(
-        "pipeline with a full-frame vs an indirect launch",
-        &[(Backend::Pipeline, frame), (Backend::Pipeline, reference)],
-        Identical,
-    );
+    let opts = GpuOptions { validation: true, disable_trace_rays_indirect: true, ..Default::default() };
+    pipeline_matches_default_context("backends_noindirect", opts, |ctx| !ctx.caps.trace_rays_indirect);
 }
 
 /// Debian 12's stock lavapipe has no ray-tracing extension: with them

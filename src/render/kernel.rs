@@ -49,6 +49,20 @@ impl Kernel {
         }
     }
 
+    /// Binds the pipeline and `sets` (from set 0).
+    fn bind(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        layout: vk::PipelineLayout,
+        sets: &[vk::DescriptorSet],
+    ) {
+        unsafe {
+            ctx.device.cmd_bind_pipeline(cmd, self.bind_point(), self.pipeline());
+            ctx.device.cmd_bind_descriptor_sets(cmd, self.bind_point(), layout, 0, sets, &[]);
+        }
+    }
+
     /// Binds the pipeline and `sets` (from set 0) and runs one invocation per pixel.
     pub fn dispatch(
         &self,
@@ -58,10 +72,9 @@ impl Kernel {
         sets: &[vk::DescriptorSet],
         extent: vk::Extent2D,
     ) {
+        self.bind(ctx, cmd, layout, sets);
         let d = &ctx.device;
         unsafe {
-            d.cmd_bind_pipeline(cmd, self.bind_point(), self.pipeline());
-            d.cmd_bind_descriptor_sets(cmd, self.bind_point(), layout, 0, sets, &[]);
             match self {
                 Kernel::Compute(_) => {
                     d.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1)
@@ -85,10 +98,9 @@ impl Kernel {
         work: &Buffer,
         extent: vk::Extent2D,
     ) {
+        self.bind(ctx, cmd, layout, sets);
         let d = &ctx.device;
         unsafe {
-            d.cmd_bind_pipeline(cmd, self.bind_point(), self.pipeline());
-            d.cmd_bind_descriptor_sets(cmd, self.bind_point(), layout, 0, sets, &[]);
             match self {
                 Kernel::Compute(_) => d.cmd_dispatch_indirect(cmd, work.raw, 4 * u64::from(WORK_GROUPS_X)),
                 Kernel::RayTracing(rt) if work.address != 0 => {
