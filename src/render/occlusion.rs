@@ -151,7 +151,7 @@ impl Pyramid {
 /// The culling pipelines and the depth pyramid.
 pub struct Occlusion {
     /// Set 1 of the cull pass (glsl/common/cluster.glsl).
-    pub set: DescriptorSet,
+    set: DescriptorSet,
     cull_layout: vk::PipelineLayout,
     cull: vk::Pipeline,
     hiz_layout: vk::PipelineLayout,

@@ -115,18 +115,18 @@ impl FullScreen {
                 (i.binding, Binding::one(ty))
             })
             .collect();
-        let (shader, select) = match shader {
-            Shader::Listed { select, traced } => {
+        let select = match shader {
+            Shader::Listed { select, .. } => {
                 bindings.push((WORK_HEADER, Binding::one(vk::DescriptorType::STORAGE_BUFFER)));
-                (Shader::Traced(traced), Some(select))
+                Some(select)
             }
-            s => (s, None),
+            _ => None,
         };
         let tracer = match shader {
-            Shader::Traced(_) => Some(
+            Shader::Traced(_) | Shader::Listed { .. } => Some(
                 init.tracer.ok_or_else(|| anyhow::anyhow!("pass {name} traces rays but no tracer exists"))?,
             ),
-            _ => None,
+            Shader::Compute(_) => None,
         };
         let mut set = DescriptorSet::numbered(ctx, &format!("{name} set"), &bindings)?;
         let mut sets = vec![init.gpu.set.layout, set.layout];
@@ -140,9 +140,10 @@ impl FullScreen {
             }
         };
         let kernel = match (shader, tracer) {
-            (Shader::Traced(s), Some(t)) => t.kernel(ctx, s, layout, spec),
-            (Shader::Compute(s), _) | (Shader::Traced(s), None) => Kernel::compute(ctx, s, layout, spec),
-            (Shader::Listed { .. }, _) => unreachable!("a listed pass's shader was split above"),
+            (Shader::Traced(s) | Shader::Listed { traced: s, .. }, Some(t)) => t.kernel(ctx, s, layout, spec),
+            (Shader::Compute(s) | Shader::Traced(s) | Shader::Listed { traced: s, .. }, _) => {
+                Kernel::compute(ctx, s, layout, spec)
+            }
         };
         let kernel = match kernel {
             Ok(k) => k,
