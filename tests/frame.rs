@@ -42,6 +42,8 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
             "{backend:?} hybrid"
         );
         assert!(targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
+        // The compacted specular pass's list (render/passes/compacted.rs).
+        assert!(targets.contains(&"work list"), "{targets:?}");
         let rt = RenderSettings { backend, mode: Mode::Rt, ..Default::default() };
         let (p, targets) = frame_of(&ctx, &scene, &rt);
         assert_eq!(p, ["primary", "direct", "specular", "composite", "tonemap", "edge aa"], "{backend:?} rt");
