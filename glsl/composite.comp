@@ -78,7 +78,7 @@ void main() {
     bool prt = prt_irradiance(p.instance, p.primitive, p.b, prt_e);
     vec3 ambient = prt ? ambient_light_from(s, is_mirror(s, 0u), prt_e / PI) : ambient_light(s, is_mirror(s, 0u));
 #endif
-    color = s.emissive + imageLoad(direct_in, px).rgb + ambient;
+    color = primary_emissive(px, p.instance, p.primitive, p.b) + imageLoad(direct_in, px).rgb + ambient;
 #ifdef HAS_SPECULAR
     color += imageLoad(specular_in, px).rgb;
 #endif

@@ -5,7 +5,8 @@
 // passes that read them do not know which one ran. Layout (24 bytes a
 // pixel with the depth buffer): albedo rgba8, normal octahedral r32ui
 // (gbuffer_pack.glsl), metallic/roughness/transmission rgba8, hit rg32ui.
-// Emission is not stored: it is looked up from the material at the hit.
+// Emission is not stored: it is looked up from the material at the hit
+// (primary_emissive), by `composite` only.
 #ifndef GBUFFER_READ_GLSL
 #define GBUFFER_READ_GLSL
 #include "scene.glsl"
@@ -43,14 +44,33 @@ vec3 primary_emissive(ivec2 px, uint instance, uint primitive, vec2 b) {
     return m.emissive * textureGrad(textures[nonuniformEXT(m.tex_emissive)], uv, dx, dy).rgb;
 }
 
-// False where the camera ray through `px` hit nothing (hit id 0).
-bool read_primary(ivec2 px, out PrimaryHit p) {
-    p.dir = camera_ray_dir(vec2(px) + 0.5);
-    uvec2 hit = texelFetch(gb_hit, px, 0).xy;
+// The primary hit's (instance + 1, primitive) and the material terms the
+// G-buffer stores, without its geometry: enough to decide which rays it
+// spawns. False where the camera ray through `px` hit nothing (hit id 0).
+bool read_primary_material(ivec2 px, out uvec2 hit, out Surface s) {
+    hit = texelFetch(gb_hit, px, 0).xy;
     if (hit.x == 0u) return false;
-    p.instance = hit.x - 1u;
     vec4 albedo = texelFetch(gb_albedo, px, 0);
     vec4 mat = texelFetch(gb_material, px, 0);
+    s.base_color = srgb_decode(albedo.rgb);
+    s.occlusion = albedo.a;
+    s.metallic = mat.r;
+    s.roughness = mat.g;
+    s.transmission = mat.b;
+    s.ior = materials[instances[hit.x - 1u].material].ior;
+    // Only `composite` adds the primary hit's emission (primary_emissive):
+    // the passes that trace from it do not pay for its texture lookup.
+    s.emissive = vec3(0.0);
+    return true;
+}
+
+// The whole primary hit, emission aside (see read_primary_material); false
+// where the camera ray through `px` hit nothing.
+bool read_primary(ivec2 px, out PrimaryHit p) {
+    p.dir = camera_ray_dir(vec2(px) + 0.5);
+    uvec2 hit;
+    if (!read_primary_material(px, hit, p.s)) return false;
+    p.instance = hit.x - 1u;
     TriangleWorld tri = triangle_world(p.instance, hit.y);
     vec2 b = plane_barycentrics(tri, frame.camera_pos, p.dir);
     p.primitive = hit.y;
@@ -62,13 +82,6 @@ bool read_primary(ivec2 px, out PrimaryHit p) {
     p.back_face = dot(tn, p.dir) > 0.0;
     p.gn = p.back_face ? -tn : tn;
     p.s.normal = oct_decode(texelFetch(gb_normal, px, 0).x);
-    p.s.base_color = srgb_decode(albedo.rgb);
-    p.s.occlusion = albedo.a;
-    p.s.metallic = mat.r;
-    p.s.roughness = mat.g;
-    p.s.transmission = mat.b;
-    p.s.ior = materials[instances[p.instance].material].ior;
-    p.s.emissive = primary_emissive(px, p.instance, hit.y, b);
     return true;
 }
 

@@ -168,6 +168,19 @@ bool is_mirror(Surface s, uint depth) {
     return REFLECTIONS && effect_shaded(EFFECT_BIT_REFLECTIONS) && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
 }
 
+// Whether `s` spawns a refraction branch at `depth` (traced, or its
+// environment-only fallback).
+bool is_refracting(Surface s, uint depth) {
+    return REFRACTIONS && effect_shaded(EFFECT_BIT_REFRACTIONS) && depth < MAX_DEPTH
+        && s.transmission * (1.0 - s.metallic) > 0.0;
+}
+
+// Whether `s` spawns any branch at `depth`: decided by its material terms
+// alone (push_branches may still drop a branch under MIN_WEIGHT).
+bool spawns_branches(Surface s, uint depth) {
+    return is_mirror(s, depth) || is_refracting(s, depth);
+}
+
 // The ambient term of `s` lit by `radiance`, the radiance a Lambertian
 // surface of albedo 1 exits (E / pi): SH irradiance, or PRT in composite.
 vec3 ambient_light_from(Surface s, bool mirror, vec3 radiance) {
@@ -186,10 +199,9 @@ vec3 ambient_light(Surface s, bool mirror) {
 // Pushes the reflection and refraction branches `s` spawns (weight `w`,
 // at `depth`, the ray cone `cone` at s); `nv` from face_viewer.
 void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w, uint depth, Cone cone) {
-    bool can_branch = depth < MAX_DEPTH;
     float tm = s.transmission * (1.0 - s.metallic);
     bool mirror = is_mirror(s, depth);
-    bool refract_on = REFRACTIONS && effect_shaded(EFFECT_BIT_REFRACTIONS) && can_branch && tm > 0.0;
+    bool refract_on = is_refracting(s, depth);
     if (!mirror && !refract_on) return;
     // Dielectric interface for the transmissive part; Schlick for the rest.
     vec3 f0 = surface_f0(s);

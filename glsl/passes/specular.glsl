@@ -25,20 +25,25 @@ bool specular_root(ivec2 px, out PrimaryHit p) {
     return true;
 }
 
-// Select kernel, one invocation per pixel: a hit without branches gets no
-// specular radiance now, a hit with some is listed.
+// Select kernel, one invocation per pixel: a hit whose material spawns no
+// branch gets no specular radiance now, the others are listed. Decided from
+// the G-buffer's material terms alone, without reconstructing the hit: the
+// chain kernel reads the whole hit of a listed pixel anyway (and writes
+// zero where its branches fall under MIN_WEIGHT).
 void specular_select(ivec2 px) {
-    PrimaryHit p;
-    if (outside_frame(px) || !specular_root(px, p)) return;
-    if (g_sp == 0) {
-        imageStore(specular_out, px, vec4(0.0, 0.0, 0.0, 1.0));
-    } else {
+    uvec2 hit;
+    Surface s;
+    if (outside_frame(px) || !read_primary_material(px, hit, s)) return;
+    g_effects = budget_effects(hit.x - 1u, px);
+    if (spawns_branches(s, 0u)) {
         work_append(px);
+    } else {
+        imageStore(specular_out, px, vec4(0.0, 0.0, 0.0, 1.0));
     }
 }
 
-// Listed kernel, entry `i`: the pixel's branches pushed again from its
-// primary hit (cheaper than storing them), traced to completion.
+// Listed kernel, entry `i`: the pixel's branches pushed from its primary
+// hit, traced to completion.
 void specular_listed(uint i) {
     ivec2 px;
     PrimaryHit p;
