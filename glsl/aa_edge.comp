@@ -138,31 +138,6 @@ float exit_along(uint instance, uint primitive, vec2 a, vec2 b) {
     return t_exit;
 }
 
-// The share of pixel `p` covered by the surface its axis neighbour `q`
-// shows (0..0.5): the edge between them lies where p's triangle ends, or
-// where q's begins, between the two centres.
-float neighbour_coverage(ivec2 p, ivec2 q) {
-    uvec2 hp = texelFetch(gb_hit, p, 0).xy;
-    uvec2 hq = texelFetch(gb_hit, q, 0).xy;
-    if (hp == hq) return 0.0;  // one triangle (or both sky): no edge between
-    vec2 a = vec2(p) + 0.5;
-    vec2 b = vec2(q) + 0.5;
-    float w = 0.0;
-    // p's triangle ends at t: q's surface covers p's pixel beyond it.
-    if (hp.x != 0u) {
-        float t = exit_along(hp.x - 1u, hp.y, a, b);
-        if (t < 1.0) w = max(w, 0.5 - t);
-    }
-    // q's triangle reaches s of the way to p: it covers p's pixel from the
-    // pixel's border (0.5) to s. Reaching p itself (s >= 1) means it lies
-    // behind what p shows there.
-    if (hq.x != 0u) {
-        float s = exit_along(hq.x - 1u, hq.y, b, a);
-        if (s < 1.0) w = max(w, s - 0.5);
-    }
-    return w;
-}
-
 // The primary hit's shading normal; 0 where the camera ray missed.
 vec3 hit_normal(ivec2 px) {
     if (texelFetch(gb_hit, px, 0).x == 0u) return vec3(0.0);
@@ -173,52 +148,161 @@ bool inside(ivec2 p) {
     return all(greaterThanEqual(p, ivec2(0))) && all(lessThan(uvec2(p), frame.resolution));
 }
 
+// The workgroup's 8x8 pixels and a one-pixel border around them (TILE x
+// TILE) share what their neighbours need: each pixel's hit, depth and
+// normal are computed once instead of by all 9 pixels around it, and each
+// surface's exit towards an edge neighbour once instead of by both pixels
+// of the pair (the pass got 1.35-1.65x faster on lavapipe:
+// bench/results/lavapipe-2core-vm-frame-passes.md). Same values, same
+// arithmetic: the image is that of the per-pixel version, bit for bit,
+// which EDGE_AA_TILED = false runs (tests/antialias.rs compares the two).
+layout(constant_id = SPEC_EDGE_AA_TILED) const bool EDGE_AA_TILED = true;
+const int TILE = 10;
+shared uvec2 s_hit[TILE * TILE];
+shared float s_depth[TILE * TILE];
+shared vec3 s_normal[TILE * TILE];
+// Blur factor B of the workgroup's own pixels (0 outside the frame).
+shared float s_blur[64];
+// exit_along from a pixel's centre towards its edge-sharing neighbour in
+// direction d (EDGE_DIRS), where a coverage needs it; else unset.
+shared float s_exit[TILE * TILE][4];
+
+// The 4 edge-sharing directions; EDGE_DIRS[3 - d] is the opposite of d.
+const ivec2 EDGE_DIRS[4] = ivec2[](ivec2(0, -1), ivec2(-1, 0), ivec2(1, 0), ivec2(0, 1));
+
+int tile_index(ivec2 t) {
+    return t.x + TILE * t.y;
+}
+
+// How far the surface seen through `p` continues towards `q` (0..1+;
+// exit_along), from the pixel centres.
+float exit_towards(uvec2 hit, ivec2 p, ivec2 q) {
+    return exit_along(hit.x - 1u, hit.y, vec2(p) + 0.5, vec2(q) + 0.5);
+}
+
+// What pixel `q` (at `t` in the tile) shows and its exit towards
+// EDGE_DIRS[d]: from the tile, or computed here (per-pixel version).
+uvec2 hit_at(ivec2 t, ivec2 q) {
+    return EDGE_AA_TILED ? s_hit[tile_index(t)] : texelFetch(gb_hit, q, 0).xy;
+}
+
+float depth_at(ivec2 t, ivec2 q) {
+    return EDGE_AA_TILED ? s_depth[tile_index(t)] : hit_depth(q);
+}
+
+vec3 normal_at(ivec2 t, ivec2 q) {
+    return EDGE_AA_TILED ? s_normal[tile_index(t)] : hit_normal(q);
+}
+
+float exit_at(ivec2 t, ivec2 q, int d) {
+    return EDGE_AA_TILED ? s_exit[tile_index(t)][d] : exit_towards(hit_at(t, q), q, q + EDGE_DIRS[d]);
+}
+
 void main() {
+    ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 - 1;
+    uint lid = gl_LocalInvocationIndex;
+    // 1. Hit, depth and normal of every tile pixel in the frame.
+    for (uint i = lid; EDGE_AA_TILED && i < uint(TILE * TILE); i += 64u) {
+        ivec2 q = origin + ivec2(int(i) % TILE, int(i) / TILE);
+        bool in_frame = inside(q);
+        s_hit[i] = in_frame ? texelFetch(gb_hit, q, 0).xy : uvec2(0u);
+        s_depth[i] = in_frame ? hit_depth(q) : 0.0;
+        s_normal[i] = in_frame ? hit_normal(q) : vec3(0.0);
+    }
+    barrier();
+
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 t = ivec2(gl_LocalInvocationID.xy) + 1;
+    int c = tile_index(t);
+    float blur = 0.0;
+    if (inside(px)) {
+        bool in_frame[8];
+        float dc = depth_at(t, px);
+        vec3 nc = normal_at(t, px);
+        float depth[8];
+        float normal_sum = 0.0;
+        for (int k = 0; k < 8; k++) {
+            ivec2 q = px + NEIGHBOURS[k], qt = t + NEIGHBOURS[k];
+            in_frame[k] = inside(q);
+            depth[k] = in_frame[k] ? depth_at(qt, q) : dc;
+            vec3 dn = in_frame[k] ? normal_at(qt, q) - nc : vec3(0.0);
+            normal_sum += dot(dn, dn);
+        }
+        // Depth: a slanted plane changes depth by the same step every pixel,
+        // so the plain difference to a neighbour would blur every floor. Each
+        // neighbour is compared with the depth the centre's plane predicts for
+        // it from the opposite neighbour, 2 dc - d_opposite (exact on a plane,
+        // see hit_depth): (d_k + d_opposite - 2 dc)^2, relative to the largest
+        // of the three so the measure does not depend on the scene's scale.
+        // Both neighbours of a pair count; a pair leaving the frame counts 0.
+        float depth_sum = 0.0;
+        for (int k = 0; k < 4; k++) {
+            if (!in_frame[k] || !in_frame[7 - k]) continue;
+            float scale = max(max(depth[k], depth[7 - k]), dc);
+            float e = scale > 0.0 ? (depth[k] + depth[7 - k] - 2.0 * dc) / scale : 0.0;
+            depth_sum += 2.0 * e * e;
+        }
+        float edge = DEPTH_WEIGHT * depth_sum + normal_sum;
+        blur = clamp((edge - EDGE_START) / (EDGE_FULL - EDGE_START), 0.0, 1.0);
+    }
+    s_blur[lid] = blur;
+    barrier();
+
+    // 2. The exits the coverages below need: this pixel's towards each edge
+    // neighbour where either of the two blurs (a neighbour in the border
+    // blurs in its own workgroup, which computes this exit itself); and
+    // one border pixel's towards the tile, per invocation of the first 32.
+    if (EDGE_AA_TILED && inside(px)) {
+        for (int d = 0; d < 4; d++) {
+            ivec2 nt = t + EDGE_DIRS[d];
+            bool in_tile = all(greaterThanEqual(nt, ivec2(1))) && all(lessThanEqual(nt, ivec2(8)));
+            bool needed = blur > 0.0 || (in_tile && s_blur[(nt.x - 1) + 8 * (nt.y - 1)] > 0.0);
+            uvec2 h = s_hit[c];
+            if (needed && h.x != 0u && inside(px + EDGE_DIRS[d]) && h != s_hit[tile_index(nt)]) {
+                s_exit[c][d] = exit_towards(h, px, px + EDGE_DIRS[d]);
+            }
+        }
+    }
+    if (EDGE_AA_TILED && lid < 32u) {
+        // Border pixel `lid` (8 per side: top, left, right, bottom, as
+        // EDGE_DIRS) and the tile pixel it faces, in direction 3 - side.
+        int side = int(lid) / 8, j = int(lid) % 8;
+        ivec2 inner = side == 0 ? ivec2(j + 1, 1) : side == 1 ? ivec2(1, j + 1) : side == 2 ? ivec2(8, j + 1) : ivec2(j + 1, 8);
+        ivec2 b = inner + EDGE_DIRS[side];
+        ivec2 bp = origin + b, ip = origin + inner;
+        uvec2 h = s_hit[tile_index(b)];
+        if (inside(bp) && inside(ip) && s_blur[(inner.x - 1) + 8 * (inner.y - 1)] > 0.0 && h.x != 0u
+            && h != s_hit[tile_index(inner)]) {
+            s_exit[tile_index(b)][3 - side] = exit_towards(h, bp, ip);
+        }
+    }
+    barrier();
+
     if (!inside(px)) return;
     vec4 centre = imageLoad(ldr_in, px);
-    float dc = hit_depth(px);
-    vec3 nc = hit_normal(px);
-    float depth[8];
-    bool in_frame[8];
-    float normal_sum = 0.0;
-    for (int k = 0; k < 8; k++) {
-        ivec2 q = px + NEIGHBOURS[k];
-        in_frame[k] = inside(q);
-        depth[k] = in_frame[k] ? hit_depth(q) : dc;
-        vec3 dn = in_frame[k] ? hit_normal(q) - nc : vec3(0.0);
-        normal_sum += dot(dn, dn);
-    }
-    // Depth: a slanted plane changes depth by the same step every pixel,
-    // so the plain difference to a neighbour would blur every floor. Each
-    // neighbour is compared with the depth the centre's plane predicts for
-    // it from the opposite neighbour, 2 dc - d_opposite (exact on a plane,
-    // see hit_depth): (d_k + d_opposite - 2 dc)^2, relative to the largest
-    // of the three so the measure does not depend on the scene's scale.
-    // Both neighbours of a pair count; a pair leaving the frame counts 0.
-    float depth_sum = 0.0;
-    for (int k = 0; k < 4; k++) {
-        if (!in_frame[k] || !in_frame[7 - k]) continue;
-        float scale = max(max(depth[k], depth[7 - k]), dc);
-        float e = scale > 0.0 ? (depth[k] + depth[7 - k] - 2.0 * dc) / scale : 0.0;
-        depth_sum += 2.0 * e * e;
-    }
-    float edge = DEPTH_WEIGHT * depth_sum + normal_sum;
-    float b = clamp((edge - EDGE_START) / (EDGE_FULL - EDGE_START), 0.0, 1.0);
-    if (!(b > 0.0)) {
+    if (!(blur > 0.0)) {
         imageStore(ldr_out, px, centre);  // bit-identical away from edges
         return;
     }
-    // The edge-sharing neighbours (NEIGHBOURS 1, 3, 4, 6), weighted by the
-    // coverage of this pixel by what they show.
+    // The edge-sharing neighbours, weighted by the coverage of this pixel by
+    // what they show (0..0.5): the edge between them lies where this
+    // pixel's triangle ends (its exit t), or where the neighbour's begins
+    // (its exit s reaches past the pixel border at 0.5), between the two
+    // centres. s >= 1 means it lies behind what this pixel shows there.
     vec3 sum = vec3(0.0);
     float total = 0.0;
-    const int EDGE_SHARING[4] = int[](1, 3, 4, 6);
-    for (int j = 0; j < 4; j++) {
-        int k = EDGE_SHARING[j];
-        ivec2 q = px + NEIGHBOURS[k];
-        if (!in_frame[k]) continue;
-        float w = neighbour_coverage(px, q);
+    uvec2 hp = hit_at(t, px);
+    for (int d = 0; d < 4; d++) {
+        ivec2 q = px + EDGE_DIRS[d], qt = t + EDGE_DIRS[d];
+        if (!inside(q)) continue;
+        uvec2 hq = hit_at(qt, q);
+        float w = 0.0;
+        if (hp != hq) {  // one triangle (or both sky): no edge between
+            float tp = hp.x != 0u ? exit_at(t, px, d) : 1.0;
+            float sq = hq.x != 0u ? exit_at(qt, q, 3 - d) : 1.0;
+            if (tp < 1.0) w = max(w, 0.5 - tp);
+            if (sq < 1.0) w = max(w, sq - 0.5);
+        }
         sum += w * srgb_decode(imageLoad(ldr_in, q).rgb);
         total += w;
     }
@@ -227,7 +311,7 @@ void main() {
         return;
     }
     // Corners covered from two sides: the weights are shares of one pixel.
-    float scale = b / max(total, 1.0);
-    vec3 c = (1.0 - scale * total) * srgb_decode(centre.rgb) + scale * sum;
-    imageStore(ldr_out, px, vec4(srgb_encode(c), centre.a));
+    float scale = blur / max(total, 1.0);
+    vec3 col = (1.0 - scale * total) * srgb_decode(centre.rgb) + scale * sum;
+    imageStore(ldr_out, px, vec4(srgb_encode(col), centre.a));
 }

@@ -486,6 +486,7 @@ impl ViewArgs {
                 reference: self.env.reference(),
                 primary_visibility: self.primary_visibility,
                 occlusion_culling: self.occlusion_culling == OnOff::On,
+                ..RenderSettings::default()
             },
             animation: self.animation.clone(),
             time: self.time.unwrap_or(0.0),

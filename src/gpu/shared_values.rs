@@ -231,6 +231,9 @@ shared! {
     uint TRACE_PACKET_SHADOW = 1;
     uint TRACE_PACKET_CLOSEST = 2;
     uint TRACE_PACKET_DEFAULT = 0;
+    // The edge filter shares its pixels' work within 8x8 tiles
+    // (glsl/aa_edge.comp); 0 runs its per-pixel reference version.
+    id SPEC_EDGE_AA_TILED = 9;
 
     // Instance mask bits: which kind of ray may hit an instance.
     uint MASK_VISIBLE = 1;

@@ -190,6 +190,10 @@ pub struct RenderSettings {
     /// shows; interior views that face walls cull ~40% of their clusters
     /// (bench/results/lavapipe-2core-vm-raster.md).
     pub occlusion_culling: bool,
+    /// The edge filter shares its pixels' depths and triangle exits within
+    /// 8x8 tiles (glsl/aa_edge.comp). False runs the per-pixel version:
+    /// the same image, slower; the tiled one's reference in tests. No flag.
+    pub edge_aa_tiled: bool,
 }
 
 impl Default for RenderSettings {
@@ -209,6 +213,7 @@ impl Default for RenderSettings {
             reference: None,
             primary_visibility: PrimaryVisibility::Auto,
             occlusion_culling: false,
+            edge_aa_tiled: true,
         }
     }
 }

@@ -250,6 +250,8 @@ pub struct ShadingConfig {
     pub shadow_fallback: bool,
     /// Anti-aliasing after tone mapping (left out in debug views).
     pub aa: AaMode,
+    /// RenderSettings::edge_aa_tiled.
+    pub edge_aa_tiled: bool,
     /// The ray-traced ambient reference runs (--reference-samples; not in
     /// debug views): the `reference` pass exists and traces.
     pub reference: bool,
@@ -317,6 +319,7 @@ impl ShadingConfig {
             budget,
             shadow_fallback,
             aa: settings.aa,
+            edge_aa_tiled: settings.edge_aa_tiled,
             reference,
             visibility,
             // Only the raster G-buffer pass (hybrid, raster or auto visibility) culls.

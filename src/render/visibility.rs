@@ -293,6 +293,7 @@ mod tests {
             budget: false,
             shadow_fallback: false,
             aa: super::super::shading::AaMode::None,
+            edge_aa_tiled: true,
             reference: false,
             visibility: PrimaryVisibility::Auto,
             occlusion: false,

@@ -15,7 +15,7 @@ use super::antialias::{self, AA_LDR};
 use super::fullscreen::{self, FullScreen, Io, Shader};
 use super::tonemap::LDR;
 use super::{gbuffer, Init, PassDesc};
-use crate::gpu::shared::{AA_IN, AA_OUT, GB_HIT, GB_NORMAL};
+use crate::gpu::shared::{AA_IN, AA_OUT, GB_HIT, GB_NORMAL, SPEC_EDGE_AA_TILED};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::{AaMode, ShadingConfig};
 use crate::vk::pipeline::Specialization;
@@ -46,7 +46,7 @@ pub const PASS: PassDesc = PassDesc {
             "edge aa",
             io(i.config),
             Shader::Compute("aa_edge.comp"),
-            &Specialization::new(&[]),
+            &Specialization::new(&[(SPEC_EDGE_AA_TILED, i.config.edge_aa_tiled as u32)]),
         )
     },
 };
