@@ -152,7 +152,7 @@ bool inside(ivec2 p) {
 // TILE) share what their neighbours need: each pixel's hit, depth and
 // normal are computed once instead of by all 9 pixels around it, and each
 // surface's exit towards an edge neighbour once instead of by both pixels
-// of the pair (the pass got 1.35-1.65x faster on lavapipe:
+// of the pair (the pass got 1.35-1.6x faster on lavapipe:
 // bench/results/lavapipe-2core-vm-frame-passes.md). Same values, same
 // arithmetic: the image is that of the per-pixel version, bit for bit,
 // which EDGE_AA_TILED = false runs (tests/antialias.rs compares the two).
@@ -172,6 +172,11 @@ const ivec2 EDGE_DIRS[4] = ivec2[](ivec2(0, -1), ivec2(-1, 0), ivec2(1, 0), ivec
 
 int tile_index(ivec2 t) {
     return t.x + TILE * t.y;
+}
+
+// The blur factor of the workgroup's pixel at `t` (1..8 in the tile).
+float blur_at(ivec2 t) {
+    return s_blur[(t.x - 1) + 8 * (t.y - 1)];
 }
 
 // How far the surface seen through `p` continues towards `q` (0..1+;
@@ -256,7 +261,7 @@ void main() {
         for (int d = 0; d < 4; d++) {
             ivec2 nt = t + EDGE_DIRS[d];
             bool in_tile = all(greaterThanEqual(nt, ivec2(1))) && all(lessThanEqual(nt, ivec2(8)));
-            bool needed = blur > 0.0 || (in_tile && s_blur[(nt.x - 1) + 8 * (nt.y - 1)] > 0.0);
+            bool needed = blur > 0.0 || (in_tile && blur_at(nt) > 0.0);
             uvec2 h = s_hit[c];
             if (needed && h.x != 0u && inside(px + EDGE_DIRS[d]) && h != s_hit[tile_index(nt)]) {
                 s_exit[c][d] = exit_towards(h, px, px + EDGE_DIRS[d]);
@@ -271,7 +276,7 @@ void main() {
         ivec2 b = inner + EDGE_DIRS[side];
         ivec2 bp = origin + b, ip = origin + inner;
         uvec2 h = s_hit[tile_index(b)];
-        if (inside(bp) && inside(ip) && s_blur[(inner.x - 1) + 8 * (inner.y - 1)] > 0.0 && h.x != 0u
+        if (inside(bp) && inside(ip) && blur_at(inner) > 0.0 && h.x != 0u
             && h != s_hit[tile_index(inner)]) {
             s_exit[tile_index(b)][3 - side] = exit_towards(h, bp, ip);
         }
