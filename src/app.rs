@@ -17,10 +17,12 @@ mod benchmark;
 mod budget_args;
 pub mod cli_parse;
 mod env_args;
+mod path_args;
 mod rays;
 pub use benchmark::*;
 pub use budget_args::BudgetArgs;
 pub use env_args::{EnvArgs, EnvOverrides};
+pub use path_args::PathArgs;
 pub use rays::{rays_command, KindReport, RayBench};
 
 /// The bundled default scene, looked for in the working directory, next to

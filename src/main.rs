@@ -297,9 +297,12 @@ struct ViewArgs {
     /// Show a G-buffer target instead of the lit image.
     #[arg(long, value_enum, default_value_t = DebugView::None)]
     debug_view: DebugView,
-    /// hybrid: G-buffer primary hits + traced secondary rays; rt: trace camera rays too.
+    /// hybrid: G-buffer primary hits + traced secondary rays; rt: trace camera
+    /// rays too; path: the path-traced ground truth (--samples).
     #[arg(long, value_enum, default_value_t = Mode::Hybrid)]
     mode: Mode,
+    #[command(flatten)]
+    path: app::PathArgs,
     /// Ray traversal backend.
     #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
@@ -433,6 +436,22 @@ impl ViewArgs {
                 "--reference-samples has no effect with --debug-view (it shows the G-buffer)".into(),
             );
         }
+        if let Some(why) = self.path.without_effect(self.mode) {
+            return Some(why.into());
+        }
+        if self.mode == Mode::Path {
+            if self.env.reference_samples.is_some() {
+                return Some(
+                    "--reference-samples has no effect with --mode path (it traces everything)".into(),
+                );
+            }
+            if self.aa.is_some_and(|a| a != AaMode::None) {
+                return Some(
+                    "--aa has no effect with --mode path: its jittered camera paths integrate each pixel"
+                        .into(),
+                );
+            }
+        }
         if self.time.is_some() && self.animation.is_none() {
             return Some("--time has no effect without --animation".into());
         }
@@ -484,6 +503,7 @@ impl ViewArgs {
                 ambient_from_scene: self.env.ambient.is_none(),
                 prt: self.env.prt_options(),
                 reference: self.env.reference(),
+                path: self.path.settings(),
                 primary_visibility: self.primary_visibility,
                 occlusion_culling: self.occlusion_culling == OnOff::On,
                 ..RenderSettings::default()
@@ -533,6 +553,10 @@ impl Cli {
                      large size instead)"
                 ))
             }
+            Some(Command::Render { supersample: Some(k), .. }) if view.mode == Mode::Path => Some(format!(
+                "--supersample {k} does not combine with --mode path: its jittered camera paths already \
+                 integrate each pixel (raise --samples instead)"
+            )),
             Some(Command::Render { supersample: Some(k), .. })
                 if view.aa.is_some_and(|a| a != AaMode::None) =>
             {

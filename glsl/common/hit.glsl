@@ -115,14 +115,17 @@ bool hit_alpha_passes(uint instance, uint primitive, vec2 b, float t) {
 }
 
 // Light transmitted through one occluder crossing: 0 for opaque, the
-// transmission-weighted base colour for transmissive materials, 1 where an
-// alpha mask cuts the surface away.
+// transmission-weighted base colour for transmissive materials (0 with
+// FRAME_OPAQUE_OCCLUDERS), 1 where an alpha mask cuts the surface away.
 vec3 occluder_transmittance(uint instance, uint primitive, vec2 b) {
     Instance inst = instances[instance];
     Material m = materials[inst.material];
     vec2 uv = hit_uv(hit_vertices(inst, primitive), b);
     vec4 base = m.base_color * sample_tex_lod(m.tex_base_color, uv, 0.0, vec4(1.0));
     if (m.alpha_mode != ALPHA_OPAQUE && base.a < m.alpha_cutoff) return vec3(1.0);
+    // The path tracer's shadow rays: glass bends light, so a straight ray
+    // through it carries none (its light arrives along refracted paths).
+    if ((frame.flags & FRAME_OPAQUE_OCCLUDERS) != 0u) return vec3(0.0);
     float tr = clamp(m.transmission * sample_tex_lod(m.tex_transmission, uv, 0.0, vec4(1.0)).r, 0.0, 1.0);
     return base.rgb * tr;
 }

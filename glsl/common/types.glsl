@@ -93,10 +93,13 @@ struct Frame {
     float hist_high;
     float speed_brighten;
     float speed_darken;
-    // The `reference` pass: frames accumulated so far, bounces (passes/reference.glsl).
-    uint reference_frame;
-    uint reference_bounces;
-    float pad2;
+    // The accumulating passes (`reference`, `path`): frames accumulated so
+    // far (0: start over; also their random seed) and the longest path
+    // (passes/reference.glsl, path/path.glsl); the path tracer's clamp of a
+    // sample's radiance (<= 0: none, the unbiased estimate).
+    uint accum_frame;
+    uint accum_bounces;
+    float path_clamp;
     // The environment's SH irradiance E_lm (rgb), with FRAME_AMBIENT_SH.
     vec4 sh_irradiance[SH_IRRADIANCE_COEFFS];
     // The environment's SH radiance L_lm (rgb), with FRAME_AMBIENT_PRT.

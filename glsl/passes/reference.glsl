@@ -2,45 +2,25 @@
 // light at the primary hit. Per pixel REFERENCE_SAMPLES_PER_FRAME
 // cosine-weighted directions about the shading normal; a ray that misses
 // brings the environment's radiance (the full-resolution map, env.glsl's
-// `environment`), one that hits is occluded, or with Frame.reference_bounces
+// `environment`), one that hits is occluded, or with Frame.accum_bounces
 // K > 1 continues as a diffuse path of up to K rays: each surface it bounces
 // off adds its emission and reflects with its diffuse albedo (the scene's
 // punctual lights stay in `direct`). With pdf cos/pi the mean of the
 // samples is E/pi, what env.glsl's ambient_radiance(n) approximates: the
 // accumulation holds the sum (rgb) and the sample count (a), and
-// `composite` divides. Seeded by pixel and Frame.reference_frame (PCG), so
+// `composite` divides. Seeded by pixel and Frame.accum_frame (PCG), so
 // every backend traces the same rays.
 #include "../common/gbuffer_read.glsl"
 #include "../common/integrator.glsl"
+#include "../common/sampling.glsl"
 
 layout(set = SET_PASS, binding = REFERENCE_OUT, rgba32f) uniform image2D reference_accum;
-
-// pcg_hash: scene.glsl's (Jarzynski & Olano 2020).
-
-// Uniform in [0, 1): the hash's top 24 bits.
-float next_random(inout uint rng) {
-    rng = pcg_hash(rng);
-    return float(rng >> 8u) * (1.0 / 16777216.0);
-}
-
-// Cosine-weighted direction about the unit normal n (pdf cos / pi), in an
-// orthonormal basis from n (Duff et al. 2017).
-vec3 cosine_direction(vec3 n, inout uint rng) {
-    float u1 = next_random(rng), u2 = next_random(rng);
-    float r = sqrt(u1), phi = 2.0 * PI * u2;
-    float sgn = n.z >= 0.0 ? 1.0 : -1.0;
-    float a = -1.0 / (sgn + n.z);
-    float b = n.x * n.y * a;
-    vec3 t = vec3(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
-    vec3 bt = vec3(b, sgn + n.y * n.y * a, -n.y);
-    return normalize(t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(1.0 - u1, 0.0)));
-}
 
 // One path's radiance towards the surface s (geometric normal gn on the
 // side its hemisphere samples).
 vec3 reference_path(Surface s, vec3 gn, inout uint rng) {
     vec3 throughput = vec3(1.0), radiance = vec3(0.0);
-    uint bounces = max(frame.reference_bounces, 1u);
+    uint bounces = max(frame.accum_bounces, 1u);
     for (uint b = 0u; b < bounces; ++b) {
         vec3 d = cosine_direction(s.normal, rng);
         // Below the geometry (a normal map tilted the lobe): the surface
@@ -67,12 +47,12 @@ void reference_pixel(ivec2 px) {
     PrimaryHit p;
     if (outside_frame(px) || !read_primary(px, p)) return;
     face_viewer(p.s, -p.dir);
-    uint rng = pcg_hash(uint(px.x) + pcg_hash(uint(px.y) + pcg_hash(frame.reference_frame)));
+    uint rng = pcg_hash(uint(px.x) + pcg_hash(uint(px.y) + pcg_hash(frame.accum_frame)));
     vec3 sum = vec3(0.0);
     for (uint i = 0u; i < REFERENCE_SAMPLES_PER_FRAME; ++i) {
         sum += reference_path(p.s, p.gn, rng);
     }
     vec4 acc = vec4(sum, float(REFERENCE_SAMPLES_PER_FRAME));
-    if (frame.reference_frame != 0u) acc += imageLoad(reference_accum, px);
+    if (frame.accum_frame != 0u) acc += imageLoad(reference_accum, px);
     imageStore(reference_accum, px, acc);
 }

@@ -95,6 +95,16 @@ impl BenchReport {
             }
             s.push('\n');
         }
+        if let Some(p) = self.passes.iter().find(|p| p.name == crate::render::passes::path::PASS.name) {
+            // The path tracer's cost per sample: a frame adds PATH_SAMPLES_PER_FRAME paths a pixel.
+            let spp = crate::gpu::shared::PATH_SAMPLES_PER_FRAME as f64;
+            let paths = spp * (self.width * self.height) as f64;
+            s.push_str(&format!(
+                "path tracer: {:.3} ms per sample per pixel ({spp} a frame), {:.3} Mpaths/s\n",
+                p.median / spp,
+                paths / (p.median * 1e3)
+            ));
+        }
         if let Some(e) = self.exposure {
             s.push_str(&format!(
                 "auto exposure (last frame): log-average luminance {:.4e}, adapted {:.4e}, exposure {:.4e}\n",
@@ -173,7 +183,7 @@ fn budget_table(t: f64, frames: &[BudgetFrame]) -> String {
 }
 
 /// The passes that may trace rays (camera, shadow, reflection/refraction).
-const TRACING_PASSES: [&str; 5] = ["primary", "visibility trace", "direct", "reference", "specular"];
+const TRACING_PASSES: [&str; 6] = ["primary", "visibility trace", "direct", "reference", "specular", "path"];
 
 fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
     v.sort_by(|a, b| a.total_cmp(b));

@@ -42,8 +42,15 @@ shared! {
     // skinned, SH irradiance instead), then the per-vertex transfer floats.
     // A 4-word placeholder (instance count 0) without a prt ambient mode.
     id SCENE_PRT = 13;
+    // The environment map's importance-sampling table (gpu/env_sampling.rs,
+    // glsl/path/env_sampling.glsl): ENV_CDF_HEADER floats (width, height,
+    // 1 with a table), the marginal CDF over rows (height + 1 floats), then
+    // each row's CDF over its texels (width + 1 floats a row). Header only
+    // without a map (constant environments are sampled uniformly).
+    id SCENE_ENV_CDF = 14;
+    uint ENV_CDF_HEADER = 4;
     // Bindless textures: variable-count, so the last binding.
-    id SCENE_TEXTURES = 14;
+    id SCENE_TEXTURES = 15;
     // Texels per side of a light's shadow map: at 1024 a directional light
     // fitted to a 40 m scene puts a texel at 4 cm, under a Sponza column's
     // detail, for 4 MiB a light (2048 quadruples memory and raster time).
@@ -94,6 +101,9 @@ shared! {
     uint FRAME_AMBIENT_PRT = 8;
     // Radiance coefficients in Frame.sh_radiance: up to 8 bands.
     uint SH_PRT_MAX_COEFFS = 64;
+    // Shadow rays treat transmissive occluders as opaque (the path tracer:
+    // light through glass comes along refracted paths, not straight rays).
+    uint FRAME_OPAQUE_OCCLUDERS = 16;
     uint PRT_HEADER_WORDS = 4;
     uint PRT_NO_VERTEX = 2147483647;
 
@@ -123,6 +133,14 @@ shared! {
     id REFERENCE_OUT = 5;
     id REFERENCE_IN = 8;
     uint REFERENCE_SAMPLES_PER_FRAME = 4;
+    // The path tracer (render/passes/path.rs, glsl/path/path.glsl): its
+    // accumulation (rgb: radiance sum, a: samples), kept across frames, and
+    // the frame's radiance (the mean); camera paths per pixel per frame;
+    // the bounce from which Russian roulette may end a path.
+    id PATH_ACCUM = 0;
+    id PATH_OUT = 1;
+    uint PATH_SAMPLES_PER_FRAME = 4;
+    uint PATH_RR_START = 3;
     // Set 1 of the tone-mapping pass and of the luminance reduction.
     id TONEMAP_IN = 0;
     id TONEMAP_OUT = 1;

@@ -99,11 +99,13 @@ pub struct GpuFrame {
     pub hist_high: f32,
     pub speed_brighten: f32,
     pub speed_darken: f32,
-    /// Frames already accumulated by the `reference` pass (0: it starts
-    /// over), also its random seed; and its path length (1: visibility only).
-    pub reference_frame: u32,
-    pub reference_bounces: u32,
-    pub pad: f32,
+    /// Frames already accumulated by the `reference` or `path` pass (0: it
+    /// starts over), also its random seed; and the longest path (reference:
+    /// 1 = visibility only; path: bounces).
+    pub accum_frame: u32,
+    pub accum_bounces: u32,
+    /// The path tracer's clamp of a sample's radiance (<= 0: none).
+    pub path_clamp: f32,
     /// Irradiance E_lm (rgb, w unused) of the environment as shaded: rotated
     /// and scaled by its intensity; read where `flags` has FRAME_AMBIENT_SH.
     pub sh_irradiance: [[f32; 4]; SH_IRRADIANCE_COEFFS as usize],

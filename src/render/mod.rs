@@ -12,6 +12,7 @@ pub mod kernel;
 pub mod occlusion;
 pub mod output;
 pub mod passes;
+pub mod path;
 mod prt_state;
 pub mod rays;
 pub mod reference;
@@ -38,7 +39,7 @@ use crate::vk::frame_ring::{FrameRing, Uploads};
 use crate::vk::timer::GpuTimer;
 use crate::vk::{Buffer, Context};
 use frame::{Access, Recorder, SharedBuffer, Use};
-use passes::{antialias::final_ldr, composite::HDR, Cx, Init, Pass, FRAME};
+use passes::{antialias::final_ldr, composite::HDR, Cx, Init, Pass};
 use shading::{SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;
@@ -47,6 +48,7 @@ use tracer::Tracer;
 
 pub use frame_results::Finished;
 pub use output::FrameOutput;
+pub use path::PathSettings;
 pub use reference::ReferenceSettings;
 pub use settings::{AmbientMode, DebugView, EnvProjection, PrtOptions, RenderSettings};
 
@@ -417,7 +419,7 @@ impl Renderer {
         }
         let mut left_out = Vec::new();
         let mut chosen = Vec::new();
-        for desc in FRAME {
+        for desc in passes::frame(&config) {
             match (desc.skip)(&config) {
                 Some(why) => left_out.push(format!("{}: {why}", desc.name)),
                 None => chosen.push(desc),
@@ -512,7 +514,13 @@ impl Renderer {
         } else {
             cull::DrawList::default()
         };
-        let ambient = AmbientMode::resolve(settings, &scene.environment);
+        let path_mode = settings.mode == shading::Mode::Path;
+        // The path tracer integrates the environment itself: no SH or PRT work.
+        let ambient = if path_mode {
+            AmbientMode::Constant
+        } else {
+            AmbientMode::resolve(settings, &scene.environment)
+        };
         let settings = &RenderSettings { ambient, ..*settings };
         self.prt.ensure(ctx, &mut self.gpu, scene, settings)?;
         let env = &scene.environment;
@@ -559,9 +567,14 @@ impl Renderer {
             sh_radiance: prt.unwrap_or([[0.0; 4]; crate::gpu::shared::SH_PRT_MAX_COEFFS as usize]),
             ..tone_uniforms(&settings.tone, self.adapt_dt)
         };
-        if let Some(r) = settings.reference {
-            frame.reference_bounces = r.bounces;
-            frame.reference_frame = self.reference.next(&frame);
+        if path_mode {
+            frame.flags |= crate::gpu::shared::FRAME_OPAQUE_OCCLUDERS;
+            frame.accum_bounces = settings.path.max_bounces;
+            frame.path_clamp = settings.path.clamp.unwrap_or(0.0);
+            frame.accum_frame = self.reference.next(&frame);
+        } else if let Some(r) = settings.reference {
+            frame.accum_bounces = r.bounces;
+            frame.accum_frame = self.reference.next(&frame);
         }
         debug_assert!(Mat4::from_cols_array(&frame.view).is_finite());
         self.gpu.write_frame(&mut Uploads { ring: &mut self.ring, slot }, &frame)

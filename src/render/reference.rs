@@ -6,8 +6,9 @@
 
 use anyhow::Result;
 
+use super::shading::Mode;
 use super::{FrameOutput, RenderSettings, Renderer};
-use crate::gpu::shared::REFERENCE_SAMPLES_PER_FRAME;
+use crate::gpu::shared::{PATH_SAMPLES_PER_FRAME, REFERENCE_SAMPLES_PER_FRAME};
 use crate::gpu::types::GpuFrame;
 use crate::scene::{Camera, Scene};
 use crate::vk::Context;
@@ -48,18 +49,18 @@ impl Accumulation {
         self.frames
     }
 
-    /// The frame's `reference_frame` uniform for `frame` (the others
+    /// The frame's `accum_frame` uniform for `frame` (the others
     /// filled): 0 when what it shows differs from the accumulated frames'.
     pub fn next(&mut self, frame: &GpuFrame) -> u32 {
         // Everything the image depends on; not the frame counter, exposure
         // or tone mapping.
         let f = frame;
         let key: Vec<u32> =
-            [&f.view_proj[..], &f.camera_pos, &f.env_color, &[f.env_intensity, f.env_rotation]]
+            [&f.view_proj[..], &f.camera_pos, &f.env_color, &[f.env_intensity, f.env_rotation, f.path_clamp]]
                 .concat()
                 .iter()
                 .map(|v| v.to_bits())
-                .chain([f.reference_bounces, f.resolution[0], f.resolution[1], f.light_count])
+                .chain([f.accum_bounces, f.resolution[0], f.resolution[1], f.light_count, f.flags])
                 .collect();
         if self.key.as_ref() != Some(&key) {
             self.frames = 0;
@@ -71,10 +72,11 @@ impl Accumulation {
     }
 }
 
-/// Renders `settings.reference`'s frames of one view (from scratch) and
-/// returns the last: the converged image. Logs progress every few frames
-/// (a software device takes minutes for N = 1024). Without a reference in
-/// `settings` it is one `render`.
+/// Renders the frames of one view's converged image, from scratch: the
+/// path tracer's (`--mode path`) or the ambient reference's
+/// (`settings.reference`), and returns the last. Logs progress every few
+/// seconds (a software device takes minutes for N = 1024). Without either
+/// it is one `render`.
 pub fn render_converged(
     renderer: &mut Renderer,
     ctx: &Context,
@@ -82,27 +84,35 @@ pub fn render_converged(
     camera: &Camera,
     settings: &RenderSettings,
 ) -> Result<FrameOutput> {
-    let Some(r) = settings.reference else { return renderer.render(ctx, scene, camera, settings) };
+    let (frames, per_frame, what) = match (settings.mode, settings.reference) {
+        (Mode::Path, _) => (settings.path.frames(), PATH_SAMPLES_PER_FRAME, "path"),
+        (_, Some(r)) => (r.frames(), REFERENCE_SAMPLES_PER_FRAME, "reference"),
+        _ => return renderer.render(ctx, scene, camera, settings),
+    };
     renderer.reset_reference();
-    let frames = r.frames();
     let start = std::time::Instant::now();
     let mut last = std::time::Instant::now();
     let mut out = renderer.render(ctx, scene, camera, settings)?;
     for i in 1..frames {
         if last.elapsed().as_secs_f64() >= 5.0 {
             last = std::time::Instant::now();
-            log::info!(
-                "reference: frame {i}/{frames} ({} samples per pixel), {:.0} s",
-                i * REFERENCE_SAMPLES_PER_FRAME,
-                start.elapsed().as_secs_f64()
-            );
+            let (done, spp) = (100 * i / frames, i * per_frame);
+            let secs = start.elapsed().as_secs_f64();
+            log::info!("{what}: {done}% ({spp} samples per pixel, frame {i}/{frames}), {secs:.0} s");
         }
         out = renderer.render(ctx, scene, camera, settings)?;
     }
+    let how = match (settings.mode, settings.reference) {
+        (Mode::Path, _) => format!(
+            "at most {} bounces{}",
+            settings.path.max_bounces,
+            settings.path.clamp.map_or(String::new(), |c| format!(", radiance clamped to {c} (biased)"))
+        ),
+        (_, r) => format!("{} bounce(s)", r.map_or(0, |r| r.bounces)),
+    };
     log::info!(
-        "reference: {} samples per pixel in {frames} frames, {} bounce(s), {:.1} s",
-        frames * REFERENCE_SAMPLES_PER_FRAME,
-        r.bounces,
+        "{what}: {} samples per pixel in {frames} frames, {how}, {:.1} s",
+        frames * per_frame,
         start.elapsed().as_secs_f64()
     );
     Ok(out)

@@ -180,6 +180,8 @@ pub struct RenderSettings {
     /// The ray-traced reference replaces the ambient radiance at primary
     /// hits (--reference-samples; render/reference.rs).
     pub reference: Option<super::ReferenceSettings>,
+    /// The path tracer's samples, path length and clamp (`--mode path` only).
+    pub path: super::path::PathSettings,
     /// How hybrid mode finds primary hits (--primary-visibility).
     pub primary_visibility: PrimaryVisibility,
     /// Two-phase occlusion culling of the raster G-buffer's clusters
@@ -211,6 +213,7 @@ impl Default for RenderSettings {
             ambient_from_scene: false,
             prt: PrtOptions::default(),
             reference: None,
+            path: Default::default(),
             primary_visibility: PrimaryVisibility::Auto,
             occlusion_culling: false,
             edge_aa_tiled: true,

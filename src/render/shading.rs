@@ -22,6 +22,10 @@ pub enum Mode {
     Hybrid,
     /// Camera rays traced too (reference for the hybrid image).
     Rt,
+    /// The path-traced ground truth (`--samples` paths per pixel,
+    /// render/path.rs): every light transport the scene has, no
+    /// approximation but the sample count.
+    Path,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -274,6 +278,9 @@ impl ShadingConfig {
     ) -> Result<Self> {
         let debug_view = settings.debug_view != crate::render::DebugView::None;
         let (mode, backend) = (settings.mode, settings.backend);
+        if mode == Mode::Path {
+            return Self::path(ctx, needs, settings);
+        }
         // A debug view traces no secondary rays.
         let wanted = if debug_view {
             Effects { shadows: false, reflections: false, refractions: false, ..settings.effects }
@@ -330,6 +337,30 @@ impl ShadingConfig {
         })
     }
 
+    /// `--mode path`: the path tracer traces everything itself; none of the
+    /// hybrid frame's effects, budget, reference or anti-aliasing exist.
+    fn path(ctx: &Context, needs: SceneNeeds, settings: &crate::render::RenderSettings) -> Result<Self> {
+        if settings.debug_view != crate::render::DebugView::None {
+            bail!("--debug-view shows the G-buffer, which --mode path has not: use --mode hybrid or rt");
+        }
+        let backend = pick_backend(settings.backend, &ctx.rt, &ctx.caps.limits, &needs, software(ctx))?;
+        Ok(ShadingConfig {
+            mode: Mode::Path,
+            effects: Effects { count_rays: settings.effects.count_rays, ..Effects::NONE },
+            backend: Some(backend),
+            debug_view: false,
+            needs,
+            luminance: settings.tone.measures_luminance(),
+            budget: false,
+            shadow_fallback: false,
+            aa: AaMode::None,
+            edge_aa_tiled: settings.edge_aa_tiled,
+            reference: false,
+            visibility: crate::render::settings::PrimaryVisibility::Raster,
+            occlusion: false,
+        })
+    }
+
     /// Why this backend (for the log).
     pub fn backend_reason(&self, ctx: &Context, requested: Backend) -> &'static str {
         match (self.backend, requested) {
@@ -364,6 +395,10 @@ impl ShadingConfig {
     }
 
     pub fn describe(&self) -> String {
+        if self.mode == Mode::Path {
+            let b = self.backend.map_or("none", Backend::name);
+            return format!("mode Path, backend {b}: the path-traced ground truth");
+        }
         let e = &self.effects;
         let on: Vec<&str> =
             [(e.shadows, "shadows"), (e.reflections, "reflections"), (e.refractions, "refractions")]
@@ -380,7 +415,7 @@ impl ShadingConfig {
             if self.budget { " (per-object budget)" } else { "" }
         ) + if self.reference { ", ray-traced ambient reference" } else { "" }
             + match (self.mode, self.visibility) {
-                (Mode::Rt, _) => "",
+                (Mode::Rt | Mode::Path, _) => "",
                 (_, crate::render::settings::PrimaryVisibility::Raster) => ", primary visibility raster",
                 (_, crate::render::settings::PrimaryVisibility::Traced) => ", primary visibility traced",
                 (_, crate::render::settings::PrimaryVisibility::Auto) => {

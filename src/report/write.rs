@@ -109,6 +109,7 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
          (median). `reference.png` is its tone-mapped image.\n",
         match rs.mode {
             Mode::Rt => "pure-RT mode (camera rays traced)",
+            Mode::Path => "the path tracer (--ref-mode path)",
             Mode::Hybrid =>
                 "hybrid mode (G-buffer primary hits; chosen with --ref-mode hybrid, so the \
                              rows leave out the hybrid-vs-rt difference below)",

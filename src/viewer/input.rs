@@ -210,7 +210,7 @@ impl Viewer {
                 if self.ctx.rt.ray_query {
                     self.settings.mode = match self.settings.mode {
                         Mode::Hybrid => Mode::Rt,
-                        Mode::Rt => Mode::Hybrid,
+                        Mode::Rt | Mode::Path => Mode::Hybrid,
                     };
                     log::info!("render mode: {:?}", self.settings.mode);
                 } else {

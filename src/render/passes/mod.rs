@@ -14,6 +14,7 @@ pub mod gbuffer;
 pub mod gbuffer_resolve;
 pub mod heuristic;
 pub mod luminance;
+pub mod path;
 pub mod primary;
 pub mod reference;
 pub mod shadow_map;
@@ -54,6 +55,20 @@ pub const FRAME: &[PassDesc] = &[
     edge_aa::PASS,
     fxaa::PASS,
 ];
+
+/// The frame of `--mode path` (DESIGN.md: path -> accumulate -> tone map):
+/// the path tracer writes the radiance the same luminance and tone mapping
+/// read; no G-buffer, and no anti-aliasing (the paths' jittered camera rays
+/// already integrate each pixel's area).
+pub const PATH_FRAME: &[PassDesc] = &[path::PASS, luminance::PASS, tonemap::PASS];
+
+/// The pass list of a frame of this configuration.
+pub fn frame(config: &ShadingConfig) -> &'static [PassDesc] {
+    match config.mode {
+        super::shading::Mode::Path => PATH_FRAME,
+        _ => FRAME,
+    }
+}
 
 /// What everything a pass needs to be built from.
 pub struct Init<'a> {

@@ -1,0 +1,206 @@
+// The path tracer's BSDF at a surface: the raster path's opaque
+// metallic-roughness model (brdf.glsl: GGX, height-correlated Smith,
+// Schlick Fresnel with f90 from f0, Lambert diffuse weighted by 1 - F and
+// by 1 - transmission), plus the transmissive share as a dielectric
+// interface with the exact Fresnel term (fresnel.glsl), rough by GGX
+// microfacets (Walter et al. 2007) or, below DELTA_ALPHA, a perfect
+// reflection / refraction as in integrator.glsl's branches. Lobes are
+// sampled from the GGX distribution of visible normals (Heitz 2018) and
+// the cosine; every non-delta lobe's pdf enters the mixture pdf the
+// multiple importance sampling weights use. Local frame: the shading
+// normal is +z, the viewer v is above it (face_viewer).
+#ifndef PATH_BSDF_GLSL
+#define PATH_BSDF_GLSL
+#include "../common/brdf.glsl"
+#include "../common/fresnel.glsl"
+#include "../common/sampling.glsl"
+
+// Below this GGX alpha (roughness ~0.03) the specular lobes are deltas: a
+// light sample can never meet them, so they are only sampled. Equals the
+// raster's alpha floor (brdf.glsl), above which both evaluate the same lobe.
+const float DELTA_ALPHA = 1e-3;
+
+struct Bsdf {
+    vec3 t, b, n;
+    vec3 f0;         // Schlick reflectance of the opaque part (surface_f0)
+    float alpha;     // GGX alpha (roughness^2, at least DELTA_ALPHA)
+    bool delta;      // perfect specular lobes
+    float spec_w;    // weight of the opaque part's specular lobe: 1 - tm
+    vec3 diffuse;    // Lambert albedo before 1 - F: (1 - metallic)(1 - transmission) base
+    float tm;        // weight of the dielectric interface: transmission (1 - metallic)
+    float eta;       // n on v's side / n on the other side
+    vec3 tint;       // transmitted light's tint (base colour, per crossing)
+    float p_spec, p_diff;  // lobe choice; the interface gets the rest
+};
+
+struct BsdfSample {
+    vec3 l;          // local
+    vec3 weight;     // f |cos| / pdf
+    float pdf;       // mixture pdf (0 for a delta lobe)
+    bool delta;
+};
+
+Bsdf bsdf_at(Surface s, vec3 v, bool back_face) {
+    Bsdf m;
+    m.n = s.normal;
+    basis_of(m.n, m.t, m.b);
+    float a = s.roughness * s.roughness;
+    m.delta = a < DELTA_ALPHA;
+    m.alpha = max(a, DELTA_ALPHA);
+    m.f0 = surface_f0(s);
+    m.tm = s.transmission * (1.0 - s.metallic);
+    m.spec_w = 1.0 - m.tm;
+    m.diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
+    m.eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
+    m.tint = s.base_color;
+    // Lobe choice in proportion to each lobe's albedo estimate at n.v.
+    vec3 fv = f_schlick(m.f0, max(dot(m.n, v), 1e-4));
+    float ws = m.spec_w * max3(fv), wd = max3(m.diffuse * (1.0 - fv)), wg = m.tm;
+    float sum = ws + wd + wg;
+    m.p_spec = sum > 0.0 ? ws / sum : 0.0;
+    m.p_diff = sum > 0.0 ? wd / sum : 0.0;
+    return m;
+}
+
+vec3 bsdf_local(Bsdf m, vec3 w) {
+    return vec3(dot(w, m.t), dot(w, m.b), dot(w, m.n));
+}
+
+vec3 bsdf_world(Bsdf m, vec3 w) {
+    return m.t * w.x + m.b * w.y + m.n * w.z;
+}
+
+float bsdf_p_glass(Bsdf m) {
+    return max(1.0 - m.p_spec - m.p_diff, 0.0);
+}
+
+// An IOR-1 interface does not bend or reflect: a straight passthrough.
+bool ior_one(Bsdf m) {
+    return abs(m.eta - 1.0) < 1e-6;
+}
+
+// GGX normal distribution of the local unit half vector h (h.z > 0),
+// written with sin^2 from x, y so it stays exact for h near the normal at
+// tiny alpha (1 - cos^2 loses it).
+float ggx_d(vec3 h, float a2) {
+    float d = h.z * h.z * a2 + (h.x * h.x + h.y * h.y);
+    return a2 / max(PI * d * d, 1e-30);
+}
+
+// Smith's Lambda for GGX at |cos| c.
+float ggx_lambda(float c, float a2) {
+    float c2 = max(c * c, 1e-12);
+    return 0.5 * (sqrt(1.0 + a2 * (1.0 - c2) / c2) - 1.0);
+}
+
+// A visible normal for the local viewer v (v.z > 0), Heitz 2018.
+vec3 sample_vndf(vec3 v, float a, float u1, float u2) {
+    vec3 vh = normalize(vec3(a * v.x, a * v.y, v.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u1), phi = 2.0 * PI * u2;
+    float p1 = r * cos(phi), p2 = r * sin(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * p2;
+    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
+    return normalize(vec3(a * nh.x, a * nh.y, max(nh.z, 1e-6)));
+}
+
+// f(v, l) |l.z| of the non-delta lobes, and their mixture pdf of l.
+vec3 bsdf_eval(Bsdf m, vec3 v, vec3 l, out float pdf) {
+    pdf = 0.0;
+    vec3 f = vec3(0.0);
+    float vz = max(v.z, 1e-4);
+    float a2 = m.alpha * m.alpha;
+    float p_glass = bsdf_p_glass(m);
+    bool has_interface = p_glass > 0.0 && !m.delta && !ior_one(m);
+    if (l.z > 0.0) {
+        vec3 h = normalize(v + l);
+        float vh = max(dot(v, h), 0.0);
+        vec3 fs = f_schlick(m.f0, vh);
+        if (m.p_diff > 0.0) {
+            f += (1.0 - fs) * m.diffuse * (l.z / PI);
+            pdf += m.p_diff * l.z / PI;
+        }
+        if (!m.delta && (m.p_spec > 0.0 || has_interface)) {
+            float d = ggx_d(h, a2);
+            float lv = ggx_lambda(vz, a2);
+            float g1 = 1.0 / (1.0 + lv), g2 = 1.0 / (1.0 + lv + ggx_lambda(l.z, a2));
+            float lobe = d * g2 / (4.0 * vz);
+            float lobe_pdf = g1 * d / (4.0 * vz);
+            f += m.spec_w * fs * lobe;
+            pdf += m.p_spec * lobe_pdf;
+            if (has_interface) {
+                float fr = fresnel_dielectric(vh, m.eta);
+                f += vec3(m.tm * fr * lobe);
+                pdf += p_glass * fr * lobe_pdf;
+            }
+        }
+    } else if (l.z < 0.0 && has_interface) {
+        // Refraction's half vector (Walter et al. 2007, eq. 16), on v's side.
+        vec3 h = normalize(m.eta * v + l);
+        if (h.z < 0.0) h = -h;
+        float vh = dot(v, h), lh = dot(l, h);
+        if (vh > 0.0 && lh < 0.0) {
+            float fr = fresnel_dielectric(vh, m.eta);
+            float denom = m.eta * vh + lh;
+            float jac = -lh / max(denom * denom, 1e-12);  // dh/dl, over eta_t^2
+            float d = ggx_d(h, a2);
+            float lv = ggx_lambda(vz, a2);
+            float g1 = 1.0 / (1.0 + lv), g2 = 1.0 / (1.0 + lv + ggx_lambda(-l.z, a2));
+            f += m.tm * m.tint * ((1.0 - fr) * d * g2 * vh * jac / vz);
+            pdf += p_glass * (1.0 - fr) * g1 * d * vh * jac / vz;
+        }
+    }
+    return f;
+}
+
+// Samples l for the local viewer v; false when the path ends (the sampled
+// direction fell below the surface, or the material reflects nothing).
+bool bsdf_sample(Bsdf m, vec3 v, inout uint rng, out BsdfSample bs) {
+    float u = next_random(rng), u1 = next_random(rng), u2 = next_random(rng);
+    float p_glass = bsdf_p_glass(m);
+    bs.delta = false;
+    bs.pdf = 0.0;
+    bs.weight = vec3(0.0);
+    if (u < m.p_spec) {
+        if (m.delta) {
+            bs.l = vec3(-v.x, -v.y, v.z);
+            bs.weight = m.spec_w * f_schlick(m.f0, max(v.z, 1e-4)) / m.p_spec;
+            bs.delta = true;
+            return true;
+        }
+        bs.l = reflect(-v, sample_vndf(v, m.alpha, u1, u2));
+        // Below the surface: killed, so the mixture pdf need not count it.
+        if (bs.l.z <= 0.0) return false;
+    } else if (u < m.p_spec + m.p_diff) {
+        float r = sqrt(u1), phi = 2.0 * PI * u2;
+        bs.l = vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u1, 0.0)));
+    } else {
+        if (p_glass <= 0.0) return false;
+        if (ior_one(m)) {
+            bs.l = -v;
+            bs.weight = m.tm * m.tint / p_glass;
+            bs.delta = true;
+            return true;
+        }
+        vec3 h = m.delta ? vec3(0.0, 0.0, 1.0) : sample_vndf(v, m.alpha, u1, u2);
+        float fr = fresnel_dielectric(max(dot(v, h), 0.0), m.eta);
+        bool reflects = next_random(rng) < fr;
+        bs.l = reflects ? reflect(-v, h) : refract_dir(-v, h, m.eta);
+        if (m.delta) {
+            bs.weight = (reflects ? vec3(m.tm) : m.tm * m.tint) / p_glass;
+            bs.delta = true;
+            return dot(bs.l, bs.l) > 0.0;
+        }
+        if (reflects ? bs.l.z <= 0.0 : bs.l.z >= 0.0) return false;
+    }
+    if (bs.l.z == 0.0) return false;
+    vec3 f = bsdf_eval(m, v, bs.l, bs.pdf);
+    if (!(bs.pdf > 0.0)) return false;
+    bs.weight = f / bs.pdf;
+    return true;
+}
+
+#endif

@@ -1,0 +1,134 @@
+// Pass `path` (`--mode path`): the ground truth. A unidirectional path
+// tracer over the scene, materials, lights and environment the other
+// passes shade, on the same traversal: camera rays jittered uniformly
+// within the pixel (a box filter), next-event estimation at every
+// non-delta vertex towards each punctual light and one environment sample,
+// the environment sample and the BSDF sample combined by multiple
+// importance sampling (power heuristic), emission found by the BSDF
+// samples alone, Russian roulette from PATH_RR_START bounces on, at most
+// Frame.accum_bounces bounces. Shadow rays see glass as opaque
+// (FRAME_OPAQUE_OCCLUDERS): its light comes along refracted paths.
+// PATH_SAMPLES_PER_FRAME paths per pixel a frame, summed in f32 with
+// their count in the kept accumulation; the frame's radiance is the mean.
+// Seeded by pixel and Frame.accum_frame (PCG): every backend traces the
+// same paths.
+#include "../common/integrator.glsl"
+#include "../common/sampling.glsl"
+#include "env_sampling.glsl"
+#include "bsdf.glsl"
+
+layout(set = SET_PASS, binding = PATH_ACCUM, rgba32f) uniform image2D path_accum;
+layout(set = SET_PASS, binding = PATH_OUT, rgba32f) uniform writeonly image2D hdr_out;
+
+// Whether l (world) leaves the surface on the side its local direction
+// says: above the geometry for a reflection, below for a transmission. A
+// normal map can tilt the shading frame past the geometric normal; such a
+// direction would leak light through the surface.
+bool consistent_side(vec3 l_world, float l_local_z, vec3 gn) {
+    return (dot(l_world, gn) > 0.0) == (l_local_z > 0.0);
+}
+
+// Light arriving along l_world from a light sample, unoccluded up to tmax.
+float visible(Surface s, vec3 gn, vec3 l_world, float tmax) {
+    vec3 o = offset_ray(s.position, dot(l_world, gn) > 0.0 ? gn : -gn, s.extent);
+    count_ray(RAY_KIND_SHADOW);
+    return trace_shadow(o, l_world, tmax).x;
+}
+
+// Next-event estimation at a surface: every punctual light, and the
+// environment once (weighted against the BSDF's sampling).
+vec3 light_samples(Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng) {
+    vec3 lit = vec3(0.0);
+    float unused;
+    for (uint i = 0u; i < frame.light_count; ++i) {
+        Light light = lights[i];
+        LightSample ls = sample_light(light, s.position);
+        vec3 l = bsdf_local(m, ls.l);
+        if (!consistent_side(ls.l, l.z, gn)) continue;
+        vec3 c = bsdf_eval(m, v, l, unused) * ls.irradiance;
+        if (!(max3(c) > 0.0)) continue;
+        if ((light.flags & LIGHT_CASTS_SHADOWS) != 0u) {
+            float tmax = light.type == LIGHT_DIRECTIONAL ? RAY_TMAX : ls.distance * (1.0 - 1e-4);
+            c *= visible(s, gn, ls.l, tmax);
+        }
+        lit += c;
+    }
+    if (env_emits()) {
+        float pdf_env, pdf_bsdf;
+        vec3 d = env_sample(rng, pdf_env);
+        vec3 l = bsdf_local(m, d);
+        if (pdf_env > 0.0 && consistent_side(d, l.z, gn)) {
+            vec3 c = bsdf_eval(m, v, l, pdf_bsdf) * environment(d);
+            c *= power_heuristic(pdf_env, pdf_bsdf) / pdf_env;
+            if (max3(c) > 0.0) lit += c * visible(s, gn, d, RAY_TMAX);
+        }
+    }
+    return lit;
+}
+
+// One camera path's radiance through pixel px.
+vec3 path_radiance(ivec2 px, inout uint rng) {
+    vec2 jitter = vec2(next_random(rng), next_random(rng));
+    vec3 dir = camera_ray_dir(vec2(px) + jitter);
+    vec3 o = frame.camera_pos;
+    vec3 throughput = vec3(1.0), radiance = vec3(0.0);
+    // The previous vertex's sampling: a delta lobe (or the camera) sees
+    // the environment whole, a BSDF sample shares it with the light sample.
+    float prev_pdf = 0.0;
+    bool prev_delta = true;
+    for (uint bounce = 0u;; ++bounce) {
+        RayHit h;
+        count_ray(bounce == 0u ? RAY_KIND_CAMERA : RAY_KIND_SECONDARY);
+        if (!trace_closest(o, dir, RAY_TMAX, h)) {
+            float w = prev_delta || !env_emits() ? 1.0 : power_heuristic(prev_pdf, env_pdf(dir));
+            radiance += throughput * environment(dir) * w;
+            break;
+        }
+        vec3 gn;
+        bool back_face;
+        Surface s = hit_surface(h, o, dir, 0.0, gn, back_face);
+        radiance += throughput * s.emissive;
+        if (bounce >= frame.accum_bounces) break;
+        vec3 v_world = -dir;
+        face_viewer(s, v_world);
+        Bsdf m = bsdf_at(s, v_world, back_face);
+        vec3 v = bsdf_local(m, v_world);
+        radiance += throughput * light_samples(s, gn, m, v, rng);
+        BsdfSample bs;
+        if (!bsdf_sample(m, v, rng, bs)) break;
+        vec3 l = normalize(bsdf_world(m, bs.l));
+        if (!consistent_side(l, bs.l.z, gn)) break;
+        throughput *= bs.weight;
+        if (!(max3(throughput) > 0.0) || any(isinf(throughput))) break;  // also NaN
+        o = offset_ray(s.position, bs.l.z > 0.0 ? gn : -gn, s.extent);
+        dir = l;
+        prev_pdf = bs.pdf;
+        prev_delta = bs.delta;
+        if (bounce + 1u >= PATH_RR_START) {
+            // Survival in proportion to the throughput, at most 0.95 so
+            // that paths in a closed, white scene still end.
+            float q = min(max3(throughput), 0.95);
+            if (next_random(rng) >= q) break;
+            throughput /= q;
+        }
+    }
+    return radiance;
+}
+
+void path_pixel(ivec2 px) {
+    if (any(greaterThanEqual(uvec2(px), frame.resolution))) return;
+    uint rng = pcg_hash(uint(px.x) + pcg_hash(uint(px.y) + pcg_hash(frame.accum_frame ^ 0x2545f491u)));
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < PATH_SAMPLES_PER_FRAME; ++i) {
+        vec3 c = path_radiance(px, rng);
+        // A sample that is not finite adds nothing (it would poison the
+        // whole accumulation); with --clamp, the explicit, reported bias.
+        if (any(isnan(c)) || any(isinf(c))) c = vec3(0.0);
+        if (frame.path_clamp > 0.0 && max3(c) > frame.path_clamp) c *= frame.path_clamp / max3(c);
+        sum += c;
+    }
+    vec4 acc = vec4(sum, float(PATH_SAMPLES_PER_FRAME));
+    if (frame.accum_frame != 0u) acc += imageLoad(path_accum, px);
+    imageStore(path_accum, px, acc);
+    imageStore(hdr_out, px, vec4(acc.rgb / acc.a, 1.0));
+}

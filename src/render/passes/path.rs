@@ -1,0 +1,48 @@
+//! Pass `path` (`--mode path`): the path-traced ground truth
+//! (glsl/path/path.glsl). Each frame adds PATH_SAMPLES_PER_FRAME camera
+//! paths per pixel to its kept accumulation and writes the mean radiance
+//! into the frame's HDR target, which `luminance` and `tonemap` read as
+//! they read `composite`'s. In path mode it is the frame's only shading
+//! pass (`PATH_FRAME`); render/path.rs drives the frames.
+
+use ash::vk;
+
+use super::composite::HDR;
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::{Init, PassDesc};
+use crate::gpu::shared::{PATH_ACCUM, PATH_OUT};
+use crate::render::frame::{Access, SharedBuffer, Use};
+use crate::render::shading::{Mode, ShadingConfig};
+use crate::render::targets::TargetDesc;
+use crate::vk::pipeline::Specialization;
+
+/// Per pixel the sum of the paths' radiance (rgb) and their count (a),
+/// kept from frame to frame.
+pub static ACCUMULATION: TargetDesc = TargetDesc::kept("path accumulation", vk::Format::R32G32B32A32_SFLOAT);
+
+fn io(_: &ShadingConfig) -> Vec<Io> {
+    vec![
+        Io::new(PATH_ACCUM, &ACCUMULATION, Access::StorageWrite),
+        Io::new(PATH_OUT, &HDR, Access::StorageWrite),
+    ]
+}
+
+fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    (c.mode != Mode::Path).then_some("not --mode path")
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "path",
+    skip,
+    uses: |c| {
+        // Read-modify-write: the previous frames' sum is read too.
+        let mut u = fullscreen::uses(&io(c), true);
+        u.push(Use::image(&ACCUMULATION, Access::StorageRead));
+        u.push(Use::buffer(SharedBuffer::Counters, Access::ShaderWrite));
+        u
+    },
+    create: |i: &Init| {
+        let spec = Specialization::new(&i.config.specialization());
+        FullScreen::create(i, "path", io(i.config), Shader::Traced("path"), &spec)
+    },
+};
