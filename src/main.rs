@@ -439,6 +439,11 @@ impl ViewArgs {
         if let Some(why) = self.path.without_effect(self.mode) {
             return Some(why.into());
         }
+        if self.path.samples.is_some() && (command == "view" || command == "bench") {
+            return Some(format!(
+                "--samples has no effect on {command}: it adds 4 paths per pixel a frame while the view stays still"
+            ));
+        }
         if self.mode == Mode::Path {
             if self.env.reference_samples.is_some() {
                 return Some(

@@ -24,6 +24,10 @@ impl Viewer {
         if self.settings.debug_view != DebugView::None {
             t.push_str(&format!(" - {:?} view", self.settings.debug_view).to_lowercase());
         }
+        if self.settings.mode == Mode::Path {
+            let spp = self.renderer.reference_frames() * crate::gpu::shared::PATH_SAMPLES_PER_FRAME;
+            t.push_str(&format!(" - path traced, {spp} samples per pixel"));
+        }
         if self.settings.tone != ToneSettings::default() {
             t.push_str(&format!(" - {}", self.settings.tone.describe()));
         }
@@ -206,6 +210,15 @@ impl Viewer {
                     log::info!("animation t = {:.2} s{}", clock, if *paused { " (paused)" } else { "" });
                 }
             }
+            KeyCode::KeyK => {
+                // The ground truth, accumulating while nothing moves.
+                self.settings.mode = if self.settings.mode == Mode::Path { Mode::Hybrid } else { Mode::Path };
+                if self.settings.mode == Mode::Path {
+                    self.settings.debug_view = DebugView::None;
+                }
+                log::info!("render mode: {:?}", self.settings.mode);
+                self.window.set_title(&self.title());
+            }
             KeyCode::KeyT => {
                 if self.ctx.rt.ray_query {
                     self.settings.mode = match self.settings.mode {
@@ -273,6 +286,10 @@ impl Viewer {
     }
 
     fn set_debug_view(&mut self, v: DebugView) {
+        if self.settings.mode == Mode::Path && v != DebugView::None {
+            log::info!("debug views show the G-buffer, which path mode has not (K: back to hybrid)");
+            return;
+        }
         self.settings.debug_view = v;
         log::info!("debug view: {v:?}");
         self.window.set_title(&self.title());
