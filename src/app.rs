@@ -22,7 +22,7 @@ mod rays;
 pub use benchmark::*;
 pub use budget_args::BudgetArgs;
 pub use env_args::{EnvArgs, EnvOverrides};
-pub use path_args::PathArgs;
+pub use path_args::{PathArgs, MAX_PATH_SAMPLES};
 pub use rays::{rays_command, KindReport, RayBench};
 
 /// The bundled default scene, looked for in the working directory, next to

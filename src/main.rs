@@ -159,16 +159,35 @@ enum Command {
         /// Default: all, with their full value lists.
         #[arg(long)]
         knobs: Option<String>,
-        /// Reference: maximum recursion depth (pure-RT mode, every effect).
+        /// What every knob is measured against: path (the path-traced ground
+        /// truth, --ref-samples, cached on disk) or self (this renderer at
+        /// its deepest settings: --ref-mode, --ref-max-depth, --ref-min-weight).
+        #[arg(long = "ref", value_enum, default_value_t = RefKind::Path)]
+        ref_kind: RefKind,
+        /// --ref path: paths per pixel to start with (doubled while the
+        /// reference's own noise is over half the smallest error).
+        #[arg(long, default_value_t = 256, value_parser = parse_ref_samples, allow_hyphen_values = true)]
+        ref_samples: u32,
+        /// --ref path: the most paths per pixel it may double to.
+        #[arg(long, default_value_t = 4096, value_parser = parse_ref_samples, allow_hyphen_values = true)]
+        ref_max_samples: u32,
+        /// --ref path: cache directory [default: $HYBRID_RT_TRUTH_CACHE, else
+        /// $XDG_CACHE_HOME/hybrid-rt/truth, else ~/.cache/hybrid-rt/truth].
+        #[arg(long, value_name = "DIR", conflicts_with = "no_ref_cache")]
+        ref_cache: Option<PathBuf>,
+        /// --ref path: render the reference even if a cached one exists, and cache nothing.
+        #[arg(long)]
+        no_ref_cache: bool,
+        /// --ref self: maximum recursion depth (pure-RT mode, every effect).
         #[arg(long, default_value_t = 16, value_parser = parse_max_depth, allow_hyphen_values = true)]
         ref_max_depth: u32,
-        /// Reference: importance cutoff in [0, 1].
+        /// --ref self: importance cutoff in [0, 1].
         #[arg(long, default_value_t = 0.001, value_parser = parse_min_weight, allow_hyphen_values = true)]
         ref_min_weight: f32,
         /// Reference: ray backend [default: the --backend of the base settings].
         #[arg(long, value_enum)]
         ref_backend: Option<Backend>,
-        /// Reference: rt (camera rays traced) or hybrid (then the rows leave
+        /// --ref self: rt (camera rays traced) or hybrid (then the rows leave
         /// out the hybrid-vs-rt difference the self-check reports).
         #[arg(long, value_enum, default_value_t = Mode::Rt)]
         ref_mode: Mode,
@@ -658,6 +677,11 @@ fn run(cli: Cli) -> Result<()> {
             frames,
             warmup,
             knobs,
+            ref_kind,
+            ref_samples,
+            ref_max_samples,
+            ref_cache,
+            no_ref_cache,
             ref_max_depth,
             ref_min_weight,
             ref_backend,
@@ -724,7 +748,14 @@ fn run(cli: Cli) -> Result<()> {
                     max_depth: ref_max_depth,
                     min_weight: ref_min_weight,
                     backend: ref_backend,
-                    mode: ref_mode,
+                    mode: if ref_kind == RefKind::Path { Mode::Path } else { ref_mode },
+                    samples: ref_samples,
+                    max_samples: ref_max_samples.max(ref_samples),
+                },
+                truth_cache: match (no_ref_cache, ref_cache) {
+                    (true, _) => None,
+                    (false, Some(dir)) => Some(dir),
+                    (false, None) => report::truth::default_cache_dir(),
                 },
                 count_rays: !no_ray_counts,
                 aa_reference: Supersample { factor: ref_supersample, filter: ref_ss_filter },
@@ -816,6 +847,25 @@ fn main() -> ExitCode {
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// What `report` measures against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum RefKind {
+    /// The path-traced ground truth.
+    Path,
+    /// The renderer itself at its deepest settings.
+    #[value(name = "self")]
+    Own,
+}
+
+fn parse_ref_samples(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(v) if (4..=app::MAX_PATH_SAMPLES).contains(&v) => Ok(v),
+        _ => {
+            Err(format!("'{s}': expected a whole number of paths per pixel, 4 to {}", app::MAX_PATH_SAMPLES))
         }
     }
 }

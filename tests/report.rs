@@ -19,7 +19,10 @@ fn tmp(name: &str) -> PathBuf {
 
 fn bin() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_hybrid-rt"));
-    c.env("HYBRID_RT_VALIDATION", "1");
+    // The path-traced references these runs render are cached here, not in
+    // the user's cache directory.
+    let cache = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("report-truth-cache");
+    c.env("HYBRID_RT_VALIDATION", "1").env(report::truth::CACHE_DIR_ENV, cache);
     c
 }
 
@@ -28,10 +31,11 @@ fn decoded_size(path: &Path) -> (u32, u32) {
     (img.width(), img.height())
 }
 
-/// The report at 32x18 with max-depth 0 and 1: its ꟻLIP is 0 for an image
-/// against itself and positive against a shifted copy, report.csv parses
-/// with the fixed header and one row per knob value, report.md names the
-/// reference and the self-check, the error map and the plot decode.
+/// The report at 32x18 with max-depth 0 and 1 against the self reference
+/// (`--ref self`): its ꟻLIP is 0 for an image against itself and positive
+/// against a shifted copy, report.csv parses with the fixed header and one
+/// row per knob value, report.md names the reference and the self-check,
+/// the error map and the plot decode.
 #[test]
 fn tiny_report_checks_its_numbers_and_files() {
     let dir = tmp("tiny");
@@ -40,6 +44,7 @@ fn tiny_report_checks_its_numbers_and_files() {
         frames: 5,
         warmup: 1,
         knobs: knobs::parse_selection("max-depth=0:1").unwrap(),
+        reference: report::ReferenceSettings::SELF,
         ..ReportOptions::new(job, &dir)
     };
     let ctx = common::validated_context();
@@ -228,9 +233,10 @@ fn report_cli() {
     let out = run(&["--knobs", "mode=hybrid", "--frames", "5", "--warmup", "1", "--no-ray-counts"]);
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{stderr}");
-    // A line when each setting starts, and one with its times when it is done.
-    assert!(stderr.contains("report [1/4] reference (16x9"), "{stderr}");
-    assert!(stderr.lines().any(|l| l.starts_with("report [4/4]") && l.contains("ms median")), "{stderr}");
+    // A line when each setting starts, and one with its times when it is
+    // done: the path-traced reference, hybrid and rt (mode=hybrid is hybrid).
+    assert!(stderr.contains("report [1/3] reference (16x9"), "{stderr}");
+    assert!(stderr.lines().any(|l| l.starts_with("report [3/3]") && l.contains("ms median")), "{stderr}");
     assert!(stdout.contains("self-check, hybrid vs rt at equal settings: ꟻLIP"), "{stdout}");
     let csv = std::fs::read_to_string(d.join("report.csv")).unwrap();
     assert_eq!(csv.lines().count(), 2, "{csv}");
@@ -364,4 +370,46 @@ fn budget_paths_span_raster_only_to_full_effects_in_both_modes() {
     }
     let table = budget_paths::table(&opts, &ctx.caps.name, &runs);
     assert!(table.contains("| effects | 0.50 |"), "{table}");
+}
+
+/// The default reference is the path-traced truth: report.md says so with
+/// its noise, which is under half the smallest error; a second run reads it
+/// from the cache (the same image, nothing rendered); a truncated cache
+/// file is rendered again with a warning, never trusted.
+#[test]
+fn path_traced_reference_is_measured_and_cached() {
+    let dir = tmp("truth");
+    let cache = dir.join("cache");
+    let job = RenderJob::new(app::default_scene_path().unwrap(), 32, 18);
+    let opts = ReportOptions {
+        frames: 5,
+        warmup: 1,
+        knobs: knobs::parse_selection("max-depth=0").unwrap(),
+        count_rays: false,
+        truth_cache: Some(cache.clone()),
+        ..ReportOptions::new(job, &dir)
+    };
+    let ctx = common::validated_context();
+    let first = report::run(&ctx, &opts).expect("report runs");
+    let t = first.truth.clone().expect("a path-traced reference");
+    assert!(!t.cached && t.samples >= 256, "{t:?}");
+    let smallest = first.rows.iter().map(|r| r.flip_mean).fold(f64::INFINITY, f64::min);
+    assert!(t.noise() <= 0.5 * smallest || t.samples * 2 > opts.reference.max_samples, "{t:?} vs {smallest}");
+    report::write_all(&first, &dir).expect("report writes");
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(md.contains("The path-traced ground truth") && md.contains("Its own noise"), "{md}");
+
+    let again = report::run(&ctx, &opts).expect("report runs again");
+    let t2 = again.truth.clone().expect("a path-traced reference");
+    assert!(t2.cached && t2.samples == t.samples, "{t2:?}");
+    assert_eq!(again.reference().image.rgb, first.reference().image.rgb, "the cached image");
+
+    let files: Vec<_> = std::fs::read_dir(&cache).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(files.len(), 1, "{files:?}");
+    let bytes = std::fs::read(&files[0]).unwrap();
+    std::fs::write(&files[0], &bytes[..bytes.len() / 2]).unwrap();
+    let third = report::run(&ctx, &opts).expect("report runs with a truncated cache file");
+    assert!(!third.truth.as_ref().unwrap().cached, "a truncated file was trusted");
+    assert_eq!(third.reference().image.rgb, first.reference().image.rgb, "rendered again, the same seeds");
+    common::assert_validation_clean(&ctx);
 }

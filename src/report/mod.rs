@@ -23,6 +23,7 @@ pub mod prt;
 pub mod prt_write;
 pub mod stability;
 pub mod tone_sheet;
+pub mod truth;
 pub mod write;
 
 use std::path::{Path, PathBuf};
@@ -39,23 +40,41 @@ use knobs::{KnobSelection, Variant};
 use measure::Measured;
 use metrics::{Errors, FlipMap, LdrImage};
 
-/// The reference's settings: pure-RT mode and every effect, with these.
+/// The reference's settings. By default the path-traced ground truth
+/// (`mode` Path, report/truth.rs) with at least `samples` paths per pixel,
+/// doubled up to `max_samples` until its own noise is under half the
+/// smallest error measured. `--ref self`: the renderer itself in pure-RT
+/// (or hybrid) mode with every effect, `max_depth` and `min_weight`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReferenceSettings {
     pub max_depth: u32,
     pub min_weight: f32,
     /// None: the base settings' backend.
     pub backend: Option<Backend>,
-    /// Rt (camera rays) by default. Hybrid measures the other knobs without
-    /// the hybrid-vs-rt difference (the self-check) in every row.
+    /// Path: the ground truth. Rt (camera rays) or Hybrid: the self
+    /// reference; Hybrid measures the other knobs without the
+    /// hybrid-vs-rt difference (the self-check) in every row.
     pub mode: Mode,
+    pub samples: u32,
+    pub max_samples: u32,
+}
+
+impl ReferenceSettings {
+    /// `--ref self`: converged on the bundled scenes at a bounded cost (the
+    /// weight cutoff keeps dielectric branching, 2^depth without it, affordable).
+    pub const SELF: ReferenceSettings = ReferenceSettings {
+        max_depth: 16,
+        min_weight: 0.001,
+        backend: None,
+        mode: Mode::Rt,
+        samples: 256,
+        max_samples: 4096,
+    };
 }
 
 impl Default for ReferenceSettings {
-    /// Converged on the bundled scenes at a bounded cost: the weight cutoff
-    /// keeps dielectric branching (2^depth without it) affordable.
     fn default() -> Self {
-        ReferenceSettings { max_depth: 16, min_weight: 0.001, backend: None, mode: Mode::Rt }
+        ReferenceSettings { mode: Mode::Path, ..Self::SELF }
     }
 }
 
@@ -74,6 +93,8 @@ pub struct ReportOptions {
     pub count_rays: bool,
     /// The `aa` knob's reference: the base settings supersampled like this.
     pub aa_reference: Supersample,
+    /// Where path-traced references are cached (None: not cached).
+    pub truth_cache: Option<PathBuf>,
     pub out: PathBuf,
 }
 
@@ -87,6 +108,7 @@ impl ReportOptions {
             reference: ReferenceSettings::default(),
             count_rays: true,
             aa_reference: Supersample { factor: 4, filter: SampleFilter::Box },
+            truth_cache: None,
             out: out.into(),
         }
     }
@@ -102,7 +124,18 @@ impl ReportOptions {
             mode: self.reference.mode,
             effects,
             backend: self.reference.backend.unwrap_or(base.backend),
+            path: crate::render::PathSettings { samples: self.reference.samples, ..Default::default() },
             ..base
+        };
+        let settings = match settings.mode {
+            // No G-buffer: no debug view, no anti-aliasing, no budget.
+            Mode::Path => RenderSettings {
+                aa: crate::render::shading::AaMode::None,
+                budget: None,
+                reference: None,
+                ..settings
+            },
+            _ => settings,
         };
         Variant::new(settings)
     }
@@ -154,8 +187,10 @@ pub struct Report {
     pub reference_settings: ReferenceSettings,
     /// Hybrid against pure RT at the base settings.
     pub self_check: Distance,
-    /// The reference against a cheaper one.
+    /// The reference against a cheaper one (path-traced: its two halves).
     pub convergence: Distance,
+    /// How the path-traced reference was made (None: the self reference).
+    pub truth: Option<truth::Truth>,
     pub rows: Vec<Row>,
     /// Knob values not measured, with why.
     pub skipped: Vec<String>,
@@ -263,9 +298,15 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
             }
         }
     };
+    let truth_mode = reference.settings.mode == Mode::Path;
     index_of(&mut variants, reference, "reference".into());
-    let convergence = concrete(opts.convergence_variant())?;
-    let convergence = index_of(&mut variants, convergence, "convergence check".into());
+    // The path-traced reference measures its convergence itself (halves).
+    let convergence = match truth_mode {
+        true => None,
+        false => {
+            Some(index_of(&mut variants, concrete(opts.convergence_variant())?, "convergence check".into()))
+        }
+    };
     let with_mode =
         |m: Mode| concrete(Variant { settings: RenderSettings { mode: m, ..base.settings }, ..base });
     let hybrid = with_mode(Mode::Hybrid).context("the base settings cannot run")?;
@@ -318,8 +359,10 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         None
     };
 
+    let exposure = reference.settings.exposure;
     let mut renderers = Renderers(Vec::new());
-    let result: Result<Vec<Measured>> = (|| {
+    let mut truth = None;
+    let result: Result<(Vec<Measured>, Vec<Row>)> = (|| {
         if variants.iter().any(|(v, _)| v.budget_share.is_some()) {
             let renderer = renderers.get(ctx, &scene, width, height)?;
             let all = budget_cost_of_everything(ctx, renderer, &scene, &camera, &base.settings)?;
@@ -336,6 +379,7 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         let mut measured: Vec<Measured> = Vec::new();
         let started = std::time::Instant::now();
         let n = variants.len();
+        let cache = opts.truth_cache.as_deref();
         for (i, (v, label)) in variants.iter().enumerate() {
             let e = measure::scaled_extent(width, height, v.scale);
             eprintln!(
@@ -346,6 +390,13 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
                 started.elapsed().as_secs_f64()
             );
             let m = match (v.accel, animation) {
+                _ if i == 0 && truth_mode => {
+                    let renderer = renderers.get(ctx, &scene, e.width, e.height)?;
+                    let samples = opts.reference.samples;
+                    let (m, t) = truth::truth(ctx, renderer, &scene, &camera, v, samples, exposure, cache)?;
+                    truth = Some(t);
+                    Ok(m)
+                }
                 (Some(_), Some(animation)) => {
                     let playback = measure::Playback { animation, end: opts.job.time, fps: opts.job.fps };
                     let counts = (opts.warmup, opts.frames);
@@ -367,31 +418,63 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
             );
             measured.push(m);
         }
-        Ok(measured)
+        let mut rows = rows_against_reference(&planned, &measured, aa_reference.as_ref(), exposure)?;
+        // The truth's own noise must stay under the errors it measures.
+        while let Some(t) = truth.as_ref() {
+            let smallest = rows
+                .iter()
+                .filter(|r| r.knob != "aa" && r.flip_mean > 0.0)
+                .map(|r| r.flip_mean)
+                .fold(1.0, f64::min);
+            if t.noise() <= 0.5 * smallest || t.samples * 2 > opts.reference.max_samples {
+                break;
+            }
+            eprintln!(
+                "report: the reference's noise (ꟻLIP ~{:.5}) is over half the smallest error ({smallest:.5}): \
+                 {} samples per pixel",
+                t.noise(),
+                t.samples * 2
+            );
+            let renderer = renderers.get(ctx, &scene, width, height)?;
+            let (m, t) =
+                truth::truth(ctx, renderer, &scene, &camera, &variants[0].0, t.samples * 2, exposure, cache)?;
+            (measured[0], truth) = (m, Some(t));
+            rows = rows_against_reference(&planned, &measured, aa_reference.as_ref(), exposure)?;
+        }
+        Ok((measured, rows))
     })();
     renderers.destroy(ctx);
-    let measured = result?;
-
-    let exposure = reference.settings.exposure;
-    let reference_image = &measured[0].image;
-    let against_ref = |i: usize| metrics::compare_hdr(reference_image, &measured[i].image, exposure);
-    let mut rows = Vec::new();
-    for (knob, value, i) in planned {
-        if let (true, Some(aa)) = (knob == "aa", &aa_reference) {
-            let m = &measured[i];
-            let map = metrics::flip(&aa.ldr, &m.ldr).with_context(|| format!("comparing aa {value}"))?;
-            let psnr = crate::metrics::psnr_rgb8(&aa.ldr.rgb, &m.ldr.rgb, 3, None);
-            // relMSE is a radiance measure; anti-aliasing changes no radiance.
-            rows.push(Row { knob, value, measured: i, flip_mean: map.mean(), psnr, rel_mse: f64::NAN, map });
-            continue;
-        }
-        let Errors { flip_mean, psnr, rel_mse, map, .. } =
-            against_ref(i).with_context(|| format!("comparing {knob} {value} with the reference"))?;
-        rows.push(Row { knob, value, measured: i, flip_mean, psnr, rel_mse, map });
-    }
+    let (measured, rows) = result?;
+    let against_ref = |i: usize| metrics::compare_hdr(&measured[0].image, &measured[i].image, exposure);
     let check = metrics::compare_hdr(&measured[rt].image, &measured[hybrid].image, exposure)?;
-    let conv = against_ref(convergence)?;
     let e = &base.settings.effects;
+    let convergence = match (convergence, &truth) {
+        (Some(i), _) => {
+            let conv = against_ref(i)?;
+            let ef = &measured[i].variant.settings.effects;
+            Distance {
+                about: format!(
+                    "the reference against max depth {}, min weight {}",
+                    ef.max_depth,
+                    plot::significant(ef.min_weight as f64, 3)
+                ),
+                flip_mean: conv.flip_mean,
+                psnr: conv.psnr,
+                ldr: conv.ldr,
+            }
+        }
+        (None, Some(t)) => Distance {
+            about: format!(
+                "the first half of the reference's {} samples per pixel against the second (its own error is \
+                 about half this)",
+                t.samples
+            ),
+            flip_mean: t.halves_flip,
+            psnr: t.halves_psnr,
+            ldr: t.halves_ldr,
+        },
+        (None, None) => bail!("report: no convergence measure (internal)"),
+    };
     Ok(Report {
         scene: opts.job.scene.clone(),
         device: ctx.caps.name.clone(),
@@ -410,22 +493,40 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
             psnr: check.psnr,
             ldr: check.ldr,
         },
-        convergence: Distance {
-            about: format!(
-                "the reference against max depth {}, min weight {}",
-                measured[convergence].variant.settings.effects.max_depth,
-                plot::significant(measured[convergence].variant.settings.effects.min_weight as f64, 3)
-            ),
-            flip_mean: conv.flip_mean,
-            psnr: conv.psnr,
-            ldr: conv.ldr,
-        },
+        convergence,
+        truth,
         measured,
         base: hybrid,
         rows,
         skipped,
         aa_reference,
     })
+}
+
+/// Each planned knob value against the reference (`measured[0]`); the aa
+/// rows against the supersampled base instead.
+fn rows_against_reference(
+    planned: &[(&'static str, String, usize)],
+    measured: &[Measured],
+    aa_reference: Option<&AaReference>,
+    exposure: f32,
+) -> Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    for (knob, value, i) in planned.iter().cloned() {
+        if let (true, Some(aa)) = (knob == "aa", aa_reference) {
+            let m = &measured[i];
+            let map = metrics::flip(&aa.ldr, &m.ldr).with_context(|| format!("comparing aa {value}"))?;
+            let psnr = crate::metrics::psnr_rgb8(&aa.ldr.rgb, &m.ldr.rgb, 3, None);
+            // relMSE is a radiance measure; anti-aliasing changes no radiance.
+            rows.push(Row { knob, value, measured: i, flip_mean: map.mean(), psnr, rel_mse: f64::NAN, map });
+            continue;
+        }
+        let Errors { flip_mean, psnr, rel_mse, map, .. } =
+            metrics::compare_hdr(&measured[0].image, &measured[i].image, exposure)
+                .with_context(|| format!("comparing {knob} {value} with the reference"))?;
+        rows.push(Row { knob, value, measured: i, flip_mean, psnr, rel_mse, map });
+    }
+    Ok(rows)
 }
 
 /// Writes every output of `report` into `dir`; returns the files written.

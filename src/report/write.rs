@@ -102,35 +102,75 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
         report.device, report.width, report.height, report.frames, report.warmup
     );
     let _ = writeln!(s, "## Reference\n");
-    let _ = writeln!(
-        s,
-        "The same renderer at its most accurate affordable settings: {}, every effect on, max \
+    if let Some(t) = &report.truth {
+        let smallest = report
+            .rows
+            .iter()
+            .filter(|r| r.knob != "aa" && r.flip_mean > 0.0)
+            .map(|r| r.flip_mean)
+            .fold(f64::INFINITY, f64::min);
+        let _ = writeln!(
+            s,
+            "The path-traced ground truth (`--ref path`; README, \"Path-traced ground truth\"): {} paths per \
+             pixel, backend {}, exposure {} ({}), {}. Every row below is its distance from the true image, \
+             approximations shared by every setting included. `reference.png` is its tone-mapped image.\n",
+            t.samples,
+            r.backend,
+            report.reference_exposure,
+            r.config,
+            if t.cached {
+                "read from the cache (`--no-ref-cache` renders it again)".to_string()
+            } else {
+                format!("rendered in {:.1} s", t.seconds)
+            }
+        );
+        let verdict = if t.noise() <= 0.5 * smallest {
+            format!("under half the smallest error measured ({smallest:.5})")
+        } else {
+            format!(
+                "**not** under half the smallest error measured ({smallest:.5}): rows that close to it are within \
+                 the reference's noise (raise --ref-max-samples)"
+            )
+        };
+        let _ = writeln!(
+            s,
+            "Its own noise: the first and second halves of its samples differ by ꟻLIP {:.5} (PSNR {} dB), so the \
+             whole is about ꟻLIP {:.5} from its limit, {verdict}.\n",
+            t.halves_flip,
+            db(t.halves_psnr),
+            t.noise()
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "The same renderer at its most accurate affordable settings: {}, every effect on, max \
          depth {}, min weight {}, backend {}, exposure {} ({}). It took {:.3} ms per frame \
          (median). `reference.png` is its tone-mapped image.\n",
-        match rs.mode {
-            Mode::Rt => "pure-RT mode (camera rays traced)",
-            Mode::Path => "the path tracer (--ref-mode path)",
-            Mode::Hybrid =>
-                "hybrid mode (G-buffer primary hits; chosen with --ref-mode hybrid, so the \
+            match rs.mode {
+                Mode::Rt => "pure-RT mode (camera rays traced)",
+                Mode::Path => "the path tracer",
+                Mode::Hybrid =>
+                    "hybrid mode (G-buffer primary hits; chosen with --ref-mode hybrid, so the \
                              rows leave out the hybrid-vs-rt difference below)",
-        },
-        rs.max_depth,
-        rs.min_weight,
-        r.backend,
-        report.reference_exposure,
-        r.config,
-        r.timing.median
-    );
-    let c = &report.convergence;
-    let _ = writeln!(
-        s,
-        "Convergence: {}: ꟻLIP {:.5}, PSNR {} dB; tone-mapped: {} (the smaller, the closer the reference is \
-         to converged).\n",
-        c.about,
-        c.flip_mean,
-        db(c.psnr),
-        c.ldr.describe()
-    );
+            },
+            rs.max_depth,
+            rs.min_weight,
+            r.backend,
+            report.reference_exposure,
+            r.config,
+            r.timing.median
+        );
+        let c = &report.convergence;
+        let _ = writeln!(
+            s,
+            "Convergence: {}: ꟻLIP {:.5}, PSNR {} dB; tone-mapped: {} (the smaller, the closer the reference \
+             is to converged).\n",
+            c.about,
+            c.flip_mean,
+            db(c.psnr),
+            c.ldr.describe()
+        );
+    }
     let k = &report.self_check;
     let _ = writeln!(s, "## Self-check: hybrid vs rt at equal settings\n");
     let _ = writeln!(
