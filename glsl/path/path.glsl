@@ -2,10 +2,9 @@
 // tracer over the scene, materials, lights and environment the other
 // passes shade, on the same traversal: camera rays jittered uniformly
 // within the pixel (a box filter), next-event estimation at every
-// non-delta vertex towards each punctual light and one environment sample,
-// the environment sample and the BSDF sample combined by multiple
-// importance sampling (power heuristic), emission found by the BSDF
-// samples alone, Russian roulette from PATH_RR_START bounces on, at most
+// non-delta vertex towards each punctual light, one environment sample and
+// one emissive triangle (by power), each combined with the BSDF sample by
+// multiple importance sampling (power heuristic), Russian roulette from PATH_RR_START bounces on, at most
 // Frame.accum_bounces bounces. Shadow rays see glass as opaque
 // (FRAME_OPAQUE_OCCLUDERS): its light comes along refracted paths.
 // PATH_SAMPLES_PER_FRAME paths per pixel a frame, summed in f32 with
@@ -15,6 +14,7 @@
 #include "../common/integrator.glsl"
 #include "../common/sampling.glsl"
 #include "env_sampling.glsl"
+#include "emitters.glsl"
 #include "bsdf.glsl"
 
 layout(set = SET_PASS, binding = PATH_ACCUM, rgba32f) uniform image2D path_accum;
@@ -36,7 +36,8 @@ float visible(Surface s, vec3 gn, vec3 l_world, float tmax) {
 }
 
 // Next-event estimation at a surface: every punctual light, and the
-// environment once (weighted against the BSDF's sampling).
+// environment and one emissive triangle once each (weighted against the
+// BSDF's sampling).
 vec3 light_samples(Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng) {
     vec3 lit = vec3(0.0);
     float unused;
@@ -52,6 +53,28 @@ vec3 light_samples(Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng) {
             c *= visible(s, gn, ls.l, tmax);
         }
         lit += c;
+    }
+    RayHit e;
+    float choice;
+    if (sample_emitter(rng, e, choice)) {
+        TriangleWorld tw = triangle_world(e.instance, e.primitive);
+        vec3 en;
+        float area = triangle_area(tw, en);
+        vec3 b = bary3(e.bary);
+        vec3 to = tw.p0 * b.x + tw.p1 * b.y + tw.p2 * b.z - s.position;
+        e.t = length(to);
+        vec3 d = to / max(e.t, 1e-30);
+        vec3 l = bsdf_local(m, d);
+        float cos_l = abs(dot(en, d));
+        if (e.t > 0.0 && cos_l > 0.0 && consistent_side(d, l.z, gn) && hit_alpha_passes(e.instance, e.primitive, e.bary, e.t)) {
+            float pdf_light = emitter_pdf(choice, area, e.t, cos_l), pdf_bsdf;
+            vec3 egn;
+            bool eback;
+            vec3 le = hit_surface(e, s.position, d, 0.0, egn, eback).emissive;
+            vec3 c = bsdf_eval(m, v, l, pdf_bsdf) * le * (power_heuristic(pdf_light, pdf_bsdf) / pdf_light);
+            // The shadow ray stops short of the emitter itself.
+            if (max3(c) > 0.0) lit += c * visible(s, gn, d, e.t * (1.0 - 1e-3));
+        }
     }
     if (env_emits()) {
         float pdf_env, pdf_bsdf;
@@ -87,7 +110,17 @@ vec3 path_radiance(ivec2 px, inout uint rng) {
         vec3 gn;
         bool back_face;
         Surface s = hit_surface(h, o, dir, 0.0, gn, back_face);
-        radiance += throughput * s.emissive;
+        if (max3(s.emissive) > 0.0) {
+            // An emitter the light samples could have picked shares it.
+            float choice = prev_delta ? 0.0 : emitter_choice(h.instance, h.primitive);
+            float w = 1.0;
+            if (choice > 0.0) {
+                vec3 en;
+                float area = triangle_area(triangle_world(h.instance, h.primitive), en);
+                w = power_heuristic(prev_pdf, emitter_pdf(choice, area, h.t, abs(dot(en, dir))));
+            }
+            radiance += throughput * s.emissive * w;
+        }
         if (bounce >= frame.accum_bounces) break;
         vec3 v_world = -dir;
         face_viewer(s, v_world);

@@ -19,6 +19,16 @@ pub const MAX_TABLE_WIDTH: u32 = 1024;
 /// Each cell's weight gets this share of the mean cell weight added.
 const FLOOR: f64 = 1e-3;
 
+/// The table of the scene's map (the header alone without one) on the GPU.
+pub fn upload(ctx: &crate::vk::Context, scene: &crate::scene::Scene) -> anyhow::Result<crate::vk::Buffer> {
+    let table = match &scene.environment.map {
+        Some(map) => table(map),
+        None => empty_table(),
+    };
+    let usage = ash::vk::BufferUsageFlags::STORAGE_BUFFER;
+    crate::vk::Buffer::with_data(ctx, "environment sampling table", bytemuck::cast_slice(&table), usage)
+}
+
 /// The header alone: no map, the shader samples the sphere uniformly.
 pub fn empty_table() -> Vec<f32> {
     vec![0.0; ENV_CDF_HEADER as usize]

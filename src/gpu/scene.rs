@@ -12,8 +12,8 @@ use super::env_sh::project_environment;
 use super::origin::RenderOrigin;
 use super::shadow_map::ShadowMaps;
 use super::shared::{
-    BUDGET_STAT_WORDS, RAY_COUNTER_SLOTS, SCENE_BUDGET_MASK, SCENE_BUDGET_STATS, SCENE_ENV_CDF,
-    SCENE_ENV_MAP, SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS,
+    BUDGET_STAT_WORDS, RAY_COUNTER_SLOTS, SCENE_BUDGET_MASK, SCENE_BUDGET_STATS, SCENE_EMITTERS,
+    SCENE_ENV_CDF, SCENE_ENV_MAP, SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS,
     SCENE_MATERIALS, SCENE_PRT, SCENE_RAY_COUNTERS, SCENE_SHADOW_MAPS, SCENE_SHADOW_VIEWS, SCENE_TEXTURES,
     SCENE_VERTICES,
 };
@@ -81,6 +81,8 @@ pub struct GpuScene {
     /// The map's importance-sampling table for the path tracer
     /// (gpu/env_sampling.rs), or its header alone.
     pub env_cdf: Buffer,
+    /// The emissive triangles as lights for the path tracer (gpu/emitters.rs).
+    pub emitters: Buffer,
     /// The budget's raster shadow fallback (gpu/shadow_map.rs).
     pub shadow: ShadowMaps,
     pub set: DescriptorSet,
@@ -145,6 +147,7 @@ impl GpuScene {
             samplers: Vec::new(),
             env_map: Image::null(),
             env_cdf: Buffer::null(),
+            emitters: Buffer::null(),
             clusters: super::clusters::Clusters::null(),
             env_sampler: vk::Sampler::null(),
             shadow: ShadowMaps::null(),
@@ -255,16 +258,8 @@ impl GpuScene {
         // No history yet (`valid` 0): the first measured frame converges at once.
         upload_now(ctx, "exposure state", |up| up.write(&self.exposure, 0, &[0u8; EXPOSURE_STATE_BYTES]))?;
         (self.env_map, self.env_mean, self.env_sh) = upload_environment(ctx, scene)?;
-        let table = match &scene.environment.map {
-            Some(map) => super::env_sampling::table(map),
-            None => super::env_sampling::empty_table(),
-        };
-        self.env_cdf = Buffer::with_data(
-            ctx,
-            "environment sampling table",
-            bytemuck::cast_slice(&table),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        self.env_cdf = super::env_sampling::upload(ctx, scene)?;
+        self.emitters = super::emitters::upload(ctx, scene)?;
         self.shadow.create(ctx, scene)?;
         self.env_sampler = create_sampler(
             ctx,
@@ -296,6 +291,7 @@ impl GpuScene {
             (SCENE_SHADOW_VIEWS, Binding::one(storage)),
             (SCENE_PRT, Binding::one(storage)),
             (SCENE_ENV_CDF, Binding::one(storage)),
+            (SCENE_EMITTERS, Binding::one(storage)),
             // Bindless textures: variable-count, so the last binding.
             (
                 SCENE_TEXTURES,
@@ -319,6 +315,7 @@ impl GpuScene {
         set.write_buffer(ctx, SCENE_SHADOW_VIEWS, self.shadow.views.raw);
         set.write_buffer(ctx, SCENE_PRT, self.prt.raw);
         set.write_buffer(ctx, SCENE_ENV_CDF, self.env_cdf.raw);
+        set.write_buffer(ctx, SCENE_EMITTERS, self.emitters.raw);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         set.write_image(ctx, SCENE_ENV_MAP, 0, self.env_map.view, self.env_sampler, read);
         set.write_image(ctx, SCENE_SHADOW_MAPS, 0, self.shadow.image.view, self.shadow.sampler, read);
@@ -399,6 +396,7 @@ impl GpuScene {
         }
         self.env_map.destroy(ctx);
         self.env_cdf.destroy(ctx);
+        self.emitters.destroy(ctx);
         self.shadow.destroy(ctx);
         self.clusters.destroy(ctx);
         unsafe {

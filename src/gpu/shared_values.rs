@@ -49,8 +49,15 @@ shared! {
     // without a map (constant environments are sampled uniformly).
     id SCENE_ENV_CDF = 14;
     uint ENV_CDF_HEADER = 4;
+    // The path tracer's emissive triangles as lights (gpu/emitters.rs,
+    // glsl/path/emitters.glsl): EMITTER_HEADER_WORDS words (emitter count,
+    // instance count), per instance its first emitter (NO_EMITTER: none),
+    // per emitter (instance, primitive), then the emitters' CDF.
+    id SCENE_EMITTERS = 15;
+    uint EMITTER_HEADER_WORDS = 2;
+    uint NO_EMITTER = 2147483647;
     // Bindless textures: variable-count, so the last binding.
-    id SCENE_TEXTURES = 15;
+    id SCENE_TEXTURES = 16;
     // Texels per side of a light's shadow map: at 1024 a directional light
     // fitted to a 40 m scene puts a texel at 4 cm, under a Sponza column's
     // detail, for 4 MiB a light (2048 quadruples memory and raster time).

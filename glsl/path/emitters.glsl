@@ -1,0 +1,70 @@
+// The path tracer's emissive triangles as lights (table: gpu/emitters.rs,
+// layout: shared_values.rs SCENE_EMITTERS): a triangle chosen by power,
+// a point uniform on it; the pdf in solid angle at the shaded point, and
+// the same pdf for an emitter a BSDF sample hit (for the MIS weights).
+// Emission is two-sided, as where a path hits it (hit_surface).
+#ifndef EMITTERS_GLSL
+#define EMITTERS_GLSL
+#include "../common/hit.glsl"
+#include "../common/sampling.glsl"
+
+layout(set = SET_SCENE, binding = SCENE_EMITTERS, scalar) readonly buffer Emitters { uint emitters[]; };
+
+uint emitter_count() {
+    return emitters[0];
+}
+
+uint emitter_pairs() {
+    return EMITTER_HEADER_WORDS + emitters[1];
+}
+
+float emitter_cdf(uint k) {
+    return uintBitsToFloat(emitters[emitter_pairs() + 2u * emitters[0] + k]);
+}
+
+// The probability that the light sample picks triangle `primitive` of
+// `instance` (0: it is not an emitter).
+float emitter_choice(uint instance, uint primitive) {
+    if (emitter_count() == 0u || instance >= emitters[1]) return 0.0;
+    uint first = emitters[EMITTER_HEADER_WORDS + instance];
+    if (first == NO_EMITTER) return 0.0;
+    return emitter_cdf(first + primitive + 1u) - emitter_cdf(first + primitive);
+}
+
+// Solid-angle pdf of a light sample landing on a triangle of world area
+// `area`, seen at distance `dist` under cosine `cos_l` to its normal.
+float emitter_pdf(float choice, float area, float dist, float cos_l) {
+    return choice * dist * dist / max(area * cos_l, 1e-30);
+}
+
+// Area and unit normal of a world-space triangle.
+float triangle_area(TriangleWorld t, out vec3 n) {
+    vec3 c = cross(t.p1 - t.p0, t.p2 - t.p0);
+    float len = length(c);
+    n = len > 0.0 ? c / len : vec3(0.0, 1.0, 0.0);
+    return 0.5 * len;
+}
+
+// Picks an emitter triangle by power and a uniform point on it: the hit a
+// ray towards it would report (t unset), and the choice's probability.
+bool sample_emitter(inout uint rng, out RayHit h, out float choice) {
+    uint n = emitter_count();
+    if (n == 0u) return false;
+    float u = next_random(rng);
+    uint lo = 0u, hi = n;
+    while (lo + 1u < hi) {
+        uint mid = (lo + hi) >> 1u;
+        if (emitter_cdf(mid) <= u) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    choice = emitter_cdf(lo + 1u) - emitter_cdf(lo);
+    uint base = emitter_pairs() + 2u * lo;
+    float r = sqrt(next_random(rng)), v = next_random(rng);
+    h = RayHit(emitters[base], emitters[base + 1u], vec2(r * (1.0 - v), r * v), 0.0);
+    return choice > 0.0;
+}
+
+#endif
