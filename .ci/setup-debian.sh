@@ -9,8 +9,8 @@ set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
 
 # The mirror this machine already uses for bookworm (deb822 .sources or one-line
-# sources.list), so backports come from the same place (a local mirror or proxy);
-# deb.debian.org only when no bookworm source is configured at all.
+# sources.list), so backports come from the same place (a local mirror or proxy).
+# The script names no host itself: with no bookworm source it fails, saying so.
 debian_mirror() {
   local uri files
   shopt -s nullglob
@@ -30,7 +30,12 @@ debian_mirror() {
                          if ($(i+1) == "bookworm") { print $i; exit } }' || true)
   fi
   shopt -u nullglob
-  echo "${uri:-http://deb.debian.org/debian}"
+  if [ -z "$uri" ]; then
+    echo "setup: no bookworm apt source configured in $APT_ETC/sources.list or $APT_ETC/sources.list.d/:" \
+      "add one (e.g. a deb822 .sources file with 'Suites: bookworm') and run this again" >&2
+    return 1
+  fi
+  echo "$uri"
 }
 
 # True when some source already provides bookworm-backports.
@@ -46,7 +51,7 @@ pkgs=(libvulkan1 vulkan-tools vulkan-validationlayers cmake ninja-build python3 
 APT_ETC=${APT_ETC:-/etc/apt}
 if [ "${1:-}" = "--print-mirror" ]; then
   debian_mirror
-  exit 0
+  exit
 fi
 
 need_install=0
@@ -60,7 +65,7 @@ fi
 
 if [ "$need_install" = 1 ] || [ "$lvp_ok" = 0 ]; then
   if [ ! -f /etc/apt/sources.list.d/bookworm-backports.sources ] && ! backports_configured; then
-    mirror=$(debian_mirror)
+    mirror=$(debian_mirror) || exit 1
     echo "setup: adding bookworm-backports from $mirror"
     cat > /etc/apt/sources.list.d/bookworm-backports.sources <<SRC
 Types: deb

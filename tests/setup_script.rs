@@ -1,10 +1,13 @@
 //! `.ci/setup-debian.sh` takes bookworm-backports from the mirror the machine
-//! already uses for bookworm, not from a host name written into the script.
+//! already uses for bookworm, not from a host name written into the script;
+//! without one it fails and says what to configure.
 
 use std::path::Path;
 use std::process::Command;
 
-fn mirror_for(files: &[(&str, &str)]) -> String {
+/// `--print-mirror` with these files under a private APT_ETC: its exit
+/// status, stdout and stderr.
+fn print_mirror(files: &[(&str, &str)]) -> (bool, String, String) {
     let dir = std::env::temp_dir().join(format!("hybrid-rt-apt-{}-{}", std::process::id(), files.len()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("sources.list.d")).unwrap();
@@ -13,9 +16,15 @@ fn mirror_for(files: &[(&str, &str)]) -> String {
     }
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join(".ci/setup-debian.sh");
     let out = Command::new("bash").arg(script).arg("--print-mirror").env("APT_ETC", &dir).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     std::fs::remove_dir_all(&dir).unwrap();
-    String::from_utf8(out.stdout).unwrap().trim().to_string()
+    let text = |b: Vec<u8>| String::from_utf8(b).unwrap().trim().to_string();
+    (out.status.success(), text(out.stdout), text(out.stderr))
+}
+
+fn mirror_for(files: &[(&str, &str)]) -> String {
+    let (ok, stdout, stderr) = print_mirror(files);
+    assert!(ok, "{stderr}");
+    stdout
 }
 
 #[test]
@@ -41,7 +50,18 @@ fn mirror_comes_from_one_line_sources_list() {
     assert_eq!(mirror_for(&[("sources.list", list)]), "http://list.example.org/debian");
 }
 
+/// No bookworm source at all: the script names no host of its own, it
+/// fails and says what to configure.
 #[test]
-fn mirror_falls_back_to_deb_debian_org() {
-    assert_eq!(mirror_for(&[]), "http://deb.debian.org/debian");
+fn no_bookworm_source_is_a_clear_error() {
+    let other = "Types: deb\nURIs: http://other.example.org/debian\nSuites: trixie\n";
+    for files in [&[][..], &[("sources.list.d/other.sources", other)][..]] {
+        let (ok, stdout, stderr) = print_mirror(files);
+        assert!(!ok, "succeeded with {stdout:?}");
+        assert!(stdout.is_empty(), "{stdout}");
+        assert!(stderr.contains("no bookworm") && stderr.contains("sources.list"), "{stderr}");
+    }
+    let script =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(".ci/setup-debian.sh")).unwrap();
+    assert!(!script.contains("deb.debian.org"), "the script names a mirror host");
 }

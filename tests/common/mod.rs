@@ -131,9 +131,10 @@ pub fn golden_diff(frame: &FrameOutput, name: &str) -> GoldenDiff {
 }
 
 /// Checks a frame against `tests/golden/<name>.png` (tolerance above). With
-/// UPDATE_GOLDEN=1 the reference is (re)written instead — never under CI,
-/// where a rewritten reference would make the check pass by construction.
-/// The rendered frame is always saved next to the test target for inspection.
+/// UPDATE_GOLDEN=1 the reference is (re)written and the test fails, so a
+/// run that rewrites goldens never passes (review the new image, then run
+/// again without it); never under CI (`.ci/run` sets CI=true itself). The
+/// rendered frame is always saved next to the test target for inspection.
 pub fn check_golden(frame: &FrameOutput, name: &str) -> GoldenDiff {
     frame.rgb8().save(out_dir().join(format!("{name}.png"))).unwrap();
     if std::env::var("UPDATE_GOLDEN").is_ok_and(|v| v == "1") {
@@ -141,8 +142,9 @@ pub fn check_golden(frame: &FrameOutput, name: &str) -> GoldenDiff {
             !std::env::var("CI").is_ok_and(|v| v == "true"),
             "UPDATE_GOLDEN=1 with CI=true: references are never rewritten in CI; unset UPDATE_GOLDEN"
         );
-        frame.rgb8().save(repo_path(&format!("tests/golden/{name}.png"))).unwrap();
-        return GoldenDiff { max: 0, share: 0.0, psnr_db: f64::INFINITY };
+        let path = repo_path(&format!("tests/golden/{name}.png"));
+        frame.rgb8().save(&path).unwrap();
+        panic!("UPDATE_GOLDEN=1: rewrote {}; review it and run again without UPDATE_GOLDEN", path.display());
     }
     let d = golden_diff(frame, name);
     eprintln!(
