@@ -553,6 +553,15 @@ impl Cli {
             Some(Command::Info) | Some(Command::Compare { .. }) | None => return,
         };
         let problem = match &self.command {
+            Some(Command::Report { ref_kind: RefKind::Path, ref_mode, ref_max_depth, ref_min_weight, .. })
+                if *ref_mode != Mode::Rt || *ref_max_depth != 16 || *ref_min_weight != 0.001 =>
+            {
+                Some(
+                    "--ref-mode, --ref-max-depth and --ref-min-weight set the self reference: add --ref self \
+                     (the default reference is the path-traced truth)"
+                        .into(),
+                )
+            }
             Some(Command::Report { knobs, stability, tone_sheet, .. })
                 if view.fps.is_some()
                     && (*stability

@@ -223,6 +223,8 @@ fn report_cli() {
         (&["--knobs", "depth"][..], "max-depth"),
         (&["--knobs", "max-depth=99"], "0..=64"),
         (&["--frames", "3"], "at least 5"),
+        (&["--ref-mode", "hybrid"], "--ref self"),
+        (&["--ref-samples", "2"], "4 to"),
     ] {
         let out = run(args);
         let stderr = String::from_utf8_lossy(&out.stderr);
