@@ -21,10 +21,16 @@ const MAGIC: &[u8; 8] = b"HRTPRT\0\x01";
 /// `$HYBRID_RT_PRT_CACHE`, else `$XDG_CACHE_HOME/hybrid-rt/prt`, else
 /// `~/.cache/hybrid-rt/prt`; `None` without any of them.
 pub fn default_cache_dir() -> Option<PathBuf> {
+    user_cache_dir(CACHE_DIR_ENV, "prt")
+}
+
+/// A cache directory by the platform convention: `$override_env`, else
+/// `$XDG_CACHE_HOME/hybrid-rt/<sub>`, else `~/.cache/hybrid-rt/<sub>`.
+pub fn user_cache_dir(override_env: &str, sub: &str) -> Option<PathBuf> {
     let env = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty()).map(PathBuf::from);
-    env(CACHE_DIR_ENV)
-        .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("hybrid-rt/prt")))
-        .or_else(|| env("HOME").map(|h| h.join(".cache/hybrid-rt/prt")))
+    env(override_env)
+        .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("hybrid-rt").join(sub)))
+        .or_else(|| env("HOME").map(|h| h.join(".cache/hybrid-rt").join(sub)))
 }
 
 /// How a transfer was obtained.

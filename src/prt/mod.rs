@@ -28,7 +28,7 @@ use std::time::Instant;
 use anyhow::{ensure, Result};
 use glam::{DMat3, DVec3};
 
-pub use cache::{default_cache_dir, key as cache_key, CacheOutcome, PrtCache, CACHE_DIR_ENV};
+pub use cache::{default_cache_dir, key as cache_key, user_cache_dir, CacheOutcome, PrtCache, CACHE_DIR_ENV};
 pub use transfer::offset_origin;
 
 use crate::scene::sh::{check_bands, ShCoeffs};

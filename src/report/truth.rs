@@ -29,10 +29,7 @@ const MAGIC: &[u8; 8] = b"HRTTRUT\x01";
 /// `$HYBRID_RT_TRUTH_CACHE`, else `$XDG_CACHE_HOME/hybrid-rt/truth`, else
 /// `~/.cache/hybrid-rt/truth`; `None` without any of them.
 pub fn default_cache_dir() -> Option<PathBuf> {
-    let env = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty()).map(PathBuf::from);
-    env(CACHE_DIR_ENV)
-        .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("hybrid-rt/truth")))
-        .or_else(|| env("HOME").map(|h| h.join(".cache/hybrid-rt/truth")))
+    crate::prt::user_cache_dir(CACHE_DIR_ENV, "truth")
 }
 
 /// The path-traced reference of one view: how it was made (its image is
