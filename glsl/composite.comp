@@ -3,7 +3,8 @@
 // `direct`) + ambient environment light + the traced reflection/refraction
 // chain (pass `specular`, variant HAS_SPECULAR); the environment where the
 // camera ray missed; variant REFERENCE takes the ambient radiance from the
-// `reference` pass's accumulation. Variant DEBUG_VIEWS shows a G-buffer view instead and
+// `reference` pass's accumulation; variant TERMS adds the `terms` pass's
+// (the report's attribution: terms supplied by the path tracer). Variant DEBUG_VIEWS shows a G-buffer view instead and
 // reads neither light pass.
 #include "common/gbuffer_read.glsl"
 #include "common/integrator.glsl"
@@ -15,6 +16,9 @@ layout(set = SET_PASS, binding = DIRECT_IN, rgba32f) uniform readonly image2D di
 #endif
 #ifdef HAS_SPECULAR
 layout(set = SET_PASS, binding = SPECULAR_IN, rgba32f) uniform readonly image2D specular_in;
+#endif
+#ifdef TERMS
+layout(set = SET_PASS, binding = TERMS_IN, rgba32f) uniform readonly image2D terms_in;
 #endif
 #ifdef REFERENCE
 layout(set = SET_PASS, binding = REFERENCE_IN, rgba32f) uniform readonly image2D reference_in;
@@ -54,6 +58,7 @@ void main() {
     }
     case DEBUG_MATERIAL: color = vec3(s.metallic, s.roughness, s.transmission); break;
     case DEBUG_OBJECT: color = hash_color(instances[p.instance].object_id + 1u); break;
+    case DEBUG_OBJECT_ID: color = vec3(float(instances[p.instance].object_id + 1u)); break;
     case DEBUG_SELECTION: {
         float grey = dot(s.base_color, vec3(0.2126, 0.7152, 0.0722));
         // Paper mode's Figure 2: red = every effect traced; per effect
@@ -81,6 +86,11 @@ void main() {
     color = primary_emissive(px, p.instance, p.primitive, p.b) + imageLoad(direct_in, px).rgb + ambient;
 #ifdef HAS_SPECULAR
     color += imageLoad(specular_in, px).rgb;
+#endif
+#ifdef TERMS
+    // (Noise in a term can take a dark pixel below zero.)
+    vec4 terms = imageLoad(terms_in, px);
+    color = max(color + terms.rgb / max(terms.a, 1.0), vec3(0.0));
 #endif
 #endif
     imageStore(hdr_out, px, vec4(color, 1.0));

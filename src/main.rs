@@ -178,6 +178,10 @@ enum Command {
         /// --ref path: render the reference even if a cached one exists, and cache nothing.
         #[arg(long)]
         no_ref_cache: bool,
+        /// --ref path: samples per pixel of each term of the default frame's
+        /// error attribution (0 leaves it out).
+        #[arg(long, default_value_t = 256)]
+        attribution_samples: u32,
         /// --ref self: maximum recursion depth (pure-RT mode, every effect).
         #[arg(long, default_value_t = 16, value_parser = parse_max_depth, allow_hyphen_values = true)]
         ref_max_depth: u32,
@@ -527,6 +531,7 @@ impl ViewArgs {
                 ambient_from_scene: self.env.ambient.is_none(),
                 prt: self.env.prt_options(),
                 reference: self.env.reference(),
+                terms: 0,
                 path: self.path.settings(),
                 primary_visibility: self.primary_visibility,
                 occlusion_culling: self.occlusion_culling == OnOff::On,
@@ -553,6 +558,9 @@ impl Cli {
             Some(Command::Info) | Some(Command::Compare { .. }) | None => return,
         };
         let problem = match &self.command {
+            Some(Command::Report { ref_kind: RefKind::Own, attribution_samples, .. }) if *attribution_samples != 256 => {
+                Some("--attribution-samples measures against the path-traced truth: leave out --ref self".into())
+            }
             Some(Command::Report { ref_kind: RefKind::Path, ref_mode, ref_max_depth, ref_min_weight, .. })
                 if *ref_mode != Mode::Rt || *ref_max_depth != 16 || *ref_min_weight != 0.001 =>
             {
@@ -691,6 +699,7 @@ fn run(cli: Cli) -> Result<()> {
             ref_max_samples,
             ref_cache,
             no_ref_cache,
+            attribution_samples,
             ref_max_depth,
             ref_min_weight,
             ref_backend,
@@ -767,6 +776,7 @@ fn run(cli: Cli) -> Result<()> {
                     (false, None) => report::truth::default_cache_dir(),
                 },
                 count_rays: !no_ray_counts,
+                attribution_samples,
                 aa_reference: Supersample { factor: ref_supersample, filter: ref_ss_filter },
                 ..ReportOptions::new(view.job()?, out)
             };

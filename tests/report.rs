@@ -225,6 +225,7 @@ fn report_cli() {
         (&["--frames", "3"], "at least 5"),
         (&["--ref-mode", "hybrid"], "--ref self"),
         (&["--ref-samples", "2"], "4 to"),
+        (&["--ref", "self", "--attribution-samples", "8"], "leave out --ref self"),
     ] {
         let out = run(args);
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -232,7 +233,17 @@ fn report_cli() {
         let line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("{stderr}"));
         assert!(line.contains(needle), "{args:?}: '{needle}' not in {line}");
     }
-    let out = run(&["--knobs", "mode=hybrid", "--frames", "5", "--warmup", "1", "--no-ray-counts"]);
+    let out = run(&[
+        "--knobs",
+        "mode=hybrid",
+        "--frames",
+        "5",
+        "--warmup",
+        "1",
+        "--no-ray-counts",
+        "--attribution-samples",
+        "8",
+    ]);
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{stderr}");
     // A line when each setting starts, and one with its times when it is
@@ -240,6 +251,9 @@ fn report_cli() {
     assert!(stderr.contains("report [1/3] reference (16x9"), "{stderr}");
     assert!(stderr.lines().any(|l| l.starts_with("report [3/3]") && l.contains("ms median")), "{stderr}");
     assert!(stdout.contains("self-check, hybrid vs rt at equal settings: ꟻLIP"), "{stdout}");
+    // The attribution's progress, and its file.
+    assert!(stderr.contains("report: attribution [6/6] every term"), "{stderr}");
+    assert!(stdout.contains("attribution.csv"), "{stdout}");
     let csv = std::fs::read_to_string(d.join("report.csv")).unwrap();
     assert_eq!(csv.lines().count(), 2, "{csv}");
     assert!(csv.lines().nth(1).unwrap().starts_with("mode,hybrid,"), "{csv}");
@@ -262,6 +276,7 @@ fn accel_update_knob_plays_the_animation() {
         warmup: 3,
         knobs: knobs::parse_selection("accel-update=refit:full").unwrap(),
         count_rays: false,
+        attribution_samples: 0,
         ..ReportOptions::new(job, &dir)
     };
     let ctx = common::validated_context();
@@ -298,6 +313,7 @@ fn accel_update_knob_plays_the_animation() {
         warmup: 1,
         knobs: knobs::parse_selection("max-depth=0,accel-update").unwrap(),
         count_rays: false,
+        attribution_samples: 0,
         ..ReportOptions::new(still, &dir)
     };
     let rep = report::run(&ctx, &skipping).expect("report runs");
@@ -317,6 +333,7 @@ fn budget_knob_spans_raster_only_to_every_object_traced() {
         warmup: 1,
         knobs: knobs::parse_selection("budget=0:1,effects=none").unwrap(),
         count_rays: false,
+        attribution_samples: 0,
         ..ReportOptions::new(job, &dir)
     };
     let ctx = common::validated_context();
@@ -389,17 +406,39 @@ fn path_traced_reference_is_measured_and_cached() {
         knobs: knobs::parse_selection("max-depth=0").unwrap(),
         count_rays: false,
         truth_cache: Some(cache.clone()),
+        attribution_samples: 16,
         ..ReportOptions::new(job, &dir)
     };
     let ctx = common::validated_context();
     let first = report::run(&ctx, &opts).expect("report runs");
     let t = first.truth.clone().expect("a path-traced reference");
     assert!(!t.cached && t.samples >= 256, "{t:?}");
+    // The default frame's error per term (each, then all) and per object.
+    let a = first.attribution.as_ref().expect("an attribution against the truth");
+    let names: Vec<&str> = a.rows.iter().map(|r| r.name.as_str()).collect();
+    let expected: Vec<&str> =
+        report::attribution::TERMS.iter().map(|t| t.name).chain(["every term"]).collect();
+    assert_eq!(names, expected);
+    assert_eq!(a.samples, 16);
+    let base = first.measured[first.base].image.clone();
+    let base_flip =
+        metrics::compare_hdr(&first.reference().image, &base, first.reference_exposure).unwrap().flip_mean;
+    assert!((a.base_flip - base_flip).abs() < 1e-9, "{} vs the base row's {base_flip}", a.base_flip);
+    let every = a.rows.last().unwrap();
+    assert!(every.flip_mean < a.base_flip, "every term supplied: {} vs {}", every.flip_mean, a.base_flip);
+    let ground = a.objects.iter().find(|o| o.name == "ground").expect("the ground in the object table");
+    assert!(ground.pixels > 100 && ground.truth > 0.0 && ground.flip > 0.0);
+    assert!(a.objects.iter().map(|o| o.pixels).sum::<usize>() <= 32 * 18);
     let smallest = first.rows.iter().map(|r| r.flip_mean).fold(f64::INFINITY, f64::min);
     assert!(t.noise() <= 0.5 * smallest || t.samples * 2 > opts.reference.max_samples, "{t:?} vs {smallest}");
     report::write_all(&first, &dir).expect("report writes");
     let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
     assert!(md.contains("The path-traced ground truth") && md.contains("Its own noise"), "{md}");
+    assert!(md.contains("| every term |") && md.contains("| ground |"), "{md}");
+    let csv = std::fs::read_to_string(dir.join("attribution.csv")).unwrap();
+    let width = common::split_csv(csv.lines().next().unwrap()).len();
+    assert!(csv.lines().all(|l| common::split_csv(l).len() == width), "{csv}");
+    assert!(csv.lines().any(|l| l.starts_with("object,ground,")), "{csv}");
 
     let again = report::run(&ctx, &opts).expect("report runs again");
     let t2 = again.truth.clone().expect("a path-traced reference");

@@ -114,9 +114,16 @@ bool hit_alpha_passes(uint instance, uint primitive, vec2 b, float t) {
     return hit_alpha(instance, primitive, b, t) >= m.alpha_cutoff;
 }
 
+// Shadow rays of this invocation see glass as opaque, as the path tracer's
+// do (FRAME_OPAQUE_OCCLUDERS, for the whole frame): the `terms` pass sets
+// it around the rays it compares with the truth; the RT pipeline's any-hit
+// shader takes it from the payload.
+bool g_opaque_occluders = false;
+
 // Light transmitted through one occluder crossing: 0 for opaque, the
 // transmission-weighted base colour for transmissive materials (0 with
-// FRAME_OPAQUE_OCCLUDERS), 1 where an alpha mask cuts the surface away.
+// FRAME_OPAQUE_OCCLUDERS or g_opaque_occluders), 1 where an alpha mask
+// cuts the surface away.
 vec3 occluder_transmittance(uint instance, uint primitive, vec2 b) {
     Instance inst = instances[instance];
     Material m = materials[inst.material];
@@ -125,9 +132,16 @@ vec3 occluder_transmittance(uint instance, uint primitive, vec2 b) {
     if (m.alpha_mode != ALPHA_OPAQUE && base.a < m.alpha_cutoff) return vec3(1.0);
     // The path tracer's shadow rays: glass bends light, so a straight ray
     // through it carries none (its light arrives along refracted paths).
-    if ((frame.flags & FRAME_OPAQUE_OCCLUDERS) != 0u) return vec3(0.0);
+    if ((frame.flags & FRAME_OPAQUE_OCCLUDERS) != 0u || g_opaque_occluders) return vec3(0.0);
     float tr = clamp(m.transmission * sample_tex_lod(m.tex_transmission, uv, 0.0, vec4(1.0)).r, 0.0, 1.0);
     return base.rgb * tr;
+}
+
+// Beer-Lambert transmittance of the medium a ray travelled through to the
+// back face it hit (h): the hit instance's material's volume, closed
+// meshes assumed (KHR_materials_volume).
+vec3 volume_transmittance(RayHit h) {
+    return exp(-materials[instances[h.instance].material].volume_sigma * h.t);
 }
 
 // Full surface at a hit. `geo_normal` is the world-space geometric normal

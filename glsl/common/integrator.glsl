@@ -270,7 +270,9 @@ vec3 trace_branches() {
             bool back_face;
             Cone at_hit = Cone(b.cone.width + b.cone.spread * h.t, b.cone.spread);
             Surface s = hit_surface(h, b.origin, b.dir, at_hit.width, gn, back_face);
-            radiance += shade(s, -b.dir, gn, back_face, b.weight, b.depth, at_hit);
+            // Leaving a mesh from inside: the branch crossed its medium.
+            vec3 w = back_face ? b.weight * volume_transmittance(h) : b.weight;
+            radiance += shade(s, -b.dir, gn, back_face, w, b.depth, at_hit);
         } else {
             radiance += b.weight * environment(b.dir);
         }

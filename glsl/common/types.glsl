@@ -32,8 +32,12 @@ struct Material {
     int tex_occlusion;
     int tex_emissive;
     int tex_transmission;
+    // Beer-Lambert attenuation per world unit inside the closed mesh
+    // (KHR_materials_volume; 0: clear).
+    vec3 volume_sigma;
     uint pad0;
     uint pad1;
+    uint pad2;
 };
 
 struct Instance {
@@ -93,9 +97,10 @@ struct Frame {
     float hist_high;
     float speed_brighten;
     float speed_darken;
-    // The accumulating passes (`reference`, `path`): frames accumulated so
-    // far (0: start over; also their random seed) and the longest path
-    // (passes/reference.glsl, path/path.glsl); the path tracer's clamp of a
+    // The accumulating passes (`reference`, `path`, `terms`): frames
+    // accumulated so far (0: start over; also their random seed) and the
+    // longest path (passes/reference.glsl, path/path.glsl), or for `terms`
+    // its TERM_* selection; the path tracer's clamp of a
     // sample's radiance (<= 0: none, the unbiased estimate).
     uint accum_frame;
     uint accum_bounces;

@@ -110,6 +110,8 @@ vec3 path_radiance(ivec2 px, inout uint rng) {
         vec3 gn;
         bool back_face;
         Surface s = hit_surface(h, o, dir, 0.0, gn, back_face);
+        // Leaving a mesh from inside: the path crossed its medium.
+        if (back_face) throughput *= volume_transmittance(h);
         if (max3(s.emissive) > 0.0) {
             // An emitter the light samples could have picked shares it.
             float choice = prev_delta ? 0.0 : emitter_choice(h.instance, h.primitive);

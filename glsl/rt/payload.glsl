@@ -15,6 +15,9 @@ struct TracePayload {
     uint camera_pixel;
     // A reflection/refraction ray's cone (g_alpha_cone): its alpha tests' LOD.
     vec2 alpha_cone;
+    // Shadow rays: 1 where the ray-generation shader's g_opaque_occluders
+    // is set (glass blocks), for the any-hit shader.
+    uint opaque;
 };
 const uint NOT_A_CAMERA_RAY = 0xffffffffu;
 // Hit groups: HIT_GROUP_* in generated/shared.glsl.

@@ -27,6 +27,7 @@ vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
     payload.transmittance = vec3(1.0);
     payload.camera_pixel = NOT_A_CAMERA_RAY;
     payload.alpha_cone = vec2(0.0);
+    payload.opaque = g_opaque_occluders ? 1u : 0u;
     uint flags = gl_RayFlagsTerminateOnFirstHitEXT | gl_RayFlagsSkipClosestHitShaderEXT;
     traceRayEXT(tlas, flags, MASK_SHADOW, HIT_GROUP_SHADOW, HIT_GROUP_STRIDE, 0u, o, 0.0, d, tmax, 0);
     return payload.hit != 0u ? vec3(0.0) : payload.transmittance;

@@ -557,7 +557,8 @@ fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
         tex_occlusion: tex_index(&m.occlusion_texture),
         tex_emissive: tex_index(&m.emissive_texture),
         tex_transmission: tex_index(&m.transmission_texture),
-        pad: [0; 2],
+        volume_sigma: m.volume_sigma(),
+        pad: [0; 3],
     }
 }
 

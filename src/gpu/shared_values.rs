@@ -148,6 +148,21 @@ shared! {
     id PATH_OUT = 1;
     uint PATH_SAMPLES_PER_FRAME = 4;
     uint PATH_RR_START = 3;
+    // The report's attribution (render/passes/terms.rs,
+    // glsl/passes/terms.glsl): per pixel the sum of the selected terms'
+    // path-traced estimate minus what the hybrid frame shades for them (rgb)
+    // and the sample count (a), written by `terms`, added by `composite`;
+    // the terms (Frame.accum_bounces holds the selection); samples per
+    // pixel per frame; the longest chain through glass and mirrors.
+    id TERMS_OUT = 6;
+    id TERMS_IN = 9;
+    uint TERM_ENV_SPECULAR = 1;
+    uint TERM_VISIBILITY = 2;
+    uint TERM_INDIRECT = 4;
+    uint TERM_EMITTERS = 8;
+    uint TERM_CAUSTICS = 16;
+    uint TERMS_SAMPLES_PER_FRAME = 4;
+    uint TERMS_CHAIN = 8;
     // Set 1 of the tone-mapping pass and of the luminance reduction.
     id TONEMAP_IN = 0;
     id TONEMAP_OUT = 1;
@@ -313,11 +328,14 @@ shared! {
     uint DEBUG_OBJECT = 5;
     // The budget's selection: ray-traced objects red, the others grey.
     uint DEBUG_SELECTION = 6;
+    // For tools (the report's per-object error): linear radiance holds the
+    // primary hit's object index + 1 in every channel, 0 where nothing is hit.
+    uint DEBUG_OBJECT_ID = 7;
 
     // Strides of the host/shader structs in bytes (scalar layout); the Rust
     // mirrors assert them, tests/shared_layout.rs reads them from SPIR-V.
     uint VERTEX_STRIDE = 48;
-    uint MATERIAL_STRIDE = 96;
+    uint MATERIAL_STRIDE = 112;
     uint INSTANCE_STRIDE = 160;
     uint LIGHT_STRIDE = 64;
     uint BVH_NODE_STRIDE = 32;

@@ -34,7 +34,9 @@ pub struct GpuMaterial {
     pub tex_occlusion: i32,
     pub tex_emissive: i32,
     pub tex_transmission: i32,
-    pub pad: [u32; 2],
+    /// Material::volume_sigma.
+    pub volume_sigma: [f32; 3],
+    pub pad: [u32; 3],
 }
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == MATERIAL_STRIDE as usize);
 
@@ -101,7 +103,7 @@ pub struct GpuFrame {
     pub speed_darken: f32,
     /// Frames already accumulated by the `reference` or `path` pass (0: it
     /// starts over), also its random seed; and the longest path (reference:
-    /// 1 = visibility only; path: bounces).
+    /// 1 = visibility only; path: bounces), or the `terms` pass's TERM_* bits.
     pub accum_frame: u32,
     pub accum_bounces: u32,
     /// The path tracer's clamp of a sample's radiance (<= 0: none).

@@ -575,6 +575,10 @@ impl Renderer {
         } else if let Some(r) = settings.reference {
             frame.accum_bounces = r.bounces;
             frame.accum_frame = self.reference.next(&frame);
+        } else if settings.terms != 0 {
+            // The `terms` pass: the selection where the others keep their path length.
+            frame.accum_bounces = settings.terms;
+            frame.accum_frame = self.reference.next(&frame);
         }
         debug_assert!(Mat4::from_cols_array(&frame.view).is_finite());
         self.gpu.write_frame(&mut Uploads { ring: &mut self.ring, slot }, &frame)

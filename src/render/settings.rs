@@ -139,6 +139,10 @@ pub enum DebugView {
     Object,
     /// The ray-tracing budget's selection (`--budget`): traced objects red.
     Selection,
+    /// For tools (the report's per-object error): the linear radiance is
+    /// the primary hit's object index + 1, 0 where nothing is hit.
+    #[value(skip)]
+    ObjectId,
 }
 
 impl DebugView {
@@ -152,6 +156,7 @@ impl DebugView {
             DebugView::Material => DEBUG_MATERIAL,
             DebugView::Object => DEBUG_OBJECT,
             DebugView::Selection => DEBUG_SELECTION,
+            DebugView::ObjectId => DEBUG_OBJECT_ID,
         }
     }
 }
@@ -180,6 +185,10 @@ pub struct RenderSettings {
     /// The ray-traced reference replaces the ambient radiance at primary
     /// hits (--reference-samples; render/reference.rs).
     pub reference: Option<super::ReferenceSettings>,
+    /// The report's attribution: these `TERM_*` terms come from the path
+    /// tracer, accumulated over frames like the reference (pass `terms`;
+    /// 0: none). Not with `reference` or a debug view. No flag.
+    pub terms: u32,
     /// The path tracer's samples, path length and clamp (`--mode path` only).
     pub path: super::path::PathSettings,
     /// How hybrid mode finds primary hits (--primary-visibility).
@@ -213,6 +222,7 @@ impl Default for RenderSettings {
             ambient_from_scene: false,
             prt: PrtOptions::default(),
             reference: None,
+            terms: 0,
             path: Default::default(),
             primary_visibility: PrimaryVisibility::Auto,
             occlusion_culling: false,

@@ -259,6 +259,9 @@ pub struct ShadingConfig {
     /// The ray-traced ambient reference runs (--reference-samples; not in
     /// debug views): the `reference` pass exists and traces.
     pub reference: bool,
+    /// The report's attribution terms run (RenderSettings::terms; not in
+    /// debug views, not beside `reference`): the `terms` pass exists.
+    pub terms: bool,
     /// How hybrid mode finds primary hits: `Raster` (pass `gbuffer`),
     /// `Traced` (pass `visibility_trace`) or `Auto` (both exist, each frame
     /// records one: render/visibility.rs). `Raster` in pure ray-traced mode
@@ -294,11 +297,16 @@ impl ShadingConfig {
             ..wanted
         };
         let reference = settings.reference.is_some() && !debug_view;
+        if settings.terms != 0 && (reference || debug_view) {
+            bail!("the attribution terms replace neither the ambient reference nor a debug view");
+        }
+        let terms = settings.terms != 0;
         use crate::render::settings::PrimaryVisibility as Pv;
         let visibility = if mode == Mode::Hybrid { settings.primary_visibility } else { Pv::Raster };
         let traces = mode == Mode::Rt
             || visibility != Pv::Raster
             || reference
+            || terms
             || effects.shadows
             || effects.reflections
             || effects.refractions;
@@ -328,6 +336,7 @@ impl ShadingConfig {
             aa: settings.aa,
             edge_aa_tiled: settings.edge_aa_tiled,
             reference,
+            terms,
             visibility,
             // Only the raster G-buffer pass (hybrid, raster or auto visibility) culls.
             occlusion: settings.occlusion_culling
@@ -356,6 +365,7 @@ impl ShadingConfig {
             aa: AaMode::None,
             edge_aa_tiled: settings.edge_aa_tiled,
             reference: false,
+            terms: false,
             visibility: crate::render::settings::PrimaryVisibility::Raster,
             occlusion: false,
         })
@@ -414,6 +424,7 @@ impl ShadingConfig {
             if on.is_empty() { "none".to_string() } else { on.join(", ") },
             if self.budget { " (per-object budget)" } else { "" }
         ) + if self.reference { ", ray-traced ambient reference" } else { "" }
+            + if self.terms { ", path-traced attribution terms" } else { "" }
             + match (self.mode, self.visibility) {
                 (Mode::Rt | Mode::Path, _) => "",
                 (_, crate::render::settings::PrimaryVisibility::Raster) => ", primary visibility raster",

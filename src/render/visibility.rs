@@ -295,6 +295,7 @@ mod tests {
             aa: super::super::shading::AaMode::None,
             edge_aa_tiled: true,
             reference: false,
+            terms: false,
             visibility: PrimaryVisibility::Auto,
             occlusion: false,
         }

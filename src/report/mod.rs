@@ -13,6 +13,7 @@
 //! `prt` and `prt_write` (`report --prt`: the environment light's ambient
 //! against a ray-traced reference).
 
+pub mod attribution;
 pub mod budget_paths;
 pub mod compare;
 pub mod knobs;
@@ -95,6 +96,9 @@ pub struct ReportOptions {
     pub aa_reference: Supersample,
     /// Where path-traced references are cached (None: not cached).
     pub truth_cache: Option<PathBuf>,
+    /// Samples per pixel of each attribution term against the path-traced
+    /// truth (report/attribution.rs); 0: no attribution.
+    pub attribution_samples: u32,
     pub out: PathBuf,
 }
 
@@ -109,6 +113,7 @@ impl ReportOptions {
             count_rays: true,
             aa_reference: Supersample { factor: 4, filter: SampleFilter::Box },
             truth_cache: None,
+            attribution_samples: 256,
             out: out.into(),
         }
     }
@@ -196,6 +201,9 @@ pub struct Report {
     pub skipped: Vec<String>,
     /// What the `aa` knob's rows were compared with, when it ran.
     pub aa_reference: Option<AaReference>,
+    /// The base frame's error per object and per missing term (path-traced
+    /// truth, `attribution_samples` > 0).
+    pub attribution: Option<attribution::Attribution>,
 }
 
 /// The `aa` knob's reference: anti-aliasing changes only the final 8-bit
@@ -362,7 +370,7 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
     let exposure = reference.settings.exposure;
     let mut renderers = Renderers(Vec::new());
     let mut truth = None;
-    let result: Result<(Vec<Measured>, Vec<Row>)> = (|| {
+    let result: Result<(Vec<Measured>, Vec<Row>, Option<attribution::Attribution>)> = (|| {
         if variants.iter().any(|(v, _)| v.budget_share.is_some()) {
             let renderer = renderers.get(ctx, &scene, width, height)?;
             let all = budget_cost_of_everything(ctx, renderer, &scene, &camera, &base.settings)?;
@@ -441,10 +449,21 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
             (measured[0], truth) = (m, Some(t));
             rows = rows_against_reference(&planned, &measured, aa_reference.as_ref(), exposure)?;
         }
-        Ok((measured, rows))
+        let attribution = match (&truth, opts.attribution_samples) {
+            (Some(_), n) if n > 0 => {
+                let renderer = renderers.get(ctx, &scene, width, height)?;
+                let base = &measured[hybrid].variant.settings;
+                let a =
+                    attribution::run(ctx, renderer, &scene, &camera, base, &measured[0].image, exposure, n)
+                        .context("report: the attribution of the default frame's error")?;
+                Some(a)
+            }
+            _ => None,
+        };
+        Ok((measured, rows, attribution))
     })();
     renderers.destroy(ctx);
-    let (measured, rows) = result?;
+    let (measured, rows, attribution) = result?;
     let against_ref = |i: usize| metrics::compare_hdr(&measured[0].image, &measured[i].image, exposure);
     let check = metrics::compare_hdr(&measured[rt].image, &measured[hybrid].image, exposure)?;
     let e = &base.settings.effects;
@@ -500,6 +519,7 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         rows,
         skipped,
         aa_reference,
+        attribution,
     })
 }
 
@@ -552,6 +572,11 @@ pub fn write_all(report: &Report, dir: &Path) -> Result<Vec<PathBuf>> {
     let plot = dir.join("error_vs_time.png");
     plot::error_vs_time(report, &plot)?;
     files.push(plot);
+    if let Some(a) = &report.attribution {
+        let csv = dir.join("attribution.csv");
+        std::fs::write(&csv, a.csv()).with_context(|| format!("writing {}", csv.display()))?;
+        files.push(csv);
+    }
     let csv = dir.join("report.csv");
     std::fs::write(&csv, write::csv(report)).with_context(|| format!("writing {}", csv.display()))?;
     files.push(csv);

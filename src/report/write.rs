@@ -74,7 +74,7 @@ pub fn error_map_name(row: &Row) -> String {
     format!("error_map_{}_{value}.png", row.knob)
 }
 
-fn db(v: f64) -> String {
+pub fn db(v: f64) -> String {
     if v.is_infinite() {
         "∞".into()
     } else {
@@ -259,6 +259,9 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
         }
         s.push('\n');
     }
+    if let Some(a) = &report.attribution {
+        s += &a.markdown(&report.measured[report.base].config);
+    }
     // Per-pass breakdown: one column per pass any setting ran.
     let mut passes: Vec<&'static str> = Vec::new();
     for m in &report.measured {
@@ -291,6 +294,9 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
          the reference). Lower and further left is better."
     );
     let _ = writeln!(s, "- `report.csv`: these rows, columns `{CSV_HEADER},{CSV_EXTRA}`.");
+    if report.attribution.is_some() {
+        let _ = writeln!(s, "- `attribution.csv`: the default frame's error per term and per object.");
+    }
     for (knob, value, file) in maps {
         let _ = writeln!(s, "- `{file}`: per-pixel ꟻLIP error of the worst {knob} setting ({value}).");
     }

@@ -101,6 +101,11 @@ pub struct Material {
     pub transmission_texture: Option<TextureRef>,
     /// KHR_materials_ior (glTF default 1.5).
     pub ior: f32,
+    /// KHR_materials_volume: the colour white light turns after travelling
+    /// `attenuation_distance` (world units; infinite: a clear medium)
+    /// inside the closed mesh (Beer-Lambert along the refracted paths).
+    pub attenuation_color: [f32; 3],
+    pub attenuation_distance: f32,
     /// Whether geometry with this material occludes light (scene-file flag).
     pub casts_shadows: bool,
 }
@@ -126,8 +131,22 @@ impl Default for Material {
             transmission: 0.0,
             transmission_texture: None,
             ior: 1.5,
+            attenuation_color: [1.0; 3],
+            attenuation_distance: f32::INFINITY,
             casts_shadows: true,
         }
+    }
+}
+
+impl Material {
+    /// The medium's attenuation coefficient per world unit, per channel:
+    /// -ln(colour) / distance (0 for a clear medium; a black channel is
+    /// capped at e^-20 per distance).
+    pub fn volume_sigma(&self) -> [f32; 3] {
+        if !self.attenuation_distance.is_finite() {
+            return [0.0; 3];
+        }
+        self.attenuation_color.map(|c| -c.max(2e-9).ln() / self.attenuation_distance)
     }
 }
 

@@ -5,8 +5,8 @@
 use ash::vk;
 
 use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{direct, gbuffer, reference, specular, Init, PassDesc};
-use crate::gpu::shared::{DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN};
+use super::{direct, gbuffer, reference, specular, terms, Init, PassDesc};
+use crate::gpu::shared::{DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN, TERMS_IN};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
 use crate::render::targets::TargetDesc;
@@ -26,18 +26,25 @@ fn io(c: &ShadingConfig) -> Vec<Io> {
     if reference::skip(c).is_none() {
         io.push(Io::new(REFERENCE_IN, &reference::ACCUMULATION, Access::StorageRead));
     }
+    if terms::skip(c).is_none() {
+        io.push(Io::new(TERMS_IN, &terms::ACCUMULATION, Access::StorageRead));
+    }
     io.push(Io::new(HDR_OUT, &HDR, Access::StorageWrite));
     io
 }
 
 fn shader(c: &ShadingConfig) -> &'static str {
-    let reference = reference::skip(c).is_none();
-    match (c.debug_view, specular::skip(c).is_none(), reference) {
-        (true, _, _) => "composite_debug",
-        (false, true, true) => "composite_specular_reference",
-        (false, true, false) => "composite_specular",
-        (false, false, true) => "composite_reference",
-        (false, false, false) => "composite.comp",
+    // (ShadingConfig::resolve allows terms neither beside the reference
+    // nor in a debug view.)
+    let (reference, terms) = (reference::skip(c).is_none(), terms::skip(c).is_none());
+    match (c.debug_view, specular::skip(c).is_none(), reference, terms) {
+        (true, ..) => "composite_debug",
+        (false, true, true, _) => "composite_specular_reference",
+        (false, true, false, true) => "composite_specular_terms",
+        (false, true, false, false) => "composite_specular",
+        (false, false, true, _) => "composite_reference",
+        (false, false, false, true) => "composite_terms",
+        (false, false, false, false) => "composite.comp",
     }
 }
 

@@ -19,6 +19,7 @@ pub mod primary;
 pub mod reference;
 pub mod shadow_map;
 pub mod specular;
+pub mod terms;
 pub mod tonemap;
 pub mod visibility_trace;
 
@@ -36,7 +37,8 @@ use crate::vk::Context;
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
 /// or traced visibility buffer + resolve, or camera rays) -> per-object statistics for the budget -> the budget's
 /// fallback shadow maps -> direct light -> the ambient reference (with
-/// --reference-samples) -> reflection/refraction chain ->
+/// --reference-samples) -> the report's attribution terms ->
+/// reflection/refraction chain ->
 /// composite -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one technique). The scene update (skinning, refit, top level)
 /// comes before it, recorded by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
@@ -48,6 +50,7 @@ pub const FRAME: &[PassDesc] = &[
     shadow_map::PASS,
     direct::PASS,
     reference::PASS,
+    terms::PASS,
     specular::PASS,
     composite::PASS,
     luminance::PASS,

@@ -42,6 +42,9 @@ pub(super) fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> 
         alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
         double_sided: m.double_sided(),
         transmission: transmission.as_ref().map_or(0.0, |t| t.transmission_factor()),
+        // (thicknessFactor is for rasterizers that cannot trace the mesh.)
+        attenuation_color: m.volume().map_or([1.0; 3], |v| v.attenuation_color()),
+        attenuation_distance: m.volume().map_or(f32::INFINITY, |v| v.attenuation_distance()),
         transmission_texture,
         ior: m.ior().unwrap_or(1.5),
         casts_shadows: true,

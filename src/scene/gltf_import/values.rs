@@ -69,7 +69,8 @@ pub(super) fn check_material(m: &gltf::Material) -> Result<()> {
         )?;
     }
     if let Some(v) = m.volume() {
-        // Not rendered (the extension is ignored), but checked like the rest.
+        // Attenuation inside the mesh is rendered by the ray-traced
+        // refraction chain and the path tracer; the thickness is not used.
         within(v.thickness_factor(), 0.0, f32::MAX, "KHR_materials_volume thicknessFactor", ">= 0")?;
         let d = v.attenuation_distance();
         // The default is +infinity ("no attenuation").

@@ -80,6 +80,15 @@ pub(super) fn material_from_def(m: MaterialDef) -> Result<Material> {
     let strength = non_negative(m.emissive_strength.unwrap_or(1.0), "emissive_strength")?;
     let ior = m.ior.unwrap_or(1.5);
     ensure!(ior >= 1.0 && ior.is_finite(), "ior must be at least 1");
+    let attenuation_color = m.attenuation_color.unwrap_or([1.0; 3]);
+    for c in attenuation_color {
+        unit_interval(c, "attenuation_color")?;
+    }
+    let attenuation_distance = m.attenuation_distance.unwrap_or(f32::INFINITY);
+    ensure!(
+        attenuation_distance > 0.0 && !attenuation_distance.is_nan(),
+        "attenuation_distance must be above 0 (a length in world units; leave it out for a clear medium)"
+    );
     Ok(Material {
         name: m.name.get_ref().clone(),
         base_color,
@@ -90,6 +99,8 @@ pub(super) fn material_from_def(m: MaterialDef) -> Result<Material> {
         double_sided: m.double_sided.unwrap_or(false),
         transmission: unit_interval(m.transmission.unwrap_or(0.0), "transmission")?,
         ior,
+        attenuation_color,
+        attenuation_distance,
         casts_shadows: m.casts_shadows.unwrap_or(true),
         ..Material::default()
     })

@@ -91,6 +91,8 @@ pub(super) struct MaterialDef {
     pub(super) emissive_strength: Option<f32>,
     pub(super) transmission: Option<f32>,
     pub(super) ior: Option<f32>,
+    pub(super) attenuation_color: Option<[f32; 3]>,
+    pub(super) attenuation_distance: Option<f32>,
     pub(super) opacity: Option<f32>,
     pub(super) double_sided: Option<bool>,
     pub(super) casts_shadows: Option<bool>,

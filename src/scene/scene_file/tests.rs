@@ -632,3 +632,36 @@ fn camera_up_rolls_the_view_and_is_validated() {
     let e = error_of("camera_up_nan", &scene("up = [nan, 1, 0]"));
     assert!(e.contains("up"), "{e}");
 }
+
+#[test]
+fn volume_attenuation_parses_and_bad_values_name_the_key() {
+    let material = |extra: &str| {
+        format!(
+            "[[material]]\nname = \"tinted\"\ntransmission = 1.0\n{extra}\n\n[[object]]\nname = \"ball\"\n\
+             primitive = \"sphere\"\nmaterial = \"tinted\"\n"
+        )
+    };
+    let scene = Scene::load(&write(
+        "volume",
+        "scene.toml",
+        &material("attenuation_color = [0.5, 0.8, 1.0]\nattenuation_distance = 2.0"),
+    ))
+    .unwrap();
+    let m = scene.materials.iter().find(|m| m.name == "tinted").unwrap();
+    let sigma = m.volume_sigma();
+    let expected = [0.5f32.ln() / -2.0, 0.8f32.ln() / -2.0, 0.0];
+    assert!(sigma.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-6), "{sigma:?}");
+    // Without a distance the medium is clear, whatever the colour.
+    let clear =
+        Scene::load(&write("volume-clear", "scene.toml", &material("attenuation_color = [0.5, 0.5, 0.5]")))
+            .unwrap();
+    assert_eq!(clear.materials.iter().find(|m| m.name == "tinted").unwrap().volume_sigma(), [0.0; 3]);
+    for (extra, needle) in [
+        ("attenuation_color = [1.5, 1.0, 1.0]", "attenuation_color"),
+        ("attenuation_distance = 0.0", "attenuation_distance"),
+        ("attenuation_distance = -1.0", "attenuation_distance"),
+    ] {
+        let err = error_of("volume-bad", &material(extra));
+        assert!(err.contains(needle) && err.contains("tinted"), "{extra}: {err}");
+    }
+}

@@ -1,0 +1,175 @@
+// Pass `terms` (the report's attribution, report/attribution.rs): for the
+// terms selected in Frame.accum_bounces (TERM_*), the path-traced estimate
+// of the light the term carries to the primary hit minus what the hybrid
+// frame shades for it there, so that `composite` (variant TERMS) shows the
+// hybrid frame with those terms supplied by the path tracer. Per sample one
+// direction from the diffuse lobe (cosine) and one from the specular lobe
+// (GGX visible normals, Heitz 2018) of the path tracer's BSDF
+// (path/bsdf.glsl); what the ray meets decides the term:
+// - nothing: the environment. Through the specular lobe of a surface the
+//   hybrid does not trace as a mirror: TERM_ENV_SPECULAR, which replaces
+//   the hybrid's f0 x unshadowed SH ambient; through the diffuse lobe:
+//   TERM_VISIBILITY, which replaces its diffuse SH (or PRT) ambient.
+// - a rough opaque surface: TERM_INDIRECT, one bounce, the surface shaded
+//   as the hybrid shades a secondary hit (direct light with shadow rays +
+//   its SH ambient); its emission: TERM_EMITTERS (the hybrid lights
+//   nothing with emissive surfaces).
+// - glass or a perfectly smooth surface: TERM_CAUSTICS, the light it
+//   passes on along a path of at most TERMS_CHAIN BSDF samples (ending at
+//   the environment, or at a rough opaque surface shaded as above); it
+//   replaces the hybrid's direct light through glass (shadow rays that
+//   pass transmissive occluders where the truth's are blocked).
+// Sums accumulate with their count like `reference`'s; seeded by pixel and
+// Frame.accum_frame, so every backend traces the same rays. Each sample
+// follows one lobe, chosen by its albedo; the pixel's program traces and
+// shades at one call site each (a software device compiles every inlined
+// traversal: lavapipe took 12 minutes for a version with six).
+#include "../common/gbuffer_read.glsl"
+#include "../common/integrator.glsl"
+#include "../common/prt.glsl"
+#include "../path/bsdf.glsl"
+
+layout(set = SET_PASS, binding = TERMS_OUT, rgba32f) uniform image2D terms_accum;
+layout(set = SET_PASS, binding = DIRECT_IN, rgba32f) uniform readonly image2D direct_in;
+
+bool term_on(uint bit) {
+    return (frame.accum_bounces & bit) != 0u;
+}
+
+// Light a path continues through: glass, or a perfectly smooth surface.
+bool passes_light_on(Surface s) {
+    return s.transmission * (1.0 - s.metallic) > 0.0 || s.roughness * s.roughness < DELTA_ALPHA;
+}
+
+// A surface to shade as the hybrid shades a secondary hit (direct light
+// + its SH ambient, integrator.glsl's shade without branches), times weight.
+struct Shading {
+    Surface s;
+    vec3 v, gn;
+    vec3 weight;
+    bool ambient;  // false: direct light only
+    bool opaque;   // shadow rays blocked by glass (g_opaque_occluders)
+};
+
+// One sample at the primary hit p: the light it brings (emission and
+// environment) and the surface it ends at, to shade (`end.weight` 0: none).
+vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out Shading end) {
+    end.weight = vec3(0.0);
+    // The lobe: diffuse (cosine) or, where the hybrid does not trace a
+    // mirror, specular (visible normals), in proportion to their albedo.
+    uint beyond = TERM_VISIBILITY | TERM_INDIRECT | TERM_EMITTERS | TERM_CAUSTICS;
+    float pd = term_on(beyond) ? m.p_diff : 0.0;
+    float ps = !mirror && term_on(beyond | TERM_ENV_SPECULAR) ? m.p_spec : 0.0;
+    if (pd + ps <= 0.0) return vec3(0.0);
+    bool diffuse = next_random(rng) * (pd + ps) < pd;
+    float u1 = next_random(rng), u2 = next_random(rng);
+    vec3 l, w;
+    if (diffuse) {
+        float r = sqrt(u1), phi = 2.0 * PI * u2;
+        l = vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u1, 0.0)));
+        // Lambert weighted by 1 - F, as bsdf_eval: f cos / (cos / pi).
+        w = (1.0 - f_schlick(m.f0, max(dot(v, normalize(v + l)), 0.0))) * m.diffuse * ((pd + ps) / pd);
+    } else if (m.delta) {
+        l = vec3(-v.x, -v.y, v.z);
+        w = m.spec_w * f_schlick(m.f0, max(v.z, 1e-4)) * ((pd + ps) / ps);
+    } else {
+        vec3 h = sample_vndf(v, m.alpha, u1, u2);
+        l = reflect(-v, h);
+        if (l.z <= 0.0) return vec3(0.0);
+        float a2 = m.alpha * m.alpha, lv = ggx_lambda(max(v.z, 1e-4), a2);
+        // f cos / pdf = F G2 / G1 (height-correlated Smith).
+        float g = (1.0 + lv) / (1.0 + lv + ggx_lambda(l.z, a2));
+        w = m.spec_w * f_schlick(m.f0, max(dot(v, h), 0.0)) * g * ((pd + ps) / ps);
+    }
+    vec3 d = normalize(bsdf_world(m, l));
+    if (dot(d, p.gn) <= 0.0) return vec3(0.0);  // below the geometry: occluded
+    uint miss_term = diffuse ? TERM_VISIBILITY : TERM_ENV_SPECULAR;
+    vec3 o = offset_ray(p.s.position, p.gn, p.s.extent);
+    vec3 radiance = vec3(0.0);
+    // First the ray from the primary hit, then (caustics) a path through
+    // glass and smooth surfaces of at most TERMS_CHAIN more rays.
+    for (uint k = 0u; k <= TERMS_CHAIN; ++k) {
+        bool first = k == 0u;
+        RayHit h;
+        count_ray(RAY_KIND_SECONDARY);
+        if (!trace_closest(o, d, RAY_TMAX, h)) {
+            if (term_on(first ? miss_term : TERM_CAUSTICS)) radiance += w * environment(d);
+            break;
+        }
+        vec3 gn;
+        bool back_face;
+        Surface s = hit_surface(h, o, d, 0.0, gn, back_face);
+        if (back_face) w *= volume_transmittance(h);  // crossed a medium
+        if (term_on(first ? TERM_EMITTERS : TERM_CAUSTICS)) radiance += w * s.emissive;
+        if (!passes_light_on(s)) {
+            if (term_on(first ? TERM_INDIRECT : TERM_CAUSTICS)) end = Shading(s, -d, gn, w, true, false);
+            break;
+        }
+        if (!term_on(TERM_CAUSTICS)) break;
+        vec3 v_world = -d;
+        face_viewer(s, v_world);
+        Bsdf mb = bsdf_at(s, v_world, back_face);
+        BsdfSample bs;
+        if (!bsdf_sample(mb, bsdf_local(mb, v_world), rng, bs)) break;
+        d = normalize(bsdf_world(mb, bs.l));
+        if ((dot(d, gn) > 0.0) != (bs.l.z > 0.0)) break;  // leaked through the geometry
+        w *= bs.weight;
+        if (!(max3(w) > 0.0) || any(isinf(w))) break;  // also NaN
+        o = offset_ray(s.position, bs.l.z > 0.0 ? gn : -gn, s.extent);
+    }
+    return radiance;
+}
+
+// What the hybrid frame's ambient shades for the selected terms at p
+// (composite's ambient split by lobe).
+vec3 hybrid_ambient_share(PrimaryHit p, bool mirror) {
+    Surface s = p.s;
+    vec3 prt_e;
+    vec3 radiance = prt_irradiance(p.instance, p.primitive, p.b, prt_e) ? prt_e / PI : ambient_radiance(s.normal);
+    vec3 f0 = surface_f0(s);
+    vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
+    vec3 share = vec3(0.0);
+    if (term_on(TERM_VISIBILITY)) share += radiance * s.occlusion * diffuse * (1.0 - f0);
+    if (term_on(TERM_ENV_SPECULAR) && !mirror) share += radiance * s.occlusion * f0;
+    return share;
+}
+
+void terms_pixel(ivec2 px) {
+    PrimaryHit p;
+    if (outside_frame(px) || !read_primary(px, p)) return;
+    vec3 v_world = -p.dir;
+    face_viewer(p.s, v_world);
+    g_effects = budget_effects(p.instance, px);
+    bool mirror = is_mirror(p.s, 0u);
+    Bsdf m = bsdf_at(p.s, v_world, p.back_face);
+    vec3 v = bsdf_local(m, v_world);
+    uint rng = pcg_hash(uint(px.x) + pcg_hash(uint(px.y) + pcg_hash(frame.accum_frame ^ 0x7f4a7c15u)));
+    float n = float(TERMS_SAMPLES_PER_FRAME);
+    vec3 sum = -n * hybrid_ambient_share(p, mirror);
+    // Iteration 0 shades the primary hit's direct light with glass opaque:
+    // with `direct`'s (glass transmits) subtracted, the hybrid's light
+    // through glass, which the caustics replace.
+    for (uint i = 0u; i <= TERMS_SAMPLES_PER_FRAME; ++i) {
+        Shading end;
+        vec3 c = vec3(0.0);
+        if (i == 0u) {
+            end = Shading(p.s, v_world, p.gn, vec3(term_on(TERM_CAUSTICS) ? n : 0.0), false, true);
+            if (term_on(TERM_CAUSTICS)) c -= n * imageLoad(direct_in, px).rgb;
+        } else {
+            c = terms_path(p, m, v, mirror, rng, end);
+        }
+        if (max3(end.weight) > 0.0) {
+            g_opaque_occluders = end.opaque;
+            face_viewer(end.s, end.v);
+            vec3 e = direct_light(end.s, end.v, end.gn);
+            if (end.ambient) e += ambient_light(end.s, false);
+            c += end.weight * e;
+            g_opaque_occluders = false;
+        }
+        if (any(isnan(c)) || any(isinf(c))) c = vec3(0.0);
+        sum += c;
+    }
+    vec4 acc = vec4(sum, n);
+    if (frame.accum_frame != 0u) acc += imageLoad(terms_accum, px);
+    imageStore(terms_accum, px, acc);
+}

@@ -1,0 +1,54 @@
+//! Pass `terms` (the report's attribution, report/attribution.rs): per
+//! pixel, the path-traced estimate of the selected light-transport terms
+//! the hybrid frame approximates or leaves out (environment specular on
+//! rough surfaces, diffuse visibility, one indirect bounce, emissive
+//! surfaces, caustics: `TERM_*`) minus what the hybrid shades for them,
+//! accumulated over frames into its own target, which `composite` adds
+//! (glsl/passes/terms.glsl). Only with `RenderSettings::terms`; never in
+//! a debug view or beside the ambient reference.
+
+use ash::vk;
+
+use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::{direct, gbuffer, Init, PassDesc};
+use crate::gpu::shared::{DIRECT_IN, TERMS_OUT};
+use crate::render::frame::{Access, Use};
+use crate::render::shading::ShadingConfig;
+use crate::render::targets::TargetDesc;
+use crate::vk::pipeline::Specialization;
+
+/// Per pixel the sum of the samples' differences (rgb) and their count
+/// (a), kept from frame to frame.
+pub static ACCUMULATION: TargetDesc = TargetDesc::kept("terms accumulation", vk::Format::R32G32B32A32_SFLOAT);
+
+fn io(_: &ShadingConfig) -> Vec<Io> {
+    let mut io = gbuffer::reads();
+    // The hybrid's direct light, which the caustics term corrects.
+    io.push(Io::new(DIRECT_IN, &direct::DIRECT, Access::StorageRead));
+    io.push(Io::new(TERMS_OUT, &ACCUMULATION, Access::StorageWrite));
+    io
+}
+
+pub fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    if c.terms {
+        None
+    } else {
+        Some("no attribution terms (report only)")
+    }
+}
+
+pub const PASS: PassDesc = PassDesc {
+    name: "terms",
+    skip,
+    uses: |c| {
+        // Read-modify-write: the previous frames' sum is read too; the
+        // primary hit's PRT transfer lives with the scene geometry.
+        let mut u = fullscreen::uses(&io(c), true);
+        u.push(Use::image(&ACCUMULATION, Access::StorageRead));
+        u
+    },
+    create: |i: &Init| {
+        let spec = Specialization::new(&i.config.specialization());
+        FullScreen::create(i, "terms", io(i.config), Shader::Traced("terms"), &spec)
+    },
+};
