@@ -107,6 +107,44 @@ fn tiny_report_checks_its_numbers_and_files() {
     assert!(w > 0 && h > 0);
 }
 
+/// The aa knob's rows are measured against the supersampled base, not the
+/// reference: their table is whole (the AA pass's times above it, no NaN
+/// relMSE) and they are plotted apart from the other knobs' rows.
+#[test]
+fn aa_rows_have_their_own_table_and_plot() {
+    let dir = tmp("aa_rows");
+    let job = RenderJob::new(app::default_scene_path().unwrap(), 32, 18);
+    let opts = ReportOptions {
+        frames: 5,
+        warmup: 1,
+        knobs: knobs::parse_selection("max-depth=1,aa=none:edge").unwrap(),
+        reference: report::ReferenceSettings::SELF,
+        count_rays: false,
+        ..ReportOptions::new(job, &dir)
+    };
+    let ctx = common::validated_context();
+    let rep = report::run(&ctx, &opts).expect("report runs");
+    common::assert_validation_clean(&ctx);
+    let files = report::write_all(&rep, &dir).expect("report writes");
+    assert!(report::plot::plotted_rows(&rep, false).iter().all(|r| r.knob != "aa"));
+    let aa = report::plot::plotted_rows(&rep, true);
+    assert!(aa.len() == 2 && aa.iter().all(|r| r.knob == "aa"), "{}", aa.len());
+    let aa_plot = dir.join(report::AA_PLOT);
+    assert!(files.contains(&aa_plot), "{files:?}");
+    assert!(decoded_size(&aa_plot).0 > 0);
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(!md.contains("NaN") && !md.contains("nan |"), "{md}");
+    // Every table: its header, its separator, then only rows up to a blank line.
+    let lines: Vec<&str> = md.lines().collect();
+    for (i, l) in lines.iter().enumerate().filter(|(_, l)| l.starts_with("| knob |")) {
+        assert!(lines[i + 1].starts_with("|---"), "no separator under {l}");
+        for row in lines[i + 2..].iter().take_while(|r| !r.is_empty()) {
+            assert!(row.starts_with('|'), "a line inside the table under {l}: {row}");
+        }
+    }
+    assert!(md.contains("| aa | none |") && md.contains(report::AA_PLOT), "{md}");
+}
+
 fn write_png(path: &Path, w: u32, h: u32, shift: u32) {
     let img = image::RgbImage::from_fn(w, h, |x, y| {
         let v = (((x + shift) * 37 + y * 11) % 256) as u8;

@@ -549,6 +549,9 @@ fn rows_against_reference(
     Ok(rows)
 }
 
+/// The `aa` knob's chart: its rows have their own reference.
+pub const AA_PLOT: &str = "error_vs_time_aa.png";
+
 /// Writes every output of `report` into `dir`; returns the files written.
 pub fn write_all(report: &Report, dir: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -570,8 +573,13 @@ pub fn write_all(report: &Report, dir: &Path) -> Result<Vec<PathBuf>> {
         files.push(path);
     }
     let plot = dir.join("error_vs_time.png");
-    plot::error_vs_time(report, &plot)?;
+    plot::error_vs_time(report, &plot, false)?;
     files.push(plot);
+    if !plot::plotted_rows(report, true).is_empty() {
+        let plot = dir.join(AA_PLOT);
+        plot::error_vs_time(report, &plot, true)?;
+        files.push(plot);
+    }
     if let Some(a) = &report.attribution {
         let csv = dir.join("attribution.csv");
         std::fs::write(&csv, a.csv()).with_context(|| format!("writing {}", csv.display()))?;

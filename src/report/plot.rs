@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{anyhow, Context as _, Result};
 use plotters::prelude::*;
 
-use super::Report;
+use super::{Report, Row};
 
 /// Indices of the points (ms, error) on the Pareto front: no other point
 /// is at most as slow and at most as wrong while better in one of the two.
@@ -76,11 +76,20 @@ const SERIES_COLORS: [(u8, u8, u8); 8] = [
 const W: u32 = 1200;
 const H: u32 = 760;
 
-/// Draws the chart of `report` to `path` (PNG).
-pub fn error_vs_time(report: &Report, path: &Path) -> Result<()> {
+/// The rows one chart shows: the `aa` knob's (measured against the
+/// supersampled base, `aa`) or every other knob's (against the report's
+/// reference): errors against different references share no axis.
+pub fn plotted_rows(report: &Report, aa: bool) -> Vec<&Row> {
+    report.rows.iter().filter(|r| (r.knob == "aa") == aa).collect()
+}
+
+/// Draws the chart of `report`'s rows against its reference (`aa` false)
+/// or of the `aa` rows against their own (true) to `path` (PNG).
+pub fn error_vs_time(report: &Report, path: &Path, aa: bool) -> Result<()> {
     register_font()?;
+    let rows = plotted_rows(report, aa);
     let points: Vec<(f64, f64)> =
-        report.rows.iter().map(|r| (report.measured[r.measured].timing.median, r.flip_mean)).collect();
+        rows.iter().map(|r| (report.measured[r.measured].timing.median, r.flip_mean)).collect();
     let finite: Vec<&(f64, f64)> = points.iter().filter(|p| p.0.is_finite() && p.0 > 0.0).collect();
     let (lo, hi) = finite.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| (lo.min(p.0), hi.max(p.0)));
     // The log axis puts its ticks from the first power of ten in range on:
@@ -93,7 +102,7 @@ pub fn error_vs_time(report: &Report, path: &Path) -> Result<()> {
         (if decade <= hi { lo } else { 10f64.powf(lo.log10().floor()) }, hi)
     };
     let ymax = finite.iter().fold(0.0f64, |m, p| m.max(p.1)).max(1e-4) * 1.15;
-    save_png(path, |buf| draw(report, &points, (lo, hi, ymax), buf))
+    save_png(path, |buf| draw(report, &rows, &points, (lo, hi, ymax), aa, buf))
 }
 
 /// Draws a W x H chart into a buffer with `draw` and writes it to `path`.
@@ -156,14 +165,17 @@ type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
 fn draw(
     report: &Report,
+    rows: &[&Row],
     points: &[(f64, f64)],
     (lo, hi, ymax): (f64, f64, f64),
+    aa: bool,
     buf: &mut [u8],
 ) -> DrawResult {
     let root = BitMapBackend::with_buffer(buf, (W, H)).into_drawing_area();
     root.fill(&WHITE)?;
     let title = format!(
-        "Image error vs GPU time: {} ({}x{}, {})",
+        "{}: {} ({}x{}, {})",
+        if aa { "Anti-aliasing: 8-bit error vs GPU time" } else { "Image error vs GPU time" },
         report.scene.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
         report.width,
         report.height,
@@ -178,14 +190,18 @@ fn draw(
     chart
         .configure_mesh()
         .x_desc("median GPU frame time (ms, log scale)")
-        .y_desc("FLIP mean against the reference (lower is better)")
+        .y_desc(if aa {
+            "FLIP mean against the supersampled base, 8-bit images (lower is better)"
+        } else {
+            "FLIP mean against the reference (lower is better)"
+        })
         .axis_desc_style(("sans-serif", 18))
         .label_style(("sans-serif", 14))
         .x_label_formatter(&|v| significant(*v, 3))
         .y_label_formatter(&|v| format!("{v:.4}"))
         .draw()?;
     let mut knobs: Vec<&'static str> = Vec::new();
-    for r in &report.rows {
+    for r in rows {
         if !knobs.contains(&r.knob) {
             knobs.push(r.knob);
         }
@@ -193,8 +209,7 @@ fn draw(
     for (k, knob) in knobs.iter().enumerate() {
         // (ms, error, label): the base setting, in every series, is
         // labelled once below.
-        let series: Vec<(f64, f64, &str)> = report
-            .rows
+        let series: Vec<(f64, f64, &str)> = rows
             .iter()
             .zip(points)
             .filter(|(r, p)| r.knob == *knob && p.0.is_finite() && p.0 > 0.0)
@@ -202,7 +217,7 @@ fn draw(
             .collect();
         draw_series(&mut chart, k, knob, &series)?;
     }
-    if let Some(i) = report.rows.iter().position(|r| r.measured == report.base) {
+    if let Some(i) = rows.iter().position(|r| r.measured == report.base) {
         let p = points[i];
         chart
             .draw_series(std::iter::once(

@@ -223,11 +223,6 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
     for knob in &knob_order {
         let about = super::knobs::find(knob).map(|k| k.about).unwrap_or("");
         let _ = writeln!(s, "## {knob}\n\n{about}.\n");
-        let _ = writeln!(
-            s,
-            "| knob | value | backend | ms median | ms p95 | ꟻLIP mean | PSNR (dB) | relMSE | rays/frame |"
-        );
-        let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---|");
         if *knob == "aa" {
             // The filter's own cost next to what it buys.
             let cells: Vec<String> = report
@@ -239,13 +234,24 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
                     None => format!("{} no pass", r.value),
                 })
                 .collect();
-            let _ = writeln!(s, "AA pass (median GPU ms): {}.\n", cells.join(", "));
+            let _ = writeln!(
+                s,
+                "Against the supersampled base, not the reference (see \"How it is measured\"), so plotted \
+                 apart, in `{}`. AA pass (median GPU ms): {}.\n",
+                super::AA_PLOT,
+                cells.join(", ")
+            );
         }
+        let _ = writeln!(
+            s,
+            "| knob | value | backend | ms median | ms p95 | ꟻLIP mean | PSNR (dB) | relMSE | rays/frame |"
+        );
+        let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---|");
         for row in report.rows.iter().filter(|r| r.knob == *knob) {
             let m = &report.measured[row.measured];
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {:.3} | {:.3} | {:.5} | {} | {:.5} | {} |",
+                "| {} | {} | {} | {:.3} | {:.3} | {:.5} | {} | {} | {} |",
                 row.knob,
                 row.value,
                 m.backend,
@@ -253,7 +259,8 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
                 m.timing.p95,
                 row.flip_mean,
                 db(row.psnr),
-                row.rel_mse,
+                // (The aa rows compare 8-bit images: no radiance error.)
+                if row.rel_mse.is_nan() { "-".to_string() } else { format!("{:.5}", row.rel_mse) },
                 rays(m.rays)
             );
         }
@@ -291,7 +298,9 @@ pub fn markdown(report: &Report, maps: &[(&'static str, String, String)]) -> Str
         s,
         "- `error_vs_time.png`: ꟻLIP mean against median GPU ms (log scale), one series per knob; \
          the black line joins the Pareto front (no other setting is both faster and closer to \
-         the reference). Lower and further left is better."
+         the reference). Lower and further left is better. The aa knob's rows, measured against the \
+         supersampled base instead, are not in it: `{}` shows them.",
+        super::AA_PLOT
     );
     let _ = writeln!(s, "- `report.csv`: these rows, columns `{CSV_HEADER},{CSV_EXTRA}`.");
     if report.attribution.is_some() {
