@@ -343,10 +343,15 @@ struct ViewArgs {
     /// discontinuities), fxaa (luminance edges) or none [default: edge].
     #[arg(long, value_enum)]
     aa: Option<AaMode>,
+    /// Trace no shadow rays: punctual lights reach every surface unoccluded.
     #[arg(long)]
     no_shadows: bool,
+    /// Trace no mirror reflections (surfaces up to roughness 0.35 then get
+    /// the ambient term's specular share instead).
     #[arg(long)]
     no_reflections: bool,
+    /// Trace no refractions: transmissive surfaces show only their
+    /// reflection and ambient terms.
     #[arg(long)]
     no_refractions: bool,
     /// Maximum reflection/refraction recursion depth (0..=64).
@@ -581,6 +586,15 @@ impl Cli {
                      accel-update knob's frames"
                         .into(),
                 )
+            }
+            Some(Command::Report { knobs: Some(k), .. }) if report::knobs::parse_selection(k).is_err() => {
+                let e = report::knobs::parse_selection(k).expect_err("checked above");
+                Some(format!("--knobs: {e:#}"))
+            }
+            Some(Command::Report { frames, stability: false, tone_sheet, budget_paths, .. })
+                if *frames < 5 && tone_sheet.is_empty() && budget_paths.is_empty() =>
+            {
+                Some(format!("--frames {frames} is too few for a p95; use at least 5"))
             }
             Some(Command::Report { prt: false, .. }) if view.env.reference_samples.is_some() => Some(
                 "--reference-samples is a report option only with --prt (the ambient's reference): report \

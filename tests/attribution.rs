@@ -25,12 +25,12 @@
 //!   debug view.
 mod common;
 
-use ash::vk::Extent2D;
+use common::Bench;
 use glam::Vec3;
 use hybrid_rt::app::EnvOverrides;
 use hybrid_rt::gpu::shared::{TERMS_SAMPLES_PER_FRAME, TERM_CAUSTICS, TERM_ENV_SPECULAR, TERM_VISIBILITY};
 use hybrid_rt::render::shading::Backend;
-use hybrid_rt::render::{DebugView, FrameOutput, RenderSettings, Renderer};
+use hybrid_rt::render::{DebugView, FrameOutput, RenderSettings};
 use hybrid_rt::report::attribution::all_terms;
 use hybrid_rt::scene::{Camera, EnvLayout, Scene};
 
@@ -90,49 +90,25 @@ material = "{sphere_material}"
     scene
 }
 
-struct Bench {
-    ctx: common::ValidatedContext,
-    renderer: Renderer,
-}
-
-impl Bench {
-    fn new(scene: &Scene, w: u32, h: u32) -> Bench {
-        let ctx = common::validated_context();
-        let renderer = Renderer::new(&ctx, scene, Extent2D { width: w, height: h }).unwrap();
-        Bench { ctx, renderer }
+/// The frame with `terms` supplied, `samples` per pixel, from scratch.
+fn with_terms(
+    b: &mut Bench,
+    scene: &Scene,
+    cam: &Camera,
+    terms: u32,
+    samples: u32,
+    backend: Backend,
+) -> FrameOutput {
+    let settings = RenderSettings { terms, backend, ..Default::default() };
+    b.renderer.reset_reference();
+    let frames = samples.div_ceil(TERMS_SAMPLES_PER_FRAME);
+    let mut out = None;
+    for _ in 0..frames {
+        out = Some(b.frame(scene, cam, &settings));
     }
-
-    fn frame(&mut self, scene: &Scene, cam: &Camera, settings: &RenderSettings) -> FrameOutput {
-        let out = self.renderer.render(&self.ctx, scene, cam, settings).unwrap();
-        assert!(out.all_finite(), "NaN or Inf reached the frame");
-        out
-    }
-
-    /// The frame with `terms` supplied, `samples` per pixel, from scratch.
-    fn with_terms(
-        &mut self,
-        scene: &Scene,
-        cam: &Camera,
-        terms: u32,
-        samples: u32,
-        backend: Backend,
-    ) -> FrameOutput {
-        let settings = RenderSettings { terms, backend, ..Default::default() };
-        self.renderer.reset_reference();
-        let frames = samples.div_ceil(TERMS_SAMPLES_PER_FRAME);
-        let mut out = None;
-        for _ in 0..frames {
-            out = Some(self.frame(scene, cam, &settings));
-        }
-        assert_eq!(self.renderer.reference_frames(), frames, "the accumulation restarted");
-        assert!(self.renderer.pass_names().contains(&"terms"), "{:?}", self.renderer.pass_names());
-        out.unwrap()
-    }
-
-    fn finish(mut self) {
-        self.renderer.destroy(&self.ctx);
-        drop(self.ctx); // validation errors, teardown included, fail here
-    }
+    assert_eq!(b.renderer.reference_frames(), frames, "the accumulation restarted");
+    assert!(b.renderer.pass_names().contains(&"terms"), "{:?}", b.renderer.pass_names());
+    out.unwrap()
 }
 
 /// Floor pixels within `radius` of the origin whose camera ray misses the
@@ -190,7 +166,7 @@ fn visibility_term_matches_the_analytic_occlusion() {
     assert!((open - 1.0).abs() < 0.01, "the hybrid floor over 0.8 L: {open}");
 
     let samples = 512;
-    let vis = b.with_terms(&scene, &cam, TERM_VISIBILITY, samples, Backend::Auto);
+    let vis = with_terms(&mut b, &scene, &cam, TERM_VISIBILITY, samples, Backend::Auto);
     let ratio = mean_ratio(&vis, &hybrid, &pixels);
     let bound = 5.0 * 0.5 / (samples as f64 * pixels.len() as f64).sqrt() + 0.005;
     println!(
@@ -199,7 +175,7 @@ fn visibility_term_matches_the_analytic_occlusion() {
     );
     assert!((ratio - expected).abs() <= bound, "visibility: {ratio} vs analytic {expected} (bound {bound})");
 
-    let spec = b.with_terms(&scene, &cam, TERM_ENV_SPECULAR, 8, Backend::Auto);
+    let spec = with_terms(&mut b, &scene, &cam, TERM_ENV_SPECULAR, 8, Backend::Auto);
     let worst = spec
         .hdr
         .iter()
@@ -208,7 +184,7 @@ fn visibility_term_matches_the_analytic_occlusion() {
         .fold(0.0f32, f32::max);
     assert!(worst <= 1e-4, "the specular term changed a scene without specular lobes: {worst}");
 
-    let all = b.with_terms(&scene, &cam, all_terms(), samples, Backend::Auto);
+    let all = with_terms(&mut b, &scene, &cam, all_terms(), samples, Backend::Auto);
     let worst =
         all.hdr.iter().zip(&vis.hdr).map(|(a, c)| (a - c).abs() / c.abs().max(1e-3)).fold(0.0f32, f32::max);
     assert!(worst <= 1e-4, "every term vs visibility alone, where nothing else carries light: {worst}");
@@ -231,7 +207,7 @@ fn caustics_term_removes_sunlight_straight_through_glass_on_every_backend() {
             pixels.iter().map(|(i, _)| hybrid.hdr[i * 4] as f64).sum::<f64>() / pixels.len() as f64;
         // The sun at 3 on a 0.8 Lambert floor, straight through the glass.
         assert!((lit - 3.0 * 0.8 / std::f64::consts::PI).abs() < 0.05, "{backend:?}: hybrid floor {lit}");
-        let c = b.with_terms(&scene, &cam, TERM_CAUSTICS, 16, backend);
+        let c = with_terms(&mut b, &scene, &cam, TERM_CAUSTICS, 16, backend);
         let left = mean_ratio(&c, &hybrid, &pixels);
         println!("{backend:?}: under the glass with caustics supplied / hybrid {left:.4}");
         assert!(left < 0.2, "{backend:?}: the sunlight through glass stays: {left}");

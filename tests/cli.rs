@@ -469,3 +469,51 @@ fn error_exits_after_device_creation_leak_nothing() {
         assert!(messages.is_empty(), "validation messages on the error path: {messages:#?}");
     }
 }
+
+/// Every effect switch says what it turns off in `--help`.
+#[test]
+fn effect_switches_have_help() {
+    let out = bin().args(["render", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&out.stdout);
+    for (flag, words) in [
+        ("--no-shadows", "shadow rays"),
+        ("--no-reflections", "mirror reflections"),
+        ("--no-refractions", "refractions"),
+    ] {
+        let at = help.find(flag).unwrap_or_else(|| panic!("{flag} not in:\n{help}"));
+        // Its description: the text before the next flag.
+        let rest = &help[at + flag.len()..];
+        let text = &rest[..rest.find("\n  -").unwrap_or(rest.len())];
+        assert!(text.contains(words), "{flag}: '{}'", text.trim());
+    }
+}
+
+/// An 8-bit environment map loads, with a warning that it is not HDR.
+#[test]
+fn ldr_environment_map_is_warned_about() {
+    let dir = tmp("ldr-env");
+    let png = dir.join("sky.png");
+    image::RgbImage::from_pixel(8, 4, image::Rgb([200, 220, 255])).save(&png).unwrap();
+    let out = common::tiny_render_cmd()
+        .arg("--env")
+        .arg(&png)
+        .arg("--out")
+        .arg(dir.join("out.png"))
+        .env("RUST_LOG", "warn")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("sky.png") && stderr.contains("not HDR"), "{stderr}");
+    let hdr = dir.join("sky.hdr");
+    image::Rgb32FImage::from_pixel(8, 4, image::Rgb([0.8, 0.9, 1.0])).save(&hdr).unwrap();
+    let out = common::tiny_render_cmd()
+        .arg("--env")
+        .arg(&hdr)
+        .arg("--out")
+        .arg(dir.join("out2.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && !stderr.contains("not HDR"), "{stderr}");
+}

@@ -27,6 +27,7 @@
 mod common;
 
 use ash::vk::Extent2D;
+use common::Bench;
 use glam::Vec3;
 use hybrid_rt::app::EnvOverrides;
 use hybrid_rt::render::shading::Backend;
@@ -94,43 +95,13 @@ fn reference(samples: u32, bounces: u32, backend: Backend) -> RenderSettings {
     RenderSettings { reference: Some(ReferenceSettings { samples, bounces }), backend, ..Default::default() }
 }
 
-struct Bench {
-    ctx: common::ValidatedContext,
-    renderer: Renderer,
-}
-
-impl Bench {
-    fn new(scene: &Scene, w: u32, h: u32) -> Bench {
-        let ctx = common::validated_context();
-        let renderer = Renderer::new(&ctx, scene, Extent2D { width: w, height: h }).unwrap();
-        Bench { ctx, renderer }
-    }
-
-    /// One frame (with a reference: one more frame of accumulation).
-    fn frame(&mut self, scene: &Scene, camera: &Camera, settings: &RenderSettings) -> FrameOutput {
-        let out = self.renderer.render(&self.ctx, scene, camera, settings).unwrap();
-        assert!(out.all_finite(), "NaN or Inf reached the frame");
-        out
-    }
-
-    /// The converged reference of `settings` (all its frames, from scratch).
-    fn converged(&mut self, scene: &Scene, camera: &Camera, settings: &RenderSettings) -> FrameOutput {
-        let out = hybrid_rt::render::reference::render_converged(
-            &mut self.renderer,
-            &self.ctx,
-            scene,
-            camera,
-            settings,
-        )
-        .unwrap();
-        assert!(out.all_finite(), "NaN or Inf reached the frame");
-        out
-    }
-
-    fn finish(mut self) {
-        self.renderer.destroy(&self.ctx);
-        drop(self.ctx); // validation errors, teardown included, fail here
-    }
+/// The converged reference of `settings` (all its frames, from scratch).
+fn converged(b: &mut Bench, scene: &Scene, camera: &Camera, settings: &RenderSettings) -> FrameOutput {
+    let out =
+        hybrid_rt::render::reference::render_converged(&mut b.renderer, &b.ctx, scene, camera, settings)
+            .unwrap();
+    assert!(out.all_finite(), "NaN or Inf reached the frame");
+    out
 }
 
 /// Where the camera ray through pixel (x, y) meets the ground (y = 0).
@@ -173,7 +144,7 @@ fn constant_environment_over_an_open_plane_equals_the_constant_ambient() {
     assert!(b.renderer.targets().describe().iter().all(|(n, _)| !n.contains("reference")));
     for backend in common::BACKENDS {
         for bounces in [1, 3] {
-            let r = b.converged(&scene, &cam, &reference(8, bounces, backend));
+            let r = converged(&mut b, &scene, &cam, &reference(8, bounces, backend));
             assert!(b.renderer.pass_names().contains(&"reference"), "{:?}", b.renderer.pass_names());
             let mut worst = 0.0f32;
             for (a, c) in r.hdr.iter().zip(&constant.hdr) {
@@ -254,7 +225,7 @@ fn plane_under_a_sphere_matches_the_analytic_occlusion_and_converges() {
     // Two bounces: the sphere's underside, lit by the environment it sees
     // (at most L) times its albedo 0.8, fills in part of what it hides:
     // brighter than visibility alone, at most 1 - 0.2 (1 - analytic).
-    let two = b.converged(&scene, &cam, &reference(256, 2, Backend::Auto));
+    let two = converged(&mut b, &scene, &cam, &reference(256, 2, Backend::Auto));
     let ratio2 = mean_ratio(&two, &constant, &pixels);
     let most = 1.0 - 0.2 * (1.0 - expected);
     println!("2 bounces: reference / constant {ratio2:.4} (visibility only {ratio:.4}, at most {most:.4})");
@@ -281,7 +252,7 @@ fn every_backend_gives_the_same_image() {
     let cam = scene.cameras[1].clone();
     let mut b = Bench::new(&scene, w, h);
     let images: Vec<FrameOutput> =
-        common::BACKENDS.iter().map(|&be| b.converged(&scene, &cam, &reference(16, 2, be))).collect();
+        common::BACKENDS.iter().map(|&be| converged(&mut b, &scene, &cam, &reference(16, 2, be))).collect();
     b.finish();
     let base = &images[0];
     let mean = base.hdr.iter().map(|v| *v as f64).sum::<f64>() / base.hdr.len() as f64;

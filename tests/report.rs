@@ -268,6 +268,8 @@ fn report_cli() {
         let out = run(args);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && !stderr.contains("panicked"), "{args:?}: {stderr}");
+        // Usage errors, all of them: exit code 2, as clap's own.
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
         let line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("{stderr}"));
         assert!(line.contains(needle), "{args:?}: '{needle}' not in {line}");
     }

@@ -10,15 +10,18 @@
 //   hybrid does not trace as a mirror: TERM_ENV_SPECULAR, which replaces
 //   the hybrid's f0 x unshadowed SH ambient; through the diffuse lobe:
 //   TERM_VISIBILITY, which replaces its diffuse SH (or PRT) ambient.
-// - a rough opaque surface: TERM_INDIRECT, one bounce, the surface shaded
-//   as the hybrid shades a secondary hit (direct light with shadow rays +
-//   its SH ambient); its emission: TERM_EMITTERS (the hybrid lights
-//   nothing with emissive surfaces).
+// - a rough opaque surface: TERM_INDIRECT, one bounce: the surface lit by
+//   the punctual lights (direct light with the truth's shadow rays, glass
+//   opaque); its emission: TERM_EMITTERS (the hybrid lights nothing with
+//   emissive surfaces).
 // - glass or a perfectly smooth surface: TERM_CAUSTICS, the light it
 //   passes on along a path of at most TERMS_CHAIN BSDF samples (ending at
-//   the environment, or at a rough opaque surface shaded as above); it
+//   the environment, or at a rough opaque surface lit as above); it
 //   replaces the hybrid's direct light through glass (shadow rays that
 //   pass transmissive occluders where the truth's are blocked).
+// Each term is a set of the truth's own paths, so supplying one never adds
+// light the truth has not; what no term holds (the environment's light
+// after a bounce, two or more rough bounces) is the residual.
 // Sums accumulate with their count like `reference`'s; seeded by pixel and
 // Frame.accum_frame, so every backend traces the same rays. Each sample
 // follows one lobe, chosen by its albedo; the pixel's program traces and
@@ -41,13 +44,12 @@ bool passes_light_on(Surface s) {
     return s.transmission * (1.0 - s.metallic) > 0.0 || s.roughness * s.roughness < DELTA_ALPHA;
 }
 
-// A surface to shade as the hybrid shades a secondary hit (direct light
-// + its SH ambient, integrator.glsl's shade without branches), times weight.
+// A surface to light by the punctual lights (integrator.glsl's
+// direct_light), times weight.
 struct Shading {
     Surface s;
     vec3 v, gn;
     vec3 weight;
-    bool ambient;  // false: direct light only
     bool opaque;   // shadow rays blocked by glass (g_opaque_occluders)
 };
 
@@ -102,7 +104,7 @@ vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out S
         if (back_face) w *= volume_transmittance(h);  // crossed a medium
         if (term_on(first ? TERM_EMITTERS : TERM_CAUSTICS)) radiance += w * s.emissive;
         if (!passes_light_on(s)) {
-            if (term_on(first ? TERM_INDIRECT : TERM_CAUSTICS)) end = Shading(s, -d, gn, w, true, false);
+            if (term_on(first ? TERM_INDIRECT : TERM_CAUSTICS)) end = Shading(s, -d, gn, w, true);
             break;
         }
         if (!term_on(TERM_CAUSTICS)) break;
@@ -153,7 +155,7 @@ void terms_pixel(ivec2 px) {
         Shading end;
         vec3 c = vec3(0.0);
         if (i == 0u) {
-            end = Shading(p.s, v_world, p.gn, vec3(term_on(TERM_CAUSTICS) ? n : 0.0), false, true);
+            end = Shading(p.s, v_world, p.gn, vec3(term_on(TERM_CAUSTICS) ? n : 0.0), true);
             if (term_on(TERM_CAUSTICS)) c -= n * imageLoad(direct_in, px).rgb;
         } else {
             c = terms_path(p, m, v, mirror, rng, end);
@@ -161,9 +163,7 @@ void terms_pixel(ivec2 px) {
         if (max3(end.weight) > 0.0) {
             g_opaque_occluders = end.opaque;
             face_viewer(end.s, end.v);
-            vec3 e = direct_light(end.s, end.v, end.gn);
-            if (end.ambient) e += ambient_light(end.s, false);
-            c += end.weight * e;
+            c += end.weight * direct_light(end.s, end.v, end.gn);
             g_opaque_occluders = false;
         }
         if (any(isnan(c)) || any(isinf(c))) c = vec3(0.0);

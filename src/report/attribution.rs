@@ -298,8 +298,9 @@ impl Attribution {
         }
         let _ = writeln!(
             s,
-            "\nWhat is left with every term supplied is what none of them models: light after more than one \
-             bounce, glossy surfaces the hybrid traces as mirrors, the truth's pixel filtering at edges.\n"
+            "\nEach term is a set of the truth's own paths. What is left with every term supplied is what \
+             none of them holds: the environment's light after a bounce, two or more rough bounces, glossy \
+             surfaces the hybrid traces as mirrors, the truth's pixel filtering at edges.\n"
         );
         let _ = writeln!(
             s,

@@ -174,10 +174,12 @@ impl Viewer {
                     .map(|r| if r.predicted_ms.is_some() { r.measured_ms } else { r.selection.spent })
                     .filter(|t| t.is_finite());
                 match &mut self.settings.budget {
-                    Some(b) => {
-                        let base = if b.budget.is_finite() { b.budget } else { everything.unwrap_or(0.0) };
-                        b.budget = if up { base * 2.0 } else { base * 0.5 };
-                    }
+                    Some(b) => match step_budget(b.budget, everything, up) {
+                        Some(t) => b.budget = t,
+                        None => log::info!(
+                            "[ / ]: no frame has measured what tracing everything costs yet; press again"
+                        ),
+                    },
                     None => log::info!("[ / ]: F8 turns the ray-tracing budget on first"),
                 }
                 self.log_budget();
@@ -245,10 +247,7 @@ impl Viewer {
     /// 4.00 ms (3/6 objects, rays 4.1 ms)" (effects mode): T, what the last
     /// selection took, and the ray passes' GPU time in the last stats window.
     fn budget_title(&self, b: &BudgetSettings) -> String {
-        let mut t = match b.mode {
-            BudgetMode::Paper => format!("budget {:.3e}", b.budget),
-            BudgetMode::Effects => format!("budget {:.2} ms", b.budget),
-        };
+        let mut t = format!("budget {}", budget_text(b));
         if b.stickiness > 0.0 {
             t.push_str(&format!(" I {}", b.stickiness));
         }
@@ -274,7 +273,7 @@ impl Viewer {
             Some(b) => {
                 log::info!(
                     "ray-tracing budget {} ({:?} mode, stickiness {}, fallback {:?})",
-                    b.budget,
+                    budget_text(b),
                     b.mode,
                     b.stickiness,
                     b.fallback
@@ -306,4 +305,46 @@ impl Viewer {
 fn toggle(name: &str, on: &mut bool) {
     *on = !*on;
     log::info!("{name}: {}", if *on { "on" } else { "off" });
+}
+
+/// T as people read it: "everything" (not yet limited), "12.3k" paper-mode
+/// units or "4.00 ms" in effects mode.
+fn budget_text(b: &BudgetSettings) -> String {
+    match (b.mode, b.budget) {
+        (_, t) if !t.is_finite() => "everything".into(),
+        (BudgetMode::Effects, t) => format!("{t:.2} ms"),
+        (BudgetMode::Paper, t) if t >= 1e4 => format!("{:.1}k", t / 1e3),
+        (BudgetMode::Paper, t) => format!("{t:.1}"),
+    }
+}
+
+/// [ (halve) or ] (double) on budget `t`; from "everything" (infinite) the
+/// step starts at what tracing everything cost in the last frame, and is
+/// not taken (None) before a frame has measured it.
+fn step_budget(t: f64, everything: Option<f64>, up: bool) -> Option<f64> {
+    let base = if t.is_finite() { t } else { everything.filter(|e| *e > 0.0)? };
+    Some(if up { base * 2.0 } else { base * 0.5 })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn budget_steps_wait_for_a_measurement() {
+        // F8 then [ before any frame measured "everything": no step to 0.
+        assert_eq!(step_budget(f64::INFINITY, None, false), None);
+        assert_eq!(step_budget(f64::INFINITY, Some(0.0), false), None);
+        assert_eq!(step_budget(f64::INFINITY, Some(8.0), false), Some(4.0));
+        assert_eq!(step_budget(3.0, None, true), Some(6.0));
+    }
+
+    #[test]
+    fn budget_values_read_short() {
+        let b = |mode, budget| BudgetSettings { mode, budget, ..BudgetSettings::paper(0.0) };
+        assert_eq!(budget_text(&b(BudgetMode::Effects, 29.0042135)), "29.00 ms");
+        assert_eq!(budget_text(&b(BudgetMode::Paper, 29.0042135)), "29.0");
+        assert_eq!(budget_text(&b(BudgetMode::Paper, 123456.7)), "123.5k");
+        assert_eq!(budget_text(&b(BudgetMode::Paper, f64::INFINITY)), "everything");
+    }
 }

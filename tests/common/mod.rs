@@ -276,3 +276,36 @@ pub fn tiny_render_cmd() -> std::process::Command {
     c.env("HYBRID_RT_VALIDATION", "1").args(["render", "--width", "16", "--height", "9"]);
     c
 }
+
+/// A validated context and a renderer of one size: frames that must be
+/// finite, and a teardown whose validation errors (leaks included) fail.
+pub struct Bench {
+    pub ctx: ValidatedContext,
+    pub renderer: hybrid_rt::render::Renderer,
+}
+
+impl Bench {
+    pub fn new(scene: &hybrid_rt::scene::Scene, w: u32, h: u32) -> Bench {
+        let ctx = validated_context();
+        let extent = ash::vk::Extent2D { width: w, height: h };
+        let renderer = hybrid_rt::render::Renderer::new(&ctx, scene, extent).unwrap();
+        Bench { ctx, renderer }
+    }
+
+    /// One frame (with an accumulating pass: one more frame of it).
+    pub fn frame(
+        &mut self,
+        scene: &hybrid_rt::scene::Scene,
+        camera: &hybrid_rt::scene::Camera,
+        settings: &hybrid_rt::render::RenderSettings,
+    ) -> FrameOutput {
+        let out = self.renderer.render(&self.ctx, scene, camera, settings).unwrap();
+        assert!(out.all_finite(), "NaN or Inf reached the frame");
+        out
+    }
+
+    pub fn finish(mut self) {
+        self.renderer.destroy(&self.ctx);
+        drop(self.ctx); // validation errors, teardown included, fail here
+    }
+}

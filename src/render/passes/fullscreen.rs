@@ -52,6 +52,15 @@ pub fn uses(io: &[Io], traced: bool) -> Vec<Use> {
     u
 }
 
+/// The declared uses of a traced pass that accumulates into `accumulation`
+/// across frames (`reference`, `terms`, `path`): a read-modify-write, so
+/// the previous frames' sum is read too.
+pub fn accumulating_uses(io: &[Io], accumulation: &'static TargetDesc) -> Vec<Use> {
+    let mut u = uses(io, true);
+    u.push(Use::image(accumulation, Access::StorageRead));
+    u
+}
+
 /// Fails when a variant of the pass's shader declares a storage image with
 /// a format qualifier other than its target's format (undefined behaviour).
 fn check_formats(name: &str, shader: &Shader, io: &[Io]) -> Result<()> {

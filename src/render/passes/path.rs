@@ -35,9 +35,7 @@ pub const PASS: PassDesc = PassDesc {
     name: "path",
     skip,
     uses: |c| {
-        // Read-modify-write: the previous frames' sum is read too.
-        let mut u = fullscreen::uses(&io(c), true);
-        u.push(Use::image(&ACCUMULATION, Access::StorageRead));
+        let mut u = fullscreen::accumulating_uses(&io(c), &ACCUMULATION);
         u.push(Use::buffer(SharedBuffer::Counters, Access::ShaderWrite));
         u
     },

@@ -12,7 +12,7 @@ use ash::vk;
 use super::fullscreen::{self, FullScreen, Io, Shader};
 use super::{direct, gbuffer, Init, PassDesc};
 use crate::gpu::shared::{DIRECT_IN, TERMS_OUT};
-use crate::render::frame::{Access, Use};
+use crate::render::frame::Access;
 use crate::render::shading::ShadingConfig;
 use crate::render::targets::TargetDesc;
 use crate::vk::pipeline::Specialization;
@@ -40,13 +40,7 @@ pub fn skip(c: &ShadingConfig) -> Option<&'static str> {
 pub const PASS: PassDesc = PassDesc {
     name: "terms",
     skip,
-    uses: |c| {
-        // Read-modify-write: the previous frames' sum is read too; the
-        // primary hit's PRT transfer lives with the scene geometry.
-        let mut u = fullscreen::uses(&io(c), true);
-        u.push(Use::image(&ACCUMULATION, Access::StorageRead));
-        u
-    },
+    uses: |c| fullscreen::accumulating_uses(&io(c), &ACCUMULATION),
     create: |i: &Init| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "terms", io(i.config), Shader::Traced("terms"), &spec)

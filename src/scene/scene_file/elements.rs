@@ -182,9 +182,19 @@ pub fn load_env_map(path: &Path, layout: crate::scene::EnvLayout) -> Result<HdrI
 /// Equirectangular Radiance HDR; non-finite and negative texels (which would
 /// poison importance sampling) become 0.
 pub fn load_hdr(path: &Path) -> Result<HdrImage> {
-    let image = image::open(path)
-        .with_context(|| format!("cannot load environment map '{}'", path.display()))?
-        .into_rgb32f();
+    let image =
+        image::open(path).with_context(|| format!("cannot load environment map '{}'", path.display()))?;
+    if !matches!(image.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F) {
+        // An 8- or 16-bit image holds display values clipped at white, not
+        // radiance: the sky's brightest texels (the sun) are lost.
+        log::warn!(
+            "environment map '{}' is a {:?} image, not HDR: its values are read as linear radiance in [0, 1], \
+             clipped at white (use a Radiance .hdr or OpenEXR map for image-based lighting)",
+            path.display(),
+            image.color()
+        );
+    }
+    let image = image.into_rgb32f();
     let (width, height) = image.dimensions();
     let mut rgb = image.into_raw();
     let mut bad = 0usize;
