@@ -587,7 +587,10 @@ impl Cli {
                         .into(),
                 )
             }
-            Some(Command::Report { knobs: Some(k), .. }) if report::knobs::parse_selection(k).is_err() => {
+            // (The other report modes read --knobs their own way.)
+            Some(Command::Report { knobs: Some(k), prt: false, stability: false, tone_sheet, budget_paths, .. })
+                if tone_sheet.is_empty() && budget_paths.is_empty() && report::knobs::parse_selection(k).is_err() =>
+            {
                 let e = report::knobs::parse_selection(k).expect_err("checked above");
                 Some(format!("--knobs: {e:#}"))
             }
