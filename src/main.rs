@@ -263,6 +263,7 @@ enum Command {
         exposure: f32,
     },
     /// Open an interactive window (fly/orbit camera, debug views, screenshots).
+    #[command(after_long_help = hybrid_rt::viewer::keys::help())]
     View {
         #[command(flatten)]
         view: ViewArgs,

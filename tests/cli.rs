@@ -517,3 +517,14 @@ fn ldr_environment_map_is_warned_about() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && !stderr.contains("not HDR"), "{stderr}");
 }
+
+/// `view --help` lists the viewer's keys.
+#[test]
+fn view_help_lists_the_keys() {
+    let out = bin().args(["view", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && help.contains("Keys:"), "{help}");
+    for (key, what) in hybrid_rt::viewer::keys::KEYS {
+        assert!(help.contains(key) && help.contains(what), "{key} not in:\n{help}");
+    }
+}

@@ -17,6 +17,7 @@
 pub mod camera_controller;
 mod frame_loop;
 mod input;
+pub mod keys;
 mod resize_test;
 mod session;
 pub mod stats;
