@@ -81,13 +81,34 @@ fn write_triangle_gltf(dir: &Path, edit: impl FnOnce(&mut String, &mut Vec<u8>))
     path
 }
 
+/// The triangle (0,0,0), (1,0,0), (0,1,0), framed by the default camera
+/// from +z, lit brighter than the sky behind it: the bright pixels form a
+/// right triangle with its vertical leg on the left and its widest row at
+/// the bottom.
 #[test]
 fn valid_triangle_renders() {
     let d = tmp("valid");
     let scene = write_triangle_gltf(&d, |_, _| {});
     let out = render_scene(&scene, &d);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(d.join("x.png").exists());
+    let img = image::open(d.join("x.png")).unwrap().to_luma8();
+    // (first column, width) of each row's bright run (the sky is ~60, the
+    // lit triangle ~110).
+    let rows: Vec<(u32, u32)> = (0..img.height())
+        .filter_map(|y| {
+            let xs: Vec<u32> = (0..img.width()).filter(|&x| img.get_pixel(x, y)[0] > 90).collect();
+            let (first, last) = (*xs.first()?, *xs.last()?);
+            assert_eq!(last - first + 1, xs.len() as u32, "row {y}: the bright pixels are not one run");
+            Some((first, xs.len() as u32))
+        })
+        .collect();
+    let covered: u32 = rows.iter().map(|r| r.1).sum();
+    let share = covered as f64 / (img.width() * img.height()) as f64;
+    assert!(rows.len() >= 8 && (0.05..0.5).contains(&share), "{} rows, {share:.3} of the image", rows.len());
+    let left = rows.iter().map(|r| r.0);
+    assert!(left.clone().max().unwrap() - left.min().unwrap() <= 2, "no vertical leg on the left: {rows:?}");
+    assert!(rows.windows(2).all(|w| w[1].1 + 1 >= w[0].1), "rows do not widen downwards: {rows:?}");
+    assert!(rows.last().unwrap().1 >= 5 * rows[0].1, "not a triangle: {rows:?}");
 }
 
 #[test]

@@ -115,22 +115,35 @@ fn options_without_effect_are_usage_errors() {
     assert_usage_error(&fps, "--fps", "--fps on report without the accel-update knob");
 }
 
-/// Negative values parse where they are valid: a camera position with a
-/// negative coordinate and an animation time before the first key.
+/// Negative values parse where they are valid, and mean what they say: a
+/// camera position with a negative coordinate (the view from the mirrored
+/// position differs) and an animation time before the start (the clip
+/// loops: -2.5 s is the pose at its duration - 2.5 s, not at +2.5 s).
 #[test]
 fn negative_numbers_parse() {
     let d = tmp("negative");
     let scene = common::shared_asset("gltf/BoxAnimated/glTF-Binary/BoxAnimated.glb");
-    let out = bin()
-        .args(["render", "--width", "16", "--height", "16", "--look-from", "-2,1,-3", "--look-at", "0,0,0"])
-        .args(["--fov", "40", "--animation", "0", "--time", "-0.5", "--scene"])
-        .arg(&scene)
-        .arg("--out")
-        .arg(d.join("x.png"))
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(d.join("x.png").exists());
+    let duration = hybrid_rt::scene::Scene::load(&scene).unwrap().animations[0].duration;
+    let render = |from: &str, time: &str| -> Vec<u8> {
+        let png = d.join(format!("x_{from}_{time}.png"));
+        let out = bin()
+            .args(["render", "--width", "16", "--height", "16", "--look-from", from, "--look-at", "0,0,0"])
+            .args(["--fov", "40", "--animation", "0", "--time", time, "--scene"])
+            .arg(&scene)
+            .arg("--out")
+            .arg(&png)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{from} {time}: {}", String::from_utf8_lossy(&out.stderr));
+        image::open(&png).unwrap().to_rgb8().into_raw()
+    };
+    let largest = |a: &[u8], b: &[u8]| a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
+    // (The clip's poses at t and -t agree for most t: 2.5 s is one where they do not.)
+    let image = render("-2,1,-3", "-2.5");
+    let looped = render("-2,1,-3", &format!("{}", duration - 2.5));
+    assert!(largest(&image, &looped) <= 2, "-2.5 s is not the pose at {} s", duration - 2.5);
+    assert!(largest(&image, &render("-2,1,-3", "2.5")) > 20, "-2.5 s rendered the pose at +2.5 s");
+    assert!(largest(&image, &render("2,1,-3", "-2.5")) > 20, "-2 rendered the view from +2");
 }
 
 /// The accepted ranges are in the help text.
