@@ -111,27 +111,6 @@ fn with_terms(
     out.unwrap()
 }
 
-/// Floor pixels within `radius` of the origin whose camera ray misses the
-/// sphere, with their points.
-fn floor_pixels(cam: &Camera, w: u32, h: u32, radius: f32) -> Vec<(usize, Vec3)> {
-    let mut out = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
-            let (o, d) = common::pixel_ray(cam, w, h, x, y);
-            if d.y >= 0.0 {
-                continue;
-            }
-            let p = o + d * (-o.y / d.y);
-            let c = Vec3::new(0.0, 1.0, 0.0);
-            let blocked = (o + d * (c - o).dot(d) - c).length() < 0.52;
-            if p.length() <= radius && !blocked {
-                out.push(((y * w + x) as usize, p));
-            }
-        }
-    }
-    out
-}
-
 /// Mean over `pixels` of a / b in red.
 fn mean_ratio(a: &FrameOutput, b: &FrameOutput, pixels: &[(usize, Vec3)]) -> f64 {
     pixels.iter().map(|(i, _)| (a.hdr[i * 4] / b.hdr[i * 4]) as f64).sum::<f64>() / pixels.len() as f64
@@ -152,7 +131,7 @@ fn visibility_term_matches_the_analytic_occlusion() {
     let err = b.renderer.render(&b.ctx, &scene, &cam, &debug).err().expect("terms in a debug view");
     assert!(format!("{err:#}").contains("debug view"), "{err:#}");
 
-    let pixels = floor_pixels(&cam, w, h, 0.3);
+    let pixels = common::ground_pixels(&cam, w, h, 0.3);
     assert!(pixels.len() >= 20, "only {} floor pixels near the origin", pixels.len());
     let (r, d) = (0.5f64, 1.0f64);
     let expected = pixels
@@ -198,7 +177,7 @@ fn caustics_term_removes_sunlight_straight_through_glass_on_every_backend() {
     let cam = scene.cameras[0].clone();
     let mut b = Bench::new(&scene, w, h);
     // Under the sphere (the sun is straight above): the floor within 0.3.
-    let pixels = floor_pixels(&cam, w, h, 0.3);
+    let pixels = common::ground_pixels(&cam, w, h, 0.3);
     assert!(pixels.len() >= 10, "only {} floor pixels under the sphere", pixels.len());
     let mut means = Vec::new();
     for backend in common::BACKENDS {

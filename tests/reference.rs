@@ -104,34 +104,6 @@ fn converged(b: &mut Bench, scene: &Scene, camera: &Camera, settings: &RenderSet
     out
 }
 
-/// Where the camera ray through pixel (x, y) meets the ground (y = 0).
-fn ground_point(cam: &Camera, w: u32, h: u32, x: u32, y: u32) -> Option<Vec3> {
-    let (o, d) = common::pixel_ray(cam, w, h, x, y);
-    let t = -o.y / d.y;
-    (d.y < 0.0).then(|| o + d * t)
-}
-
-/// Pixels on the ground within `radius` of the origin (the sphere, when
-/// there is one, in front of none of them: it is above the centre and the
-/// camera looks at the ground beside it), with their points.
-fn ground_pixels(cam: &Camera, w: u32, h: u32, radius: f32) -> Vec<(usize, Vec3)> {
-    let mut out = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
-            let Some(p) = ground_point(cam, w, h, x, y) else { continue };
-            // The pixel sees the ground only if the sphere is not in the way.
-            let (o, d) = common::pixel_ray(cam, w, h, x, y);
-            let c = Vec3::new(0.0, 1.0, 0.0);
-            let tc = (c - o).dot(d);
-            let blocked = (o + d * tc - c).length() < 0.52;
-            if p.length() <= radius && !blocked {
-                out.push(((y * w + x) as usize, p));
-            }
-        }
-    }
-    out
-}
-
 #[test]
 fn constant_environment_over_an_open_plane_equals_the_constant_ambient() {
     let scene = scene("reference_open", false);
@@ -181,7 +153,7 @@ fn plane_under_a_sphere_matches_the_analytic_occlusion_and_converges() {
     let mut b = Bench::new(&scene, w, h);
     let constant =
         b.frame(&scene, &cam, &RenderSettings { ambient: AmbientMode::Constant, ..Default::default() });
-    let pixels = ground_pixels(&cam, w, h, 0.3);
+    let pixels = common::ground_pixels(&cam, w, h, 0.3);
     assert!(pixels.len() >= 20, "only {} ground pixels near the origin", pixels.len());
     let (r, d) = (0.5f64, 1.0f64);
     let expected = pixels

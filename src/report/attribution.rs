@@ -137,14 +137,13 @@ fn with_terms(
         bail!("the attribution's accumulation restarted part-way ({} frames)", renderer.reference_frames());
     }
     let first = first.context("no half-way frame")?;
-    // The second half alone: twice the whole minus the first half.
-    let second: Vec<f32> = out.hdr.iter().zip(&first).map(|(f, a)| 2.0 * f - a).collect();
-    let image = |v: &[f32]| HdrImage::from_rgba(out.width, out.height, v).0;
-    Ok((image(&out.hdr), image(&first), image(&second)))
+    let h = super::truth::Halves::of(out.width, out.height, &out.hdr, &first);
+    Ok((h.full, h.first, h.second))
 }
 
-/// The attribution of the frame `settings` renders (the report's base
-/// hybrid settings) against `truth`, each term with `samples` samples.
+/// The attribution of `base`, the frame `settings` renders (the report's
+/// base hybrid settings, already measured), against `truth`, each term
+/// with `samples` samples.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     ctx: &Context,
@@ -152,6 +151,7 @@ pub fn run(
     scene: &Scene,
     camera: &Camera,
     settings: &RenderSettings,
+    base: &HdrImage,
     truth: &HdrImage,
     exposure: f32,
     samples: u32,
@@ -159,8 +159,6 @@ pub fn run(
     let plain = RenderSettings { terms: 0, reference: None, ..*settings };
     let ids =
         renderer.render(ctx, scene, camera, &RenderSettings { debug_view: DebugView::ObjectId, ..plain })?;
-    let base = renderer.render(ctx, scene, camera, &plain)?;
-    let (base, _) = HdrImage::from_rgba(base.width, base.height, &base.hdr);
     if (base.width, base.height) != (truth.width, truth.height) {
         bail!(
             "the attribution's frame is {}x{}, the truth {}x{}",
@@ -199,11 +197,11 @@ pub fn run(
             map: e.map,
         });
     }
-    let objects = per_object(scene, &ids.hdr, &base, truth, &base_map, &rows);
+    let objects = per_object(scene, &ids.hdr, base, truth, &base_map, &rows);
     Ok(Attribution {
         samples: 2 * samples.div_ceil(2 * TERMS_SAMPLES_PER_FRAME).max(1) * TERMS_SAMPLES_PER_FRAME,
         base_flip: base_map.mean(),
-        base_psnr: metrics::psnr_hdr(truth, &base),
+        base_psnr: metrics::psnr_hdr(truth, base),
         rows,
         objects,
     })

@@ -452,10 +452,11 @@ pub fn run(ctx: &Context, opts: &ReportOptions) -> Result<Report> {
         let attribution = match (&truth, opts.attribution_samples) {
             (Some(_), n) if n > 0 => {
                 let renderer = renderers.get(ctx, &scene, width, height)?;
-                let base = &measured[hybrid].variant.settings;
-                let a =
-                    attribution::run(ctx, renderer, &scene, &camera, base, &measured[0].image, exposure, n)
-                        .context("report: the attribution of the default frame's error")?;
+                // The base frame is measured already: its settings and image.
+                let (settings, base) = (&measured[hybrid].variant.settings, &measured[hybrid].image);
+                let truth = &measured[0].image;
+                let a = attribution::run(ctx, renderer, &scene, &camera, settings, base, truth, exposure, n)
+                    .context("report: the attribution of the default frame's error")?;
                 Some(a)
             }
             _ => None,

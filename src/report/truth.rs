@@ -211,12 +211,9 @@ fn render(
             renderer.reference_frames()
         );
     }
-    let (full, non_finite) = HdrImage::from_rgba(out.width, out.height, &out.hdr);
     let first = first_half.context("no half-way frame")?;
-    // The second half alone: the sum of all minus the first half's.
-    let second: Vec<f32> = out.hdr.iter().zip(&first).map(|(f, a)| 2.0 * f - a).collect();
-    let (a, _) = HdrImage::from_rgba(out.width, out.height, &first);
-    let (b, _) = HdrImage::from_rgba(out.width, out.height, &second);
+    let Halves { full, non_finite, first: a, second: b } =
+        Halves::of(out.width, out.height, &out.hdr, &first);
     let halves = metrics::compare_hdr(&a, &b, exposure)?;
     let (median, p95) = median_p95(&totals);
     let timing = Timing {
@@ -245,6 +242,26 @@ fn render(
         cached: false,
     };
     Ok((measured, truth))
+}
+
+/// An accumulation read back whole and half-way: the whole image, its
+/// non-finite pixels, and its two halves as independent images.
+pub(super) struct Halves {
+    pub full: HdrImage,
+    pub non_finite: usize,
+    pub first: HdrImage,
+    pub second: HdrImage,
+}
+
+impl Halves {
+    /// From the RGBA mean of all frames and the mean of the first half.
+    pub fn of(width: u32, height: u32, full: &[f32], first: &[f32]) -> Halves {
+        // The second half alone: twice the whole's mean minus the first half's.
+        let second: Vec<f32> = full.iter().zip(first).map(|(f, a)| 2.0 * f - a).collect();
+        let (full, non_finite) = HdrImage::from_rgba(width, height, full);
+        let image = |v: &[f32]| HdrImage::from_rgba(width, height, v).0;
+        Halves { full, non_finite, first: image(first), second: image(&second) }
+    }
 }
 
 fn measured(variant: &Variant, image: HdrImage, timing: Timing, exposure: f32) -> Measured {

@@ -309,3 +309,30 @@ impl Bench {
         drop(self.ctx); // validation errors, teardown included, fail here
     }
 }
+
+/// Pixels of the ground (y = 0) within `radius` of the origin whose camera
+/// ray does not pass through a sphere of radius 0.5 (plus a margin for its
+/// tessellation) centred 1.0 above the origin, with their points.
+pub fn ground_pixels(
+    cam: &hybrid_rt::scene::Camera,
+    w: u32,
+    h: u32,
+    radius: f32,
+) -> Vec<(usize, glam::Vec3)> {
+    let mut out = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let (o, d) = pixel_ray(cam, w, h, x, y);
+            if d.y >= 0.0 {
+                continue;
+            }
+            let p = o + d * (-o.y / d.y);
+            let c = glam::Vec3::new(0.0, 1.0, 0.0);
+            let blocked = (o + d * (c - o).dot(d) - c).length() < 0.52;
+            if p.length() <= radius && !blocked {
+                out.push(((y * w + x) as usize, p));
+            }
+        }
+    }
+    out
+}
