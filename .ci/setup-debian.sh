@@ -3,7 +3,7 @@
 # the Vulkan loader, Mesa 25 lavapipe from bookworm-backports (stock Mesa 22.3 has
 # no ray tracing), the Khronos validation layer, Xvfb for the window test, the
 # C++ toolchain shaderc's from-source build uses (see README "Shader compiler")
-# and RenderDoc 1.24 with its Python module (tests/renderdoc.rs captures a frame).
+# and RenderDoc 1.24 with its Python module (tests/cli/renderdoc.rs captures a frame).
 # Idempotent: a second run only checks.
 set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
@@ -47,7 +47,7 @@ pkgs=(libvulkan1 vulkan-tools vulkan-validationlayers cmake ninja-build python3 
       xvfb xauth libx11-6 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0
       fonts-dejavu-core renderdoccmd python3-renderdoc)
 
-# APT_ETC: only for tests of the mirror detection (tests/setup_script.rs).
+# APT_ETC: only for tests of the mirror detection (tests/cli/setup_script.rs).
 APT_ETC=${APT_ETC:-/etc/apt}
 if [ "${1:-}" = "--print-mirror" ]; then
   debian_mirror

@@ -155,7 +155,7 @@ bool inside(ivec2 p) {
 // of the pair (the pass got 1.35-1.6x faster on lavapipe:
 // bench/results/lavapipe-2core-vm-frame-passes.md). Same values, same
 // arithmetic: the image is that of the per-pixel version, bit for bit,
-// which EDGE_AA_TILED = false runs (tests/antialias.rs compares the two).
+// which EDGE_AA_TILED = false runs (tests/render/antialias.rs compares the two).
 layout(constant_id = SPEC_EDGE_AA_TILED) const bool EDGE_AA_TILED = true;
 const int TILE = 10;
 shared uvec2 s_hit[TILE * TILE];

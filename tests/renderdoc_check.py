@@ -1,4 +1,4 @@
-"""Opens a RenderDoc capture, replays it and prints what tests/renderdoc.rs checks.
+"""Opens a RenderDoc capture, replays it and prints what tests/cli/renderdoc.rs checks.
 
 Usage: /usr/bin/python3 tests/renderdoc_check.py CAPTURE.rdc
 

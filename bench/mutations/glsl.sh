@@ -2,7 +2,8 @@
 # Hand mutations of the GLSL, each with the test that must catch it: applies
 # them one by one to a scratch copy of the tree (never to this checkout),
 # builds it against this checkout's target directory (so shaderc is not
-# rebuilt) and runs the named test. Prints one line per mutation: caught
+# rebuilt) and runs the named test (crate: a folder of tests/, e.g. report; filter:
+# module::test). Prints one line per mutation: caught
 # (the test failed, as it must) or MISSED; exits 1 if any was missed.
 # Usage: bash bench/mutations/glsl.sh [NAME_FILTER]
 # The list: bench/mutations/glsl.txt, one mutation a line:
@@ -23,6 +24,10 @@ while IFS='|' read -r name file expr crate test; do
   test=$(echo "$test" | xargs); expr=$(echo "$expr" | sed 's/^ *//; s/ *$//')
   [[ -z "$name" || "$name" == \#* ]] && continue
   [[ -n "$filter" && "$name" != *"$filter"* ]] && continue
+  # A "|" inside the sed expression would shift the fields: refuse the line.
+  if [[ -z "$crate" || -z "$test" || "$test" == *"|"* ]]; then
+    echo "$name: malformed line (five fields separated by |; no | inside the expression)"; missed=1; continue
+  fi
   rm -rf "$scratch/tree" && mkdir -p "$scratch/tree"
   git ls-files -z --cached --others --exclude-standard | xargs -0 cp --parents -t "$scratch/tree"
   ln -s "$root/../shared" "$scratch/shared" 2>/dev/null || true

@@ -24,7 +24,7 @@ vec3 environment(vec3 dir) {
 // coefficients (scene/sh, 3 bands). The basis is scene/sh/basis.rs's, in
 // its frame x = -n.z, y = n.x, z = n.y (polar angle from +Y, azimuth
 // atan2(n.x, -n.z), the map's own). The Hann-windowed projection keeps it
-// non-negative on the shipped maps (tests/ibl.rs checks the sun maps), but
+// non-negative on the shipped maps (tests/render/ibl.rs checks the sun maps), but
 // not everywhere: light from one cap on black dips to -0.3% of the peak
 // opposite it, hence the clamp (a negative pixel would poison the
 // log-average exposure).

@@ -1,6 +1,6 @@
 // Dielectric interface: exact Fresnel reflectance and the refracted
 // direction, sharing one Snell term so they agree on total internal
-// reflection. Closed-form tests: tests/shading_closed_form.rs.
+// reflection. Closed-form tests: tests/render/shading_closed_form.rs.
 #ifndef FRESNEL_GLSL
 #define FRESNEL_GLSL
 

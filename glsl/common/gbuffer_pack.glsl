@@ -1,7 +1,7 @@
 // How the G-buffer stores a unit normal: octahedral mapping (Cigolle et
 // al., "A Survey of Efficient Representations for Independent Unit
 // Vectors", JCGT 2014) quantized to two 16-bit snorms in one uint. Max
-// angular error 0.0036 degrees (tests/shading_closed_form.rs), a quarter
+// angular error 0.0036 degrees (tests/render/shading_closed_form.rs), a quarter
 // of the bytes of the rgba16f vector it replaced. Written by gbuffer_resolve.comp
 // and the `primary` pass, read by gbuffer_read.glsl and the edge AA.
 #ifndef GBUFFER_PACK_GLSL

@@ -1,6 +1,6 @@
 // Tone curves: exposed linear radiance -> display-referred [0, 1], before
 // sRGB encoding. Every curve maps 0 to 0 and is non-decreasing (tested
-// through the shading probe, tests/tonemap.rs).
+// through the shading probe, tests/render/tonemap.rs).
 #ifndef TONEMAP_GLSL
 #define TONEMAP_GLSL
 

@@ -1,7 +1,7 @@
 #version 460
 // Evaluates the shading functions the renderer uses (BRDF, Fresnel,
 // refraction, ray offset, tone curves, eye adaptation) on host-given inputs, so tests can check the
-// compiled GLSL itself against closed forms (tests/shading_closed_form.rs).
+// compiled GLSL itself against closed forms (tests/render/shading_closed_form.rs).
 // Not part of any frame.
 #extension GL_EXT_scalar_block_layout : require
 #include "../common/types.glsl"

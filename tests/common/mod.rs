@@ -85,7 +85,7 @@ pub fn out_dir() -> PathBuf {
 /// none by more than GOLDEN_MAX_ERROR. Measured on lavapipe: every golden
 /// re-renders with 0 differing pixels (max error 0), while one material
 /// changed on one object differs on several % of the frame (see
-/// tests/models.rs) — a PSNR bound of 35 dB let that pass.
+/// tests/render/models.rs) — a PSNR bound of 35 dB let that pass.
 pub const GOLDEN_NOISE: u8 = 2;
 pub const GOLDEN_MAX_SHARE: f64 = 0.001;
 pub const GOLDEN_MAX_ERROR: u8 = 16;

@@ -306,13 +306,13 @@ rotation_deg = [0.0, 30.0, 0.0]
 material = "red"
 "#;
 
-/// A white 4x4 floor (4 vertices; tests/prt.rs subdivides it) under a
+/// A white 4x4 floor (4 vertices; tests/render/prt.rs subdivides it) under a
 /// sphere of radius 1 centred at height 2; the camera looks at the origin
 /// from the side, under the sphere. No light: the frame is the ambient
 /// term. Under a constant environment L the unoccluded ambient irradiance
 /// of a floor point at distance D from the centre is pi L (1 - r^2 d / D^3)
 /// (pi L (1 - (r/d)^2) below the centre); the sphere's underside sees the
-/// floor (tests/prt.rs, tests/prt_report.rs).
+/// floor (tests/render/prt.rs, tests/report/prt_report.rs).
 pub const PLANE_UNDER_SPHERE: &str = r#"
 [[camera]]
 position = [3.0, 0.6, 0.0]

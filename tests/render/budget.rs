@@ -1,0 +1,277 @@
+//! The per-object ray-tracing budget (render/budget): in paper and effects
+//! mode a budget of 0 with the paper's fallback (`--fallback none`) renders
+//! exactly the raster-only image and an unlimited one exactly the full
+//! hybrid image, on every backend; each effect's selection bit gates
+//! exactly that effect; a partial effect traces its share of an object's
+//! pixels, in tiles that nest as the share grows; a K = 0 object is never
+//! selected; stickiness keeps the selection steady over a slow pan.
+use crate::common;
+
+use common::BACKENDS;
+use glam::Vec3;
+use hybrid_rt::gpu::shared::{
+    EFFECT_ALL, EFFECT_BIT_REFLECTIONS, EFFECT_BIT_REFRACTIONS, EFFECT_BIT_SHADOWS,
+};
+use hybrid_rt::metrics::diff_stats;
+use hybrid_rt::render::budget::effects::{selection_word, traced_fraction};
+use hybrid_rt::render::budget::{BudgetMode, BudgetSettings, Fallback};
+use hybrid_rt::render::shading::{AaMode, Effects};
+use hybrid_rt::render::{RenderSettings, Renderer};
+use hybrid_rt::scene::{Camera, Scene};
+
+const W: u32 = 96;
+const H: u32 = 54;
+
+fn budget(t: f64, stickiness: f32) -> Option<BudgetSettings> {
+    Some(BudgetSettings { stickiness, ..BudgetSettings::paper(t) })
+}
+
+fn default_scene() -> Scene {
+    Scene::load(&common::repo_path("assets/default.toml")).unwrap()
+}
+
+#[test]
+fn zero_budget_is_raster_only_and_unlimited_is_full_hybrid_on_every_backend() {
+    let scene = default_scene();
+    for backend in BACKENDS {
+        let full = RenderSettings { backend, ..Default::default() };
+        let none = Effects { shadows: false, reflections: false, refractions: false, ..full.effects };
+        let raster = common::render_scene(&scene, W, H, &RenderSettings { effects: none, ..full });
+        let hybrid = common::render_scene(&scene, W, H, &full);
+        // The scene's effects are visible: the two references differ.
+        let (max_effects, share) = diff_stats(&raster.rgb8(), &hybrid.rgb8(), 3, 8);
+        assert!(share > 0.02, "{backend:?}: the effects barely show ({:.2}%)", share * 100.0);
+        for mode in [BudgetMode::Paper, BudgetMode::Effects] {
+            let with = |t: f64| RenderSettings {
+                budget: Some(BudgetSettings { mode, budget: t, stickiness: 0.0, fallback: Fallback::None }),
+                ..full
+            };
+            let zero = common::render_scene(&scene, W, H, &with(0.0));
+            let inf = common::render_scene(&scene, W, H, &with(f64::INFINITY));
+            let (max_zero, _) = diff_stats(&raster.rgb8(), &zero.rgb8(), 3, 0);
+            let (max_inf, _) = diff_stats(&hybrid.rgb8(), &inf.rgb8(), 3, 0);
+            eprintln!(
+                "{backend:?} {mode:?}: budget 0 vs raster only max {max_zero}, inf vs hybrid max {max_inf}; \
+                 effects change {:.1}% of pixels (max {max_effects})",
+                share * 100.0
+            );
+            assert_eq!(max_zero, 0, "{backend:?} {mode:?}: budget 0 differs from the raster-only image");
+            assert_eq!(
+                max_inf, 0,
+                "{backend:?} {mode:?}: an unlimited budget differs from the full hybrid image"
+            );
+        }
+    }
+}
+
+/// Each effect's bit gates exactly that effect: with only effect e on, a
+/// selection of e alone renders the traced image and a selection of every
+/// other bit the untraced one, bit for bit. (Effects are checked one at a
+/// time: a traced chain keeps everything beyond its first ray, its own
+/// shadow rays and nested reflections included, which global switches turn
+/// off, so "all but e" has no global-switch equivalent.)
+#[test]
+fn each_effect_bit_gates_exactly_its_effect() {
+    let scene = default_scene();
+    let ctx = common::validated_context();
+    let n = scene.objects.len();
+    let camera = scene.cameras[0].clone();
+    let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::effects(f64::INFINITY) };
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
+    let none = Effects { shadows: false, reflections: false, refractions: false, ..Effects::default() };
+    let with = |effects: Effects| RenderSettings { effects, ..Default::default() };
+    let untraced = r.render(&ctx, &scene, &camera, &with(none)).unwrap();
+    let cases = [
+        (EFFECT_BIT_SHADOWS, "shadows", Effects { shadows: true, ..none }),
+        (EFFECT_BIT_REFLECTIONS, "reflections", Effects { reflections: true, ..none }),
+        (EFFECT_BIT_REFRACTIONS, "refractions", Effects { refractions: true, ..none }),
+    ];
+    for (bit, name, only) in cases {
+        let traced = r.render(&ctx, &scene, &camera, &with(only)).unwrap();
+        let settings = RenderSettings { budget: Some(b), ..with(only) };
+        let mut selected = |bits: u32| {
+            // A frame under the budget first (its passes), then the override.
+            r.render(&ctx, &scene, &camera, &settings).unwrap();
+            r.set_budget_selection(&b, vec![bits; n]);
+            r.render(&ctx, &scene, &camera, &settings).unwrap()
+        };
+        let (max_on, _) = diff_stats(&traced.rgb8(), &selected(1 << bit).rgb8(), 3, 0);
+        let (max_off, _) = diff_stats(&untraced.rgb8(), &selected(EFFECT_ALL & !(1 << bit)).rgb8(), 3, 0);
+        let (_, shows) = diff_stats(&untraced.rgb8(), &traced.rgb8(), 3, 4);
+        eprintln!(
+            "{name}: selected alone vs traced max {max_on}, every other bit vs untraced max {max_off}; \
+             the effect shows on {:.1}% of pixels",
+            shows * 100.0
+        );
+        assert!(shows > 0.005, "{name}: the default scene does not show the effect");
+        assert_eq!(max_on, 0, "{name}: its bit alone does not render the traced effect");
+        assert_eq!(max_off, 0, "{name}: the other bits render some of it");
+    }
+    r.destroy(&ctx);
+}
+
+/// A partial effect (effects mode's leftover budget) traces its share of
+/// every pixel tile hash, so of an object's shadow rays; the tiles traced at
+/// a share are traced at every larger one, so a growing budget only adds
+/// shadows. Paper mode's settings carry the override (its report counts the
+/// rays of every frame, calibrated or not).
+#[test]
+fn a_partial_effect_traces_its_share_of_the_pixels_in_nested_tiles() {
+    let scene = default_scene();
+    let ctx = common::validated_context();
+    let n = scene.objects.len();
+    let camera = scene.cameras[0].clone();
+    // 40x23 tiles: enough for the share of traced rays to be near the
+    // word's (binomial spread ~2% at share 0.5 over the lit tiles).
+    let (w, h) = (320, 180);
+    let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::paper(f64::INFINITY) };
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
+    let only_shadows =
+        Effects { shadows: true, reflections: false, refractions: false, ..Effects::default() };
+    // No anti-aliasing: it blends traced and untraced neighbours at tile edges.
+    let settings =
+        RenderSettings { effects: only_shadows, budget: Some(b), aa: AaMode::None, ..Default::default() };
+    let mut shadow_rays = |word: u32| {
+        r.render(&ctx, &scene, &camera, &settings).unwrap();
+        r.set_budget_selection(&b, vec![word; n]);
+        let out = r.render(&ctx, &scene, &camera, &settings).unwrap();
+        (r.budget_report().unwrap().measured_rays[0], out.rgb8())
+    };
+    let (all_rays, traced) = shadow_rays(1 << EFFECT_BIT_SHADOWS);
+    let (no_rays, untraced) = shadow_rays(0);
+    assert!(all_rays > 10_000.0 && no_rays == 0.0, "shadow rays: all {all_rays}, none {no_rays}");
+    let mut last: Option<image::RgbImage> = None;
+    for share in [0.25, 0.5, 0.75] {
+        let word = selection_word(0, 1 << EFFECT_BIT_SHADOWS, share);
+        let (rays, img) = shadow_rays(word);
+        let got = rays / all_rays;
+        eprintln!("share {share}: {got:.3} of the shadow rays");
+        assert!((got - traced_fraction(word, 0)).abs() < 0.08, "share {share}: traced {got:.3} of the rays");
+        // Each pixel is the traced or the untraced one; what a smaller
+        // share traced stays traced.
+        let shadowed = |img: &image::RgbImage, x, y| img.get_pixel(x, y) != untraced.get_pixel(x, y);
+        for (x, y, p) in img.enumerate_pixels() {
+            assert!(
+                p == traced.get_pixel(x, y) || p == untraced.get_pixel(x, y),
+                "pixel ({x}, {y}) is mixed"
+            );
+            if let Some(prev) = &last {
+                assert!(!shadowed(prev, x, y) || shadowed(&img, x, y), "share {share} dropped ({x}, {y})");
+            }
+        }
+        last = Some(img);
+    }
+    r.destroy(&ctx);
+}
+
+/// Renders `frames` frames of `scene` from `cameras(i)` with one renderer
+/// and returns each frame's selection (per object).
+fn selections(
+    scene: &Scene,
+    settings: &RenderSettings,
+    frames: usize,
+    camera: impl Fn(usize) -> Camera,
+) -> Vec<Vec<bool>> {
+    let ctx = common::validated_context();
+    let mut r = Renderer::new(&ctx, scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
+    let mut out = Vec::new();
+    for i in 0..frames {
+        r.render(&ctx, scene, &camera(i), settings).unwrap();
+        out.push(r.budget_report().expect("a budget report").selection.mask.clone());
+        let report = r.budget_report().unwrap();
+        assert_eq!(report.effects.iter().map(|&b| b != 0).collect::<Vec<_>>(), report.selection.mask);
+    }
+    r.destroy(&ctx);
+    drop(ctx);
+    out
+}
+
+#[test]
+fn an_object_of_relevance_zero_is_never_selected() {
+    let mut scene = default_scene();
+    let red = scene.objects.iter().position(|o| o.name == "red cube").expect("the default scene's red cube");
+    scene.objects[red].props.relevance = 0.0;
+    let cam = scene.cameras[0].clone();
+    for b in [BudgetSettings::paper(f64::INFINITY), BudgetSettings::effects(f64::INFINITY)] {
+        let settings = RenderSettings { budget: Some(b), ..Default::default() };
+        let sel = selections(&scene, &settings, 2, |_| cam.clone());
+        for mask in &sel {
+            assert!(!mask[red], "{:?}: the K = 0 object was selected: {mask:?}", b.mode);
+            assert!(
+                mask.iter().filter(|&&m| m).count() >= 4,
+                "an unlimited budget selects the rest: {mask:?}"
+            );
+        }
+    }
+}
+
+/// Two equal mirror spheres side by side; the budget fits one. The camera
+/// sways left and right across the midpoint: by centrality the selection
+/// flips at every crossing, unless the selected sphere keeps its place.
+const TWO_SPHERES: &str = r#"
+[[camera]]
+position = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+yfov_deg = 50
+
+[[light]]
+type = "directional"
+direction = [-0.3, -1.0, -0.4]
+intensity = 3.0
+
+[[material]]
+name = "mirror"
+base_color = [0.9, 0.9, 0.9]
+metallic = 1.0
+roughness = 0.05
+
+[[object]]
+name = "left"
+primitive = "sphere"
+radius = 0.5
+translation = [-1.0, 0.0, 0.0]
+material = "mirror"
+
+[[object]]
+name = "right"
+primitive = "sphere"
+radius = 0.5
+translation = [1.0, 0.0, 0.0]
+material = "mirror"
+"#;
+
+#[test]
+fn stickiness_steadies_the_selection_over_a_slow_pan() {
+    let scene = common::scene_from_toml("budget_two_spheres", TWO_SPHERES);
+    let base = scene.cameras[0].clone();
+    // 40 frames swaying the view +-0.4 units, period 10 frames.
+    let pan = |i: usize| {
+        let x = 0.4 * (i as f32 * std::f32::consts::TAU / 10.0 + 0.3).sin();
+        Camera::look_at("pan", base.position(), Vec3::new(x, 0.0, 0.0), base.yfov, base.znear)
+    };
+    let all = selections(
+        &scene,
+        &RenderSettings { budget: budget(f64::INFINITY, 0.0), ..Default::default() },
+        1,
+        pan,
+    );
+    assert!(all[0].iter().all(|&m| m), "both spheres visible: {all:?}");
+    // Room for one sphere (their costs are about equal).
+    let ctx = common::validated_context();
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
+    let settings = RenderSettings { budget: budget(f64::INFINITY, 0.0), ..Default::default() };
+    r.render(&ctx, &scene, &pan(0), &settings).unwrap();
+    let t = 0.6 * r.budget_report().unwrap().selection.spent;
+    r.destroy(&ctx);
+    drop(ctx);
+    let changes = |stickiness: f32| {
+        let settings = RenderSettings { budget: budget(t, stickiness), ..Default::default() };
+        let sel = selections(&scene, &settings, 40, pan);
+        assert!(sel.iter().all(|m| m.iter().filter(|&&b| b).count() == 1), "one sphere fits: {sel:?}");
+        sel.windows(2).filter(|w| w[0] != w[1]).count()
+    };
+    let (loose, sticky) = (changes(0.0), changes(1e4));
+    eprintln!("budget {t:.0}: selection changes over the sway: I = 0: {loose}, I = 1e4: {sticky}");
+    assert!(loose >= 4, "without stickiness the selection should follow the sway ({loose} changes)");
+    assert!(sticky * 4 <= loose, "stickiness does not steady the selection: {sticky} vs {loose} changes");
+}

@@ -1,0 +1,178 @@
+//! Hybrid mode's two primary-visibility techniques (`--primary-visibility
+//! raster|traced`, render/visibility.rs) find the same primary hits: the
+//! traced pass (`visibility trace`) writes the hit ids the raster pass
+//! writes, and `gbuffer resolve` onwards is shared, so a pixel whose camera
+//! ray hits the triangle the rasterizer covered it with is shaded
+//! identically. Only pixels whose centre lies on a triangle edge (the
+//! rasterizer's tie-breaking rule against the ray test's) or an alpha
+//! cut-out's border may hit another triangle; the test bounds how many
+//! pixels differ at all. Also: each technique records its own pass only,
+//! and auto is raster in a renderer that does not measure (deterministic).
+use crate::common;
+
+use common::BACKENDS;
+use hybrid_rt::render::settings::PrimaryVisibility;
+use hybrid_rt::render::shading::{AaMode, Backend};
+use hybrid_rt::render::{FrameOutput, RenderSettings, Renderer};
+use hybrid_rt::scene::Scene;
+
+const W: u32 = 160;
+const H: u32 = 90;
+
+/// Two radiances agree: same hit, same shading (the passes after the
+/// visibility buffer are deterministic; the tolerance only absorbs nothing
+/// but float formatting of equal work).
+fn same(a: f32, b: f32) -> bool {
+    (a - b).abs() <= 1e-5 * a.abs().max(b.abs()).max(1.0)
+}
+
+/// Renders `scene` hybrid with `visibility`; checks which visibility pass ran.
+fn render(scene: &Scene, backend: Backend, visibility: PrimaryVisibility) -> FrameOutput {
+    let settings =
+        RenderSettings { backend, aa: AaMode::None, primary_visibility: visibility, ..Default::default() };
+    let out = common::render_scene(scene, W, H, &settings);
+    let ran = |p: &str| out.timings.iter().any(|(n, _)| *n == p);
+    let (raster, traced) = (ran("gbuffer"), ran("visibility trace"));
+    match visibility {
+        PrimaryVisibility::Traced => assert!(traced && !raster, "traced: {:?}", out.timings),
+        // Auto without measuring is raster.
+        _ => assert!(raster && !traced, "{visibility:?}: {:?}", out.timings),
+    }
+    out
+}
+
+/// Pixels whose radiance differs between the two techniques.
+fn differing(a: &FrameOutput, b: &FrameOutput) -> usize {
+    a.hdr.chunks(4).zip(b.hdr.chunks(4)).filter(|(p, q)| !(0..3).all(|c| same(p[c], q[c]))).count()
+}
+
+/// Raster and traced visibility of `scene` agree on all but `max_differing`
+/// pixels (which may differ by anything: another triangle was hit); the
+/// others within `same`'s 1e-5 relative. Returns the traced frame.
+fn agree(name: &str, scene: &Scene, backend: Backend, max_differing: usize) -> FrameOutput {
+    let raster = render(scene, backend, PrimaryVisibility::Raster);
+    let traced = render(scene, backend, PrimaryVisibility::Traced);
+    let n = differing(&raster, &traced);
+    eprintln!("{name} ({backend:?}): {n} of {} pixels differ between raster and traced visibility", W * H);
+    assert!(n <= max_differing, "{name} ({backend:?}): {n} pixels differ (bound {max_differing})");
+    traced
+}
+
+#[test]
+fn raster_and_traced_visibility_agree_on_the_shipped_scenes() {
+    // Measured: 2 and 1 pixels (lavapipe, 160x90).
+    for (file, bound) in [("default.toml", 4), ("armadillo_glass.toml", 4)] {
+        let scene = Scene::load(&common::repo_path(&format!("assets/{file}"))).unwrap();
+        agree(file, &scene, Backend::Compute, bound);
+    }
+}
+
+/// An alpha-masked fence seen directly: the cut-outs fall where the raster's
+/// alpha test puts them, on every backend (ray query, RT pipeline's any-hit
+/// shader, compute BVH).
+#[test]
+fn alpha_masked_cut_outs_agree_on_every_backend() {
+    let scene = fence_scene();
+    for backend in BACKENDS {
+        // Measured: 1 pixel on each backend.
+        let traced = agree("fence", &scene, backend, 3);
+        // The cut-outs are there: the middle row crosses red stripes and
+        // the wall through their gaps (~5 px each) many times.
+        let img = traced.rgb8();
+        let red: Vec<bool> =
+            (0..W).map(|x| img.get_pixel(x, H / 2).0).map(|[r, g, _]| r as u32 > 2 * g as u32).collect();
+        let changes = red.windows(2).filter(|w| w[0] != w[1]).count();
+        assert!(changes >= 16, "{backend:?}: the middle row changes stripe {changes} times: {red:?}");
+    }
+}
+
+/// `auto` in a renderer that does not measure (render, tests, goldens)
+/// records the raster pass on every frame, and never builds the traced one.
+#[test]
+fn auto_without_measuring_is_raster() {
+    let scene = fence_scene();
+    let ctx = common::validated_context();
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: 32, height: 18 }).unwrap();
+    let settings = RenderSettings { backend: Backend::Compute, ..Default::default() };
+    for _ in 0..3 {
+        let out = r.render(&ctx, &scene, &scene.cameras[0], &settings).unwrap();
+        assert!(out.timings.iter().any(|(n, _)| *n == "gbuffer"), "{:?}", out.timings);
+        assert!(!r.pass_names().contains(&"visibility trace"), "{:?}", r.pass_names());
+    }
+    // Measuring: probe frames record one pass each, the raster first (the
+    // first frame after a pass was made compiles it, then PROBE_SAMPLES
+    // measured ones), then the traced pass alike, then only the one chosen,
+    // whatever the times were. No frame records both.
+    r.visibility.measure = true;
+    let probes = 1 + hybrid_rt::render::visibility::PROBE_SAMPLES as usize;
+    let mut seq = Vec::new();
+    for _ in 0..2 * probes + 2 {
+        let out = r.render(&ctx, &scene, &scene.cameras[0], &settings).unwrap();
+        let raster = out.timings.iter().any(|(n, _)| *n == "gbuffer");
+        let traced = out.timings.iter().any(|(n, _)| *n == "visibility trace");
+        seq.push(match (raster, traced) {
+            (true, false) => "raster",
+            (false, true) => "traced",
+            _ => panic!("not one visibility pass: {:?}", out.timings),
+        });
+    }
+    assert_eq!(seq[..2 * probes], [vec!["raster"; probes], vec!["traced"; probes]].concat(), "{seq:?}");
+    assert!(seq[2 * probes + 1] == seq[2 * probes], "{seq:?}");
+    let d = r.visibility.describe().unwrap();
+    assert!(
+        d.contains(&format!("last frame {}", seq[2 * probes + 1]))
+            && d.contains("raster")
+            && d.contains("traced"),
+        "{d}"
+    );
+    r.destroy(&ctx);
+    common::assert_validation_clean(&ctx);
+}
+
+/// A 4 x 4 quad 5 units ahead filling most of the view, alpha-masked with
+/// vertical stripes (5 opaque texels, 3 transparent, of 64; uv repeated
+/// twice), in front of a plane that shows through the gaps.
+fn fence_scene() -> Scene {
+    let (w, h) = (64u32, 64u32);
+    let img = image::RgbaImage::from_fn(w, h, |x, _| {
+        let a = if x % 8 < 5 { 255 } else { 0 };
+        image::Rgba([230, 20, 20, a])
+    });
+    let path = common::scenes::masked_quad_gltf("primary_visibility_fence.gltf", 2.0, 2.0, &img);
+    let toml = format!(
+        r#"
+[environment]
+color = [0.1, 0.3, 1.0]
+
+[[camera]]
+position = [0.3, 0.2, 5.0]
+target = [0.0, 0.0, 0.0]
+yfov_deg = 50
+
+[[light]]
+type = "directional"
+direction = [0.2, -1.0, -0.6]
+intensity = 3.0
+
+[[material]]
+name = "clay"
+base_color = [0.7, 0.6, 0.5]
+roughness = 0.8
+
+[[object]]
+name = "wall"
+primitive = "plane"
+size = [20.0, 20.0]
+material = "clay"
+translation = [0.0, 0.0, -2.0]
+rotation_deg = [90.0, 0.0, 0.0]
+
+[[object]]
+name = "fence"
+gltf = "{}"
+rotation_deg = [0.0, 20.0, 0.0]
+"#,
+        path.display()
+    );
+    common::scene_from_toml("primary_visibility_fence", &toml)
+}

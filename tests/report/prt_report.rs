@@ -1,0 +1,108 @@
+//! `report --prt` end to end (src/report/prt.rs) on the plane under a
+//! sphere (tests/common/scenes.rs) under a constant environment: the report
+//! renders the ray-traced reference and the selected transfers and gives
+//! one row per variant with its precompute, composite and frame times; PRT
+//! shadowed is closer to the reference than unshadowed (the sphere's
+//! underside sees the floor, which only the shadowed transfer and the
+//! reference know about); the files it writes hold those rows.
+use crate::common;
+
+use std::path::PathBuf;
+
+use hybrid_rt::app::{EnvOverrides, RenderJob};
+use hybrid_rt::render::ReferenceSettings;
+use hybrid_rt::report::prt::{self, PrtReportOptions};
+use hybrid_rt::scene::EnvLayout;
+
+#[test]
+fn prt_report_rows_and_shadowed_beats_unshadowed() {
+    let tmp = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    std::env::set_var(hybrid_rt::prt::CACHE_DIR_ENV, tmp.join("prt-report-cache"));
+    let scene = tmp.join("scenes").join("prt_report_plane_sphere.toml");
+    std::fs::create_dir_all(scene.parent().unwrap()).unwrap();
+    std::fs::write(&scene, common::scenes::PLANE_UNDER_SPHERE).unwrap();
+    let map = common::write_hdr("prt_report_constant", 32, 16, |_, _| [1.0; 3]);
+    let job = RenderJob {
+        env: EnvOverrides { map: Some((map, EnvLayout::Equirect)), ..Default::default() },
+        settings: hybrid_rt::render::RenderSettings {
+            prt: hybrid_rt::render::PrtOptions { samples: 16, ..Default::default() },
+            ..Default::default()
+        },
+        ..RenderJob::new(&scene, 48, 27)
+    };
+    let opts = PrtReportOptions {
+        frames: 5,
+        warmup: 1,
+        knobs: prt::parse_selection("transfer=prt-unshadowed:prt-shadowed,bands=3,sh-samples=exact").unwrap(),
+        reference: ReferenceSettings { samples: 64, bounces: 1 },
+        ..PrtReportOptions::new(job, tmp.join("prt-report-out"))
+    };
+    let ctx = common::validated_context();
+    let report = prt::run(&ctx, &opts).unwrap();
+    let got: Vec<_> = report
+        .rows
+        .iter()
+        .map(|r| (r.setting.transfer.as_str(), r.setting.bands, r.setting.sh_samples.as_str()))
+        .collect();
+    assert_eq!(got, [("prt-unshadowed", 3, "exact"), ("prt-shadowed", 3, "exact")]);
+    for r in &report.rows {
+        let m = &report.measured[r.measured];
+        let p = r.precompute.expect("a PRT row has a precompute");
+        assert!(p.seconds.is_finite() || !p.computed, "{:?}", r.setting);
+        assert!(m.pass_ms("composite") > 0.0 && m.timing.median >= m.pass_ms("composite"), "{:?}", m.timing);
+        assert!(r.flip_mean.is_finite() && r.psnr.is_finite());
+    }
+    let (unshadowed, shadowed) = (report.rows[0].flip_mean, report.rows[1].flip_mean);
+    println!(
+        "ꟻLIP against the reference: prt-unshadowed {unshadowed:.5}, prt-shadowed {shadowed:.5}; reference \
+         at {} vs 64 samples {:.5}",
+        report.convergence.0, report.convergence.1
+    );
+    assert!(shadowed < unshadowed, "shadowed {shadowed} is not below unshadowed {unshadowed}");
+    // The reference's own noise is below what shadowing changes.
+    assert!(
+        report.convergence.1 < unshadowed - shadowed,
+        "reference not converged: {}",
+        report.convergence.1
+    );
+    let files = hybrid_rt::report::prt_write::write_all(&report, &opts.out).unwrap();
+    assert!(files.iter().any(|f| f.ends_with("prt_error_vs_time.png")));
+    let csv = std::fs::read_to_string(opts.out.join("prt.csv")).unwrap();
+    let lines: Vec<_> = csv.lines().collect();
+    assert_eq!(lines.len(), 3, "{csv}");
+    assert!(
+        lines[1].contains(",prt-unshadowed,3,exact,16,") && lines[2].contains(",prt-shadowed,3,exact,16,"),
+        "{csv}"
+    );
+    drop(ctx); // validation errors, teardown included, fail here
+}
+
+/// Bad `report --prt` input: an error naming the knob and value (exit 1,
+/// checked before anything renders), or a usage error (exit 2); no panic,
+/// nothing written.
+#[test]
+fn prt_report_bad_input_is_named() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("prt-report-bad");
+    let _ = std::fs::remove_dir_all(&out);
+    for (args, code, says) in [
+        (&["--prt", "--knobs", "bands=9"][..], 1, "bands 9"),
+        (&["--prt", "--knobs", "sh-samples=many"], 1, "sh-samples 'many'"),
+        (&["--prt", "--knobs", "transfer=prt-interreflected-0"], 1, "transfer 'prt-interreflected-0'"),
+        (&["--prt", "--knobs", "max-depth"], 1, "unknown knob 'max-depth' for report --prt"),
+        (&["--prt-sweep"], 2, "--prt"),
+        (&["--prt", "--stability"], 2, "--stability"),
+    ] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_hybrid-rt"))
+            .arg("report")
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: error does not say {says}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}
