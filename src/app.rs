@@ -17,13 +17,17 @@ mod benchmark;
 mod budget_args;
 pub mod cli_parse;
 mod env_args;
+mod gpu_args;
 mod path_args;
 mod rays;
+mod view_args;
 pub use benchmark::*;
 pub use budget_args::BudgetArgs;
 pub use env_args::{EnvArgs, EnvOverrides};
+pub use gpu_args::GpuArgs;
 pub use path_args::{PathArgs, MAX_PATH_SAMPLES};
 pub use rays::{rays_command, KindReport, RayBench};
+pub use view_args::{OnOff, ToneArgs, ViewArgs};
 
 /// The bundled default scene, looked for in the working directory, next to
 /// the executable (an installed copy, or `target/<profile>/` inside the

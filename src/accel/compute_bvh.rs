@@ -21,11 +21,9 @@ use anyhow::{Context as _, Result};
 use ash::vk;
 use glam::{DMat4, Mat4};
 
-use gpu_allocator::MemoryLocation;
-
 use super::bvh::{triangle_aabbs, Bvh, BvhNode, WideBvh, DEFAULT_ALPHA};
 use super::compute_refit::ComputeRefit;
-use super::compute_top_level::TopLevelRefit;
+use super::compute_top_level::{host_buffer, TopLevelRefit};
 use super::dynamic::{RebuildPolicy, RefitState, Update};
 use super::flat::{FlatStatic, FlatTriangle};
 use super::watertight::triangle_positions;
@@ -149,15 +147,6 @@ struct TreeData<'a> {
     nodes: &'a [BvhNode],
     prims: &'a [u32],
     flat_tris: &'a [FlatTriangle],
-}
-
-/// Top-level buffers are rewritten every frame something moves, through
-/// the frame's ring slot (never in place: a frame in flight reads them);
-/// sized for the worst case once. Host-visible only for the tests' reads
-/// of the GPU's fit (`gpu_top_level`).
-pub(super) fn host_buffer(ctx: &Context, name: &str, bytes: usize) -> Result<Buffer> {
-    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    Buffer::new(ctx, name, bytes as u64, usage, MemoryLocation::CpuToGpu)
 }
 
 impl ComputeBvh {

@@ -6,6 +6,7 @@
 
 use anyhow::Result;
 use ash::vk;
+use gpu_allocator::MemoryLocation;
 
 use crate::gpu::shared::{
     TOP_FIT_BLAS_NODES, TOP_FIT_INSTANCES, TOP_FIT_NODES, TOP_FIT_ORDER, TOP_FIT_PRIMS,
@@ -15,6 +16,15 @@ use super::bvh::{Bvh, MAX_DEPTH};
 use crate::vk::frame_ring::Uploads;
 use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
 use crate::vk::{memory_barrier, Buffer, Context};
+
+/// Top-level buffers are rewritten every frame something moves, through
+/// the frame's ring slot (never in place: a frame in flight reads them);
+/// sized for the worst case once. Host-visible only for the tests' reads
+/// of the GPU's fit (`gpu_top_level`).
+pub(super) fn host_buffer(ctx: &Context, name: &str, bytes: usize) -> Result<Buffer> {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    Buffer::new(ctx, name, bytes as u64, usage, MemoryLocation::CpuToGpu)
+}
 
 /// Mirrors `Push` in glsl/anim/tlas_refit.comp.
 #[repr(C)]
@@ -47,7 +57,7 @@ impl TopLevelRefit {
     ) -> Result<TopLevelRefit> {
         // Every node plus the level boundaries of the deepest allowed tree.
         let capacity = (2 * instances.max(1) - 1) + MAX_DEPTH + 2;
-        let order = super::compute_bvh::host_buffer(ctx, "BVH top-level refit order", 4 * capacity)?;
+        let order = host_buffer(ctx, "BVH top-level refit order", 4 * capacity)?;
         // Objects land in `fit` as they are made: an error destroys them.
         let mut fit = TopLevelRefit {
             order,

@@ -568,7 +568,7 @@ pub fn bench_command(
 /// The tables of `reports` as CSV: one row per variant and pass (the
 /// frame total last), GPU ms.
 pub fn bench_csv(reports: &[BenchReport]) -> String {
-    use crate::report::write::{csv_field, csv_number};
+    use crate::csv::{csv_field, csv_number};
     let mut s = String::from(
         "variant,mode,backend,accel_update,config,pass,ms_min,ms_median,ms_p95,ms_max,frames,width,height,\
          rays_camera,rays_shadow,rays_secondary\n",

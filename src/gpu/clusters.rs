@@ -18,7 +18,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 
-use super::scene::Draw;
+use super::draw::Draw;
 use super::shared::{CLUSTER_STRIDE, CLUSTER_TRIANGLES, OCC_COUNTER_SLOTS};
 use crate::scene::{Aabb, Scene};
 use crate::vk::{Buffer, Context};

@@ -4,6 +4,7 @@
 //! `render`): it imports only `vk` and `scene`.
 
 pub mod clusters;
+mod draw;
 pub mod emitters;
 pub mod env_sampling;
 pub mod env_sh;

@@ -8,6 +8,7 @@ use ash::vk;
 use glam::{Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
+pub use super::draw::{Draw, PrimitiveRange};
 use super::env_sh::project_environment;
 use super::origin::RenderOrigin;
 use super::shadow_map::ShadowMaps;
@@ -33,24 +34,6 @@ const TRANSFER_BOTH: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
     vk::BufferUsageFlags::TRANSFER_SRC.as_raw() | vk::BufferUsageFlags::TRANSFER_DST.as_raw(),
 );
 
-/// Where one mesh primitive lives in the shared buffers.
-#[derive(Clone, Copy, Debug)]
-pub struct PrimitiveRange {
-    pub first_index: u32,
-    pub index_count: u32,
-    pub vertex_offset: u32,
-    pub vertex_count: u32,
-}
-
-/// One draw of the G-buffer pass.
-#[derive(Clone, Copy, Debug)]
-pub struct Draw {
-    pub instance: u32,
-    pub range: PrimitiveRange,
-    pub alpha_mode: AlphaMode,
-    pub double_sided: bool,
-}
-
 pub struct GpuScene {
     pub vertices: Buffer,
     pub indices: Buffer,
@@ -72,7 +55,7 @@ pub struct GpuScene {
     /// BUDGET_STAT_WORDS + 1 words per object (render/budget).
     pub budget_stats: Buffer,
     pub budget_mask: Buffer,
-    /// Diffuse PRT transfer (gpu/prt_buffer.rs), or its 4-word placeholder.
+    /// Diffuse PRT transfer (prt/pack.rs), or its 4-word placeholder.
     pub prt: Buffer,
     pub textures: Vec<Image>,
     samplers: Vec<(SamplerDesc, vk::Sampler)>,
@@ -345,7 +328,7 @@ impl GpuScene {
         up.write(&self.frame, 0, bytemuck::bytes_of(frame))
     }
 
-    /// Replaces the PRT buffer (`words`: gpu/prt_buffer.rs `pack`; None: the
+    /// Replaces the PRT buffer (`words`: prt/pack.rs `pack`; None: the
     /// placeholder). Waits for the device: the scene set is rewritten.
     pub fn set_prt(&mut self, ctx: &Context, words: Option<&[u32]>) -> Result<()> {
         unsafe { ctx.device.device_wait_idle() }

@@ -36,7 +36,7 @@ shared! {
     // lights by the `shadow_map` pass), and each light's view-projection.
     id SCENE_SHADOW_MAPS = 11;
     id SCENE_SHADOW_VIEWS = 12;
-    // Diffuse PRT (gpu/prt_buffer.rs, glsl/common/prt.glsl): a header of
+    // Diffuse PRT (prt/pack.rs, glsl/common/prt.glsl): a header of
     // PRT_HEADER_WORDS words (coefficients, channels, instance count, 0),
     // per instance its first transfer vertex (PRT_NO_VERTEX: animated or
     // skinned, SH irradiance instead), then the per-vertex transfer floats.
@@ -333,7 +333,7 @@ shared! {
     uint DEBUG_OBJECT_ID = 7;
 
     // Strides of the host/shader structs in bytes (scalar layout); the Rust
-    // mirrors assert them, tests/shared_layout.rs reads them from SPIR-V.
+    // mirrors assert them, tests/render/shared_layout.rs reads them from SPIR-V.
     uint VERTEX_STRIDE = 48;
     uint MATERIAL_STRIDE = 112;
     uint INSTANCE_STRIDE = 160;

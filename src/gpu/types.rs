@@ -1,6 +1,6 @@
 //! Rust mirrors of `glsl/common/types.glsl` (scalar block layout). The
 //! sizes are asserted against the strides in `shared_values.rs`, which the
-//! shaders' layout is tested against (tests/shared_layout.rs).
+//! shaders' layout is tested against (tests/render/shared_layout.rs).
 
 use bytemuck::{Pod, Zeroable};
 

@@ -21,6 +21,7 @@
 
 mod cache;
 mod interreflect;
+mod pack;
 mod transfer;
 
 use std::time::Instant;
@@ -29,6 +30,7 @@ use anyhow::{ensure, Result};
 use glam::{DMat3, DVec3};
 
 pub use cache::{default_cache_dir, key as cache_key, user_cache_dir, CacheOutcome, PrtCache, CACHE_DIR_ENV};
+pub use pack::pack;
 pub use transfer::offset_origin;
 
 use crate::scene::sh::{check_bands, ShCoeffs};

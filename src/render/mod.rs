@@ -24,6 +24,7 @@ pub mod supersample;
 pub mod targets;
 pub mod tone;
 pub mod tracer;
+pub mod uses;
 pub mod visibility;
 
 use anyhow::{Context as _, Result};
@@ -49,8 +50,7 @@ use tracer::Tracer;
 pub use frame_results::Finished;
 pub use output::FrameOutput;
 pub use path::PathSettings;
-pub use reference::ReferenceSettings;
-pub use settings::{AmbientMode, DebugView, EnvProjection, PrtOptions, RenderSettings};
+pub use settings::{AmbientMode, DebugView, EnvProjection, PrtOptions, ReferenceSettings, RenderSettings};
 
 /// The frame uniforms' tone-mapping fields.
 fn tone_uniforms(t: &ToneSettings, adapt_dt: Option<f32>) -> GpuFrame {

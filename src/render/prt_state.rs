@@ -54,7 +54,7 @@ impl PrtState {
                 Some(s) => {
                     let cache = PrtCache::new(default_cache_dir());
                     let (transfer, _) = cache.get(scene, &s).context("PRT precompute")?;
-                    gpu.set_prt(ctx, Some(&crate::gpu::prt_buffer::pack(&transfer)))?;
+                    gpu.set_prt(ctx, Some(&crate::prt::pack(&transfer)))?;
                 }
             }
             self.uploaded = want;

@@ -1,8 +1,9 @@
 //! The ray-traced reference for diffuse environment light
 //! (`--reference-samples N`): the `reference` pass (passes/reference.rs)
 //! accumulates REFERENCE_SAMPLES_PER_FRAME hemisphere samples per pixel per
-//! frame; here are its settings, when the accumulation starts over, and the
-//! loop that renders the ⌈N/S⌉ frames of a converged image.
+//! frame; here is when the accumulation starts over and the loop that
+//! renders the ⌈N/S⌉ frames of a converged image (its settings:
+//! settings.rs `ReferenceSettings`).
 
 use anyhow::Result;
 
@@ -12,23 +13,6 @@ use crate::gpu::shared::{PATH_SAMPLES_PER_FRAME, REFERENCE_SAMPLES_PER_FRAME};
 use crate::gpu::types::GpuFrame;
 use crate::scene::{Camera, Scene};
 use crate::vk::Context;
-
-/// What the reference integrates.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ReferenceSettings {
-    /// Samples per pixel of the converged image (rounded up to whole frames).
-    pub samples: u32,
-    /// Rays per path: 1 = environment light with visibility, K > 1 adds
-    /// K - 1 diffuse bounces.
-    pub bounces: u32,
-}
-
-impl ReferenceSettings {
-    /// Frames that reach `samples` at REFERENCE_SAMPLES_PER_FRAME a frame.
-    pub fn frames(&self) -> u32 {
-        self.samples.div_ceil(REFERENCE_SAMPLES_PER_FRAME).max(1)
-    }
-}
 
 /// The accumulation's history: frames accumulated since the last change of
 /// what the image shows (camera, environment, path length, targets).

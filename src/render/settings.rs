@@ -2,8 +2,8 @@
 //! pass to `Renderer::render`.
 
 use super::budget;
-use super::shading::{AaMode, Backend, Effects, Mode};
 use super::tone::ToneSettings;
+use crate::gpu::shared::REFERENCE_SAMPLES_PER_FRAME;
 
 /// How the ambient term lights surfaces from an environment map.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -184,7 +184,7 @@ pub struct RenderSettings {
     pub prt: PrtOptions,
     /// The ray-traced reference replaces the ambient radiance at primary
     /// hits (--reference-samples; render/reference.rs).
-    pub reference: Option<super::ReferenceSettings>,
+    pub reference: Option<ReferenceSettings>,
     /// The report's attribution: these `TERM_*` terms come from the path
     /// tracer, accumulated over frames like the reference (pass `terms`;
     /// 0: none). Not with `reference` or a debug view. No flag.
@@ -229,6 +229,126 @@ impl Default for RenderSettings {
             edge_aa_tiled: true,
         }
     }
+}
+
+/// What the reference integrates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ReferenceSettings {
+    /// Samples per pixel of the converged image (rounded up to whole frames).
+    pub samples: u32,
+    /// Rays per path: 1 = environment light with visibility, K > 1 adds
+    /// K - 1 diffuse bounces.
+    pub bounces: u32,
+}
+
+impl ReferenceSettings {
+    /// Frames that reach `samples` at REFERENCE_SAMPLES_PER_FRAME a frame.
+    pub fn frames(&self) -> u32 {
+        self.samples.div_ceil(REFERENCE_SAMPLES_PER_FRAME).max(1)
+    }
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Mode {
+    /// G-buffer primary hits + traced secondary rays.
+    #[default]
+    Hybrid,
+    /// Camera rays traced too (reference for the hybrid image).
+    Rt,
+    /// The path-traced ground truth (`--samples` paths per pixel,
+    /// render/path.rs): every light transport the scene has, no
+    /// approximation but the sample count.
+    Path,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Backend {
+    /// Ray query where supported, else the ray-tracing pipeline, else the
+    /// compute BVH tracer.
+    #[default]
+    Auto,
+    /// VK_KHR_ray_query.
+    Query,
+    /// VK_KHR_ray_tracing_pipeline (ray generation + hit shaders).
+    Pipeline,
+    /// Our own BVH traversed in a compute shader (no ray-tracing extension).
+    Compute,
+}
+
+/// Anti-aliasing of the tone-mapped frame (render/passes/antialias.rs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum AaMode {
+    /// The tone-mapped frame as it is.
+    None,
+    /// Geometric edge filter: depth and normal discontinuities of the
+    /// G-buffer pick the pixels to blur (Shishkovtsov; Sabino Eq. 4.2).
+    #[default]
+    Edge,
+    /// Luminance edge filter in the style of FXAA 3.11 (quality preset).
+    Fxaa,
+}
+
+impl Backend {
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Auto => "auto",
+            Backend::Query => "query",
+            Backend::Pipeline => "pipeline",
+            Backend::Compute => "compute",
+        }
+    }
+}
+
+impl AaMode {
+    pub const ALL: [AaMode; 3] = [AaMode::None, AaMode::Edge, AaMode::Fxaa];
+
+    /// The name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            AaMode::None => "none",
+            AaMode::Edge => "edge",
+            AaMode::Fxaa => "fxaa",
+        }
+    }
+}
+
+/// User-facing switches (all on by default; the scene may still not need them).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Effects {
+    pub shadows: bool,
+    pub reflections: bool,
+    pub refractions: bool,
+    /// Maximum recursion depth of reflection/refraction branches.
+    pub max_depth: u32,
+    /// Branches whose weight falls below this are not traced.
+    pub min_weight: f32,
+    /// Count rays by kind (benchmarks; costs atomics).
+    pub count_rays: bool,
+}
+
+impl Default for Effects {
+    fn default() -> Self {
+        Self {
+            shadows: true,
+            reflections: true,
+            refractions: true,
+            max_depth: 8,
+            min_weight: 0.01,
+            count_rays: false,
+        }
+    }
+}
+
+impl Effects {
+    pub const NONE: Effects = Effects {
+        shadows: false,
+        reflections: false,
+        refractions: false,
+        max_depth: 8,
+        min_weight: 0.01,
+        count_rays: false,
+    };
 }
 
 #[cfg(test)]

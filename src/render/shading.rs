@@ -15,108 +15,7 @@ use crate::scene::{LightKind, Scene};
 use crate::vk::limits::Limits;
 use crate::vk::{Context, RtEnables};
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum Mode {
-    /// G-buffer primary hits + traced secondary rays.
-    #[default]
-    Hybrid,
-    /// Camera rays traced too (reference for the hybrid image).
-    Rt,
-    /// The path-traced ground truth (`--samples` paths per pixel,
-    /// render/path.rs): every light transport the scene has, no
-    /// approximation but the sample count.
-    Path,
-}
-
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum Backend {
-    /// Ray query where supported, else the ray-tracing pipeline, else the
-    /// compute BVH tracer.
-    #[default]
-    Auto,
-    /// VK_KHR_ray_query.
-    Query,
-    /// VK_KHR_ray_tracing_pipeline (ray generation + hit shaders).
-    Pipeline,
-    /// Our own BVH traversed in a compute shader (no ray-tracing extension).
-    Compute,
-}
-
-/// Anti-aliasing of the tone-mapped frame (render/passes/antialias.rs).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum AaMode {
-    /// The tone-mapped frame as it is.
-    None,
-    /// Geometric edge filter: depth and normal discontinuities of the
-    /// G-buffer pick the pixels to blur (Shishkovtsov; Sabino Eq. 4.2).
-    #[default]
-    Edge,
-    /// Luminance edge filter in the style of FXAA 3.11 (quality preset).
-    Fxaa,
-}
-
-impl Backend {
-    /// The name on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Backend::Auto => "auto",
-            Backend::Query => "query",
-            Backend::Pipeline => "pipeline",
-            Backend::Compute => "compute",
-        }
-    }
-}
-
-impl AaMode {
-    pub const ALL: [AaMode; 3] = [AaMode::None, AaMode::Edge, AaMode::Fxaa];
-
-    /// The name on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            AaMode::None => "none",
-            AaMode::Edge => "edge",
-            AaMode::Fxaa => "fxaa",
-        }
-    }
-}
-
-/// User-facing switches (all on by default; the scene may still not need them).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Effects {
-    pub shadows: bool,
-    pub reflections: bool,
-    pub refractions: bool,
-    /// Maximum recursion depth of reflection/refraction branches.
-    pub max_depth: u32,
-    /// Branches whose weight falls below this are not traced.
-    pub min_weight: f32,
-    /// Count rays by kind (benchmarks; costs atomics).
-    pub count_rays: bool,
-}
-
-impl Default for Effects {
-    fn default() -> Self {
-        Self {
-            shadows: true,
-            reflections: true,
-            refractions: true,
-            max_depth: 8,
-            min_weight: 0.01,
-            count_rays: false,
-        }
-    }
-}
-
-impl Effects {
-    pub const NONE: Effects = Effects {
-        shadows: false,
-        reflections: false,
-        refractions: false,
-        max_depth: 8,
-        min_weight: 0.01,
-        count_rays: false,
-    };
-}
+pub use super::settings::{AaMode, Backend, Effects, Mode};
 
 /// What the scene contains that each effect needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -277,9 +176,9 @@ impl ShadingConfig {
     pub fn resolve(
         ctx: &Context,
         needs: SceneNeeds,
-        settings: &crate::render::RenderSettings,
+        settings: &crate::render::settings::RenderSettings,
     ) -> Result<Self> {
-        let debug_view = settings.debug_view != crate::render::DebugView::None;
+        let debug_view = settings.debug_view != crate::render::settings::DebugView::None;
         let (mode, backend) = (settings.mode, settings.backend);
         if mode == Mode::Path {
             return Self::path(ctx, needs, settings);
@@ -318,7 +217,7 @@ impl ShadingConfig {
         let luminance = settings.tone.measures_luminance() && !debug_view;
         let secondary = backend.is_some() && (effects.shadows || effects.reflections || effects.refractions);
         let budget = settings.budget.is_some()
-            && (secondary || settings.debug_view == crate::render::DebugView::Selection);
+            && (secondary || settings.debug_view == crate::render::settings::DebugView::Selection);
         let shadow_fallback = budget
             && backend.is_some()
             && effects.shadows
@@ -348,8 +247,12 @@ impl ShadingConfig {
 
     /// `--mode path`: the path tracer traces everything itself; none of the
     /// hybrid frame's effects, budget, reference or anti-aliasing exist.
-    fn path(ctx: &Context, needs: SceneNeeds, settings: &crate::render::RenderSettings) -> Result<Self> {
-        if settings.debug_view != crate::render::DebugView::None {
+    fn path(
+        ctx: &Context,
+        needs: SceneNeeds,
+        settings: &crate::render::settings::RenderSettings,
+    ) -> Result<Self> {
+        if settings.debug_view != crate::render::settings::DebugView::None {
             bail!("--debug-view shows the G-buffer, which --mode path has not: use --mode hybrid or rt");
         }
         let backend = pick_backend(settings.backend, &ctx.rt, &ctx.caps.limits, &needs, software(ctx))?;

@@ -6,30 +6,9 @@
 use anyhow::Result;
 use ash::vk;
 
-use super::frame::{Access, Resource, Use};
+pub use super::uses::TargetDesc;
+use super::uses::{Access, Resource, Use};
 use crate::vk::{Context, Image};
-
-/// A render target: name (debug name, identity) and format.
-#[derive(Debug, PartialEq, Eq)]
-pub struct TargetDesc {
-    pub name: &'static str,
-    pub format: vk::Format,
-    /// Its contents carry over from frame to frame (an accumulation):
-    /// after its first use a frame starts from the last layout, not from
-    /// undefined contents.
-    pub kept: bool,
-}
-
-impl TargetDesc {
-    pub const fn new(name: &'static str, format: vk::Format) -> TargetDesc {
-        TargetDesc { name, format, kept: false }
-    }
-
-    /// A target whose contents are kept across frames.
-    pub const fn kept(name: &'static str, format: vk::Format) -> TargetDesc {
-        TargetDesc { name, format, kept: true }
-    }
-}
 
 /// One allocated target.
 pub struct Target {

@@ -327,7 +327,7 @@ impl Attribution {
 
     /// attribution.csv: the default frame, a row per term, then a row per object.
     pub fn csv(&self) -> String {
-        use super::write::{csv_field, csv_number};
+        use crate::csv::{csv_field, csv_number};
         let n = |v: f64| csv_number(v, 6);
         let mut header: Vec<String> =
             ["kind", "name", "pixels", "hybrid_luminance", "truth_luminance", "flip_mean", "flip_every_term"]

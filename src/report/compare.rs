@@ -98,7 +98,7 @@ pub fn compare(a: &Path, b: &Path, map: Option<&Path>, threshold: f32, exposure:
     let (width, height) = ia.size();
     let (flip, psnr, rel_mse, hdr, ldr) = match (&ia, &ib) {
         (Loaded::Ldr(x), Loaded::Ldr(y)) => {
-            let psnr = crate::metrics::psnr_rgb8(&x.rgb, &y.rgb, 3, None);
+            let psnr = crate::image_diff::psnr_rgb8(&x.rgb, &y.rgb, 3, None);
             (metrics::flip(x, y)?, psnr, None, false, metrics::LdrDiff::of(x, y))
         }
         (Loaded::Hdr(x), Loaded::Hdr(y)) => {

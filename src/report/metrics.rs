@@ -197,7 +197,7 @@ pub struct LdrDiff {
 
 impl LdrDiff {
     pub fn of(a: &LdrImage, b: &LdrImage) -> LdrDiff {
-        let (max, share_differing) = crate::metrics::diff_stats(&a.rgb, &b.rgb, 3, 0);
+        let (max, share_differing) = crate::image_diff::diff_stats(&a.rgb, &b.rgb, 3, 0);
         LdrDiff { max, share_differing }
     }
 

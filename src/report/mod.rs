@@ -13,6 +13,7 @@
 //! `prt` and `prt_write` (`report --prt`: the environment light's ambient
 //! against a ray-traced reference).
 
+pub mod args;
 pub mod attribution;
 pub mod budget_paths;
 pub mod compare;
@@ -26,6 +27,7 @@ pub mod stability;
 pub mod tone_sheet;
 pub mod truth;
 pub mod write;
+pub use args::ReportArgs;
 
 use std::path::{Path, PathBuf};
 
@@ -537,7 +539,7 @@ fn rows_against_reference(
         if let (true, Some(aa)) = (knob == "aa", aa_reference) {
             let m = &measured[i];
             let map = metrics::flip(&aa.ldr, &m.ldr).with_context(|| format!("comparing aa {value}"))?;
-            let psnr = crate::metrics::psnr_rgb8(&aa.ldr.rgb, &m.ldr.rgb, 3, None);
+            let psnr = crate::image_diff::psnr_rgb8(&aa.ldr.rgb, &m.ldr.rgb, 3, None);
             // relMSE is a radiance measure; anti-aliasing changes no radiance.
             rows.push(Row { knob, value, measured: i, flip_mean: map.mean(), psnr, rel_mse: f64::NAN, map });
             continue;

@@ -282,7 +282,7 @@ fn compare(case: &Case, r: &Rendered, cases: &[Case], all: &[Rendered], exposure
     let errors = reference.and_then(|reference| {
         let e = metrics::compare_hdr(reference, &m.image, exposure)?;
         let (a, b) = (reference.tone_mapped(exposure), m.image.tone_mapped(exposure));
-        let (_, far) = crate::metrics::diff_stats(&a.rgb, &b.rgb, 3, write::MARGINAL_DIFF);
+        let (_, far) = crate::image_diff::diff_stats(&a.rgb, &b.rgb, 3, write::MARGINAL_DIFF);
         Ok((e, far))
     });
     match errors {

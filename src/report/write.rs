@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use super::{Report, Row};
+use crate::csv::{csv_field, csv_number};
 use crate::render::shading::Mode;
 
 /// The fixed leading columns of report.csv.
@@ -12,26 +13,6 @@ pub const CSV_HEADER: &str = "knob,value,backend,ms_median,ms_p95,flip_mean,psnr
 /// Columns after the fixed ones.
 const CSV_EXTRA: &str =
     "rel_mse,width,height,rays_camera,rays_shadow,rays_secondary,non_finite_pixels,aa_pass_ms";
-
-/// One CSV field: quoted (RFC 4180) when it holds a comma, quote or line break.
-pub fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-/// A number for CSV: fixed digits, "inf" / "nan" spelled out, empty for None.
-pub fn csv_number(v: f64, digits: usize) -> String {
-    if v.is_nan() {
-        "nan".into()
-    } else if v.is_infinite() {
-        if v > 0.0 { "inf" } else { "-inf" }.into()
-    } else {
-        format!("{v:.digits$}")
-    }
-}
 
 pub fn csv(report: &Report) -> String {
     let mut s = format!("{CSV_HEADER},{CSV_EXTRA}\n");

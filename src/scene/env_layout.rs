@@ -21,8 +21,8 @@ use std::path::Path;
 use anyhow::{ensure, Result};
 use glam::DVec3;
 
+use super::hdr_image::HdrImage;
 use super::sh::texel_dir;
-use super::HdrImage;
 
 /// How an environment image maps directions to texels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize, clap::ValueEnum)]

@@ -9,6 +9,7 @@ pub mod animation;
 pub mod camera;
 pub mod env_layout;
 pub mod gltf_import;
+mod hdr_image;
 pub mod obj;
 pub mod primitives;
 pub mod scene_file;
@@ -28,6 +29,7 @@ use glam::{DMat4, DQuat, DVec3, Mat4, Quat, Vec3};
 
 pub use camera::Camera;
 pub use env_layout::EnvLayout;
+pub use hdr_image::HdrImage;
 
 /// One vertex of the single shared vertex buffer. Position first so the
 /// acceleration-structure builds can read it in place (stride 48).
@@ -308,14 +310,6 @@ pub struct Instance {
     /// (stable while the node hierarchy does not change), which owns a
     /// deformed vertex range and an updatable acceleration structure.
     pub skinned: Option<usize>,
-}
-
-/// Linear RGB float image (equirectangular environment).
-#[derive(Clone, Debug)]
-pub struct HdrImage {
-    pub width: u32,
-    pub height: u32,
-    pub rgb: Vec<f32>,
 }
 
 #[derive(Clone, Debug)]

@@ -69,18 +69,3 @@ pub fn spirv_image_format(format: vk::Format) -> Option<u32> {
         _ => return None,
     })
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::gpu::shared::{SET_PASS, TONEMAP_IN, TONEMAP_OUT};
-
-    #[test]
-    fn finds_the_tone_mapper_s_image_formats() {
-        let words = crate::vk::pipeline::spirv("tonemap.comp").unwrap();
-        let f = storage_image_formats(&words);
-        let rgba32f = spirv_image_format(vk::Format::R32G32B32A32_SFLOAT).unwrap();
-        let rgba8 = spirv_image_format(vk::Format::R8G8B8A8_UNORM).unwrap();
-        assert_eq!(f, vec![(SET_PASS, TONEMAP_IN, rgba32f), (SET_PASS, TONEMAP_OUT, rgba8)]);
-    }
-}

@@ -219,7 +219,7 @@ fn assert_same_image(shot: &Path, headless: &Path, size: (u32, u32), log: &str) 
     let b = image::open(headless).unwrap().into_rgb8();
     assert_eq!(a.dimensions(), size, "screenshot size");
     assert_eq!(b.dimensions(), size, "headless size");
-    let psnr = hybrid_rt::metrics::psnr_rgb8(a.as_raw(), b.as_raw(), 3, None);
+    let psnr = hybrid_rt::image_diff::psnr_rgb8(a.as_raw(), b.as_raw(), 3, None);
     eprintln!("viewer screenshot {} vs headless render: PSNR {psnr:.2} dB", shot.display());
     assert!(psnr >= 40.0, "{} differs from the headless render: PSNR {psnr:.2} dB", shot.display());
 }

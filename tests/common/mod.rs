@@ -125,8 +125,8 @@ pub fn golden_diff(frame: &FrameOutput, name: &str) -> GoldenDiff {
         .unwrap_or_else(|e| panic!("reference {} missing ({e}); run with UPDATE_GOLDEN=1", golden.display()))
         .into_rgb8();
     assert_eq!(expected.dimensions(), actual.dimensions(), "golden {name}: size differs");
-    let (max, share) = hybrid_rt::metrics::diff_stats(expected.as_raw(), actual.as_raw(), 3, GOLDEN_NOISE);
-    let psnr_db = hybrid_rt::metrics::psnr_rgb8(expected.as_raw(), actual.as_raw(), 3, None);
+    let (max, share) = hybrid_rt::image_diff::diff_stats(expected.as_raw(), actual.as_raw(), 3, GOLDEN_NOISE);
+    let psnr_db = hybrid_rt::image_diff::psnr_rgb8(expected.as_raw(), actual.as_raw(), 3, None);
     GoldenDiff { max, share, psnr_db }
 }
 

@@ -11,7 +11,7 @@ use crate::common;
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
-use hybrid_rt::metrics::diff_stats;
+use hybrid_rt::image_diff::diff_stats;
 use hybrid_rt::render::frame::{Access, Use};
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::animation::find_animation;

@@ -38,10 +38,10 @@ fn moved_instances_match_the_same_pose_uploaded_static() {
         r.destroy(&ctx);
         common::assert_validation_clean(&ctx);
 
-        let (max, frac) = hybrid_rt::metrics::diff_stats(&dynamic.ldr, &baked.ldr, 4, 1);
+        let (max, frac) = hybrid_rt::image_diff::diff_stats(&dynamic.ldr, &baked.ldr, 4, 1);
         eprintln!("{backend:?}: moved vs static: max diff {max}, {:.3}% pixels > 1", frac * 100.0);
         assert!(max <= 1, "{backend:?}: moved instances differ from the static pose (max {max})");
-        let (_, changed) = hybrid_rt::metrics::diff_stats(&before.ldr, &dynamic.ldr, 4, 8);
+        let (_, changed) = hybrid_rt::image_diff::diff_stats(&before.ldr, &dynamic.ldr, 4, 8);
         assert!(changed > 0.005, "{backend:?}: the image did not change when the instances moved");
     }
 }

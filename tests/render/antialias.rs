@@ -130,7 +130,7 @@ fn edge_filter_changes_only_edges_and_lowers_flip_in_both_modes_on_every_backend
         match &hybrid_edge {
             None => hybrid_edge = Some(edge),
             Some(h) => {
-                let (max, share) = hybrid_rt::metrics::diff_stats(&h.ldr, &edge.ldr, 4, 1);
+                let (max, share) = hybrid_rt::image_diff::diff_stats(&h.ldr, &edge.ldr, 4, 1);
                 assert!(
                     max <= 2 && share <= 0.002,
                     "{what} vs hybrid: max {max}, {:.3}% > 1/255",
@@ -202,8 +202,8 @@ fn tiled_edge_filter_matches_the_per_pixel_one() {
             let b = render(&ctx, &mut r, scene, &RenderSettings { edge_aa_tiled: false, ..tiled });
             let plain = render(&ctx, &mut r, scene, &RenderSettings { aa: AaMode::None, ..tiled });
             r.destroy(&ctx);
-            let (_, filtered) = hybrid_rt::metrics::diff_stats(&plain.ldr, &b.ldr, 4, 0);
-            let (max, share) = hybrid_rt::metrics::diff_stats(&a.ldr, &b.ldr, 4, 0);
+            let (_, filtered) = hybrid_rt::image_diff::diff_stats(&plain.ldr, &b.ldr, 4, 0);
+            let (max, share) = hybrid_rt::image_diff::diff_stats(&a.ldr, &b.ldr, 4, 0);
             eprintln!(
                 "{name} {w}x{h} {mode:?}: {:.1}% of pixels filtered; tiled vs per-pixel: max {max}/255 on {:.3}%",
                 filtered * 100.0,

@@ -51,8 +51,8 @@ fn assert_agree(name: &str, frames: &[(Backend, FrameOutput)], bound: Bound) {
         for j in i + 1..frames.len() {
             let (a, fa) = &frames[i];
             let (b, fb) = &frames[j];
-            let (max, frac) = hybrid_rt::metrics::diff_stats(&fa.ldr, &fb.ldr, 4, 2);
-            let psnr = hybrid_rt::metrics::psnr_rgb8(&fa.ldr, &fb.ldr, 4, None);
+            let (max, frac) = hybrid_rt::image_diff::diff_stats(&fa.ldr, &fb.ldr, 4, 2);
+            let psnr = hybrid_rt::image_diff::psnr_rgb8(&fa.ldr, &fb.ldr, 4, None);
             eprintln!(
                 "{name}: {a:?} vs {b:?}: {:.3}% pixels differ by > 2/255, max difference {max}/255, PSNR {psnr:.1} dB",
                 frac * 100.0

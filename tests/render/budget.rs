@@ -12,7 +12,7 @@ use glam::Vec3;
 use hybrid_rt::gpu::shared::{
     EFFECT_ALL, EFFECT_BIT_REFLECTIONS, EFFECT_BIT_REFRACTIONS, EFFECT_BIT_SHADOWS,
 };
-use hybrid_rt::metrics::diff_stats;
+use hybrid_rt::image_diff::diff_stats;
 use hybrid_rt::render::budget::effects::{selection_word, traced_fraction};
 use hybrid_rt::render::budget::{BudgetMode, BudgetSettings, Fallback};
 use hybrid_rt::render::shading::{AaMode, Effects};

@@ -7,7 +7,7 @@
 //! off. With `none` nothing is reflected or shadowed.
 use crate::common;
 
-use hybrid_rt::metrics::diff_stats;
+use hybrid_rt::image_diff::diff_stats;
 use hybrid_rt::render::budget::{BudgetSettings, Fallback};
 use hybrid_rt::render::shading::Effects;
 use hybrid_rt::render::{RenderSettings, Renderer};

@@ -27,7 +27,7 @@ use hybrid_rt::accel::bvh::{Bvh, BvhNode};
 use hybrid_rt::accel::compute_bvh::ComputeBvh;
 use hybrid_rt::accel::dynamic::RebuildPolicy;
 use hybrid_rt::gpu::GpuScene;
-use hybrid_rt::metrics::diff_stats;
+use hybrid_rt::image_diff::diff_stats;
 use hybrid_rt::render::frame::{Access, Use};
 use hybrid_rt::render::shading::{AaMode, Backend, Mode};
 use hybrid_rt::render::skinning::Skinning;

@@ -126,7 +126,7 @@ material = "clay"
             mask.push((-1..=1).all(|dy| (-1..=1).all(|dx| id(x + dx, y + dy) == id(x, y))));
         }
     }
-    let psnr = hybrid_rt::metrics::psnr_rgb8(&hybrid.ldr, &rt.ldr, 4, Some(&mask));
+    let psnr = hybrid_rt::image_diff::psnr_rgb8(&hybrid.ldr, &rt.ldr, 4, Some(&mask));
     eprintln!("mirrored boxes, hybrid vs pure RT: PSNR {psnr:.1} dB over non-edge pixels");
     assert!(psnr >= 40.0, "hybrid and pure RT disagree on mirrored boxes: PSNR {psnr:.1} dB");
 }

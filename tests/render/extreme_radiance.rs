@@ -125,7 +125,7 @@ material = "mirror"
     let rt = common::render_scene(&scene, W, H, &RenderSettings { mode: Mode::Rt, ..Default::default() });
     let max = hybrid.hdr.iter().fold(0.0f32, |m, v| m.max(*v));
     assert_eq!(max, hybrid_rt::gpu::scene::MAX_EMISSIVE, "the lamp's radiance");
-    let (worst, _) = hybrid_rt::metrics::diff_stats(&hybrid.ldr, &rt.ldr, 4, 1);
+    let (worst, _) = hybrid_rt::image_diff::diff_stats(&hybrid.ldr, &rt.ldr, 4, 1);
     assert!(worst <= 1, "hybrid and pure RT differ by {worst}/255 on a 1e6 emitter");
     let rel =
         hybrid.hdr.iter().zip(&rt.hdr).map(|(a, b)| (a - b).abs() / a.abs().max(1.0)).fold(0.0f32, f32::max);

@@ -7,7 +7,7 @@ use crate::common;
 
 use common::BACKENDS;
 use glam::DVec3;
-use hybrid_rt::metrics::{diff_stats, psnr_rgb8};
+use hybrid_rt::image_diff::{diff_stats, psnr_rgb8};
 use hybrid_rt::render::RenderSettings;
 use hybrid_rt::report::stability::cases::transform_scene;
 use hybrid_rt::scene::Scene;

@@ -79,7 +79,7 @@ fn alpha_mask_cuts_out_geometry() {
         }
     }
     let solid = render(&opaque, 240, 135);
-    let (_, differing) = hybrid_rt::metrics::diff_stats(&masked.ldr, &solid.ldr, 4, 8);
+    let (_, differing) = hybrid_rt::image_diff::diff_stats(&masked.ldr, &solid.ldr, 4, 8);
     assert!(differing > 0.01, "alpha mask changed only {:.3}% of pixels", differing * 100.0);
 }
 

@@ -278,7 +278,7 @@ material = "MATERIAL"
             &(backdrop.replace("IOR", "1.0") + &slab.replace("MATERIAL", material)),
         );
         let b = common::render_scene(&with, W, H, &settings());
-        let psnr = hybrid_rt::metrics::psnr_rgb8(&a.ldr, &b.ldr, 4, None);
+        let psnr = hybrid_rt::image_diff::psnr_rgb8(&a.ldr, &b.ldr, 4, None);
         eprintln!("IOR-1 {material} slab: PSNR {psnr:.1} dB against the scene without it");
         assert!(psnr >= 40.0, "IOR-1 {material} slab changed the image: PSNR {psnr:.1} dB");
     }
@@ -321,14 +321,14 @@ material = "wall"
         let s = RenderSettings { backend, ..settings() };
         let a = common::render_scene(&without_ball, W, H, &s);
         let b = common::render_scene(&invisible, W, H, &s);
-        let (max, changed) = hybrid_rt::metrics::diff_stats(&a.ldr, &b.ldr, 4, 2);
+        let (max, changed) = hybrid_rt::image_diff::diff_stats(&a.ldr, &b.ldr, 4, 2);
         eprintln!("IOR-1 sphere on {backend:?}: max difference {max}/255, {changed:.5} of pixels over 2/255");
         assert!(max <= 2 && changed == 0.0, "{backend:?}: the IOR-1 sphere is visible: max {max}/255");
     }
 
     let glass = common::scene_from_toml("glass_ball", &(backdrop.replace("IOR", "1.5") + sphere));
     let g = common::render_scene(&glass, W, H, &settings());
-    let (max, changed) = hybrid_rt::metrics::diff_stats(&a.ldr, &g.ldr, 4, 8);
+    let (max, changed) = hybrid_rt::image_diff::diff_stats(&a.ldr, &g.ldr, 4, 8);
     assert!(max > 30 && changed > 0.01, "the glass ball refracts nothing ({max}, {changed})");
 }
 
@@ -346,7 +346,7 @@ fn facing_mirrors_terminate_at_max_depth() {
         eprintln!("facing mirrors, max depth {depth}: {:.2} s", t.elapsed().as_secs_f64());
     }
     // Deeper recursion shows more inter-reflections.
-    let (_, changed) = hybrid_rt::metrics::diff_stats(&images[0].ldr, &images[1].ldr, 4, 2);
+    let (_, changed) = hybrid_rt::image_diff::diff_stats(&images[0].ldr, &images[1].ldr, 4, 2);
     assert!(changed > 0.01, "depth 2 and 8 look the same ({changed})");
 }
 
@@ -376,7 +376,7 @@ fn hybrid_matches_pure_ray_tracing() {
     let ids =
         common::render_scene(&scene, W, H, &RenderSettings { debug_view: DebugView::Object, ..settings() });
     let mask = edge_mask(&ids);
-    let psnr = hybrid_rt::metrics::psnr_rgb8(&hybrid.ldr, &rt.ldr, 4, Some(&mask));
+    let psnr = hybrid_rt::image_diff::psnr_rgb8(&hybrid.ldr, &rt.ldr, 4, Some(&mask));
     let excluded = mask.iter().filter(|k| !**k).count() as f64 / mask.len() as f64;
     eprintln!(
         "hybrid vs pure RT: PSNR {psnr:.1} dB over non-edge pixels ({:.1}% edge pixels excluded)",

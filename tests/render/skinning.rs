@@ -5,7 +5,7 @@
 use crate::common;
 
 use hybrid_rt::accel::dynamic::RebuildPolicy;
-use hybrid_rt::metrics::diff_stats;
+use hybrid_rt::image_diff::diff_stats;
 use hybrid_rt::render::shading::Backend;
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::animation::find_animation;

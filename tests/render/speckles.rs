@@ -6,7 +6,7 @@
 use crate::common;
 
 use common::BACKENDS;
-use hybrid_rt::metrics::psnr_rgb8;
+use hybrid_rt::image_diff::psnr_rgb8;
 use hybrid_rt::render::shading::Mode;
 use hybrid_rt::render::{FrameOutput, RenderSettings};
 use hybrid_rt::scene::Scene;

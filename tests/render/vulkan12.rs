@@ -86,7 +86,7 @@ fn the_1_2_path_renders_the_1_3_image_on_every_backend() {
                 frame
             })
             .collect();
-        let (max, share) = hybrid_rt::metrics::diff_stats(&frames[0].ldr, &frames[1].ldr, 4, 0);
+        let (max, share) = hybrid_rt::image_diff::diff_stats(&frames[0].ldr, &frames[1].ldr, 4, 0);
         eprintln!(
             "{backend:?} {mode:?}: 1.2 vs 1.3: max difference {max}/255 on {:.3}% of pixels",
             share * 100.0

@@ -42,3 +42,22 @@ pub const PASS: PassDesc = PassDesc {
         )
     },
 };
+
+/// The SPIR-V reflection (vk/reflect.rs) on this pass's shader: it lives
+/// here, not in `vk`, because the bindings it expects are the pass's.
+#[cfg(test)]
+mod tests {
+    use ash::vk;
+
+    use crate::gpu::shared::{SET_PASS, TONEMAP_IN, TONEMAP_OUT};
+    use crate::vk::reflect::{spirv_image_format, storage_image_formats};
+
+    #[test]
+    fn finds_the_tone_mapper_s_image_formats() {
+        let words = crate::vk::pipeline::spirv("tonemap.comp").unwrap();
+        let f = storage_image_formats(&words);
+        let rgba32f = spirv_image_format(vk::Format::R32G32B32A32_SFLOAT).unwrap();
+        let rgba8 = spirv_image_format(vk::Format::R8G8B8A8_UNORM).unwrap();
+        assert_eq!(f, vec![(SET_PASS, TONEMAP_IN, rgba32f), (SET_PASS, TONEMAP_OUT, rgba8)]);
+    }
+}

@@ -9,7 +9,7 @@ use anyhow::{Context as _, Result};
 
 use super::cases::{Against, INVARIANT_PSNR, INVISIBLE_MAX_DIFF, MODE_PSNR};
 use super::{Row, Stability};
-use crate::report::write::{csv_field, csv_number};
+use crate::csv::{csv_field, csv_number};
 
 /// The fixed leading columns of the stability report.csv.
 pub const CSV_HEADER: &str = "case,backend,finite_pct,flip_mean,psnr,ms_median,pass";

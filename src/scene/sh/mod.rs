@@ -36,7 +36,7 @@ pub use project::{
 pub use window::Window;
 
 #[cfg(doc)]
-use super::HdrImage;
+use super::hdr_image::HdrImage;
 
 /// SH coefficients of an RGB function on the sphere: `bands`^2 entries,
 /// coefficient (l, m) at [`sh_index`]`(l, m)`.

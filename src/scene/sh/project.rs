@@ -25,7 +25,7 @@ use anyhow::{ensure, Result};
 use glam::DVec3;
 
 use super::{check_bands, eval_basis, ShCoeffs, Window, DEFAULT_BANDS, MAX_BANDS};
-use crate::scene::HdrImage;
+use crate::scene::hdr_image::HdrImage;
 
 /// What to project and how to post-process it.
 #[derive(Clone, Copy, Debug, PartialEq)]
