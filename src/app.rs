@@ -13,6 +13,7 @@ use crate::render::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::vk::{Context, ContextOptions, DeviceSelector, RenderDocUse};
 
+mod bench_tables;
 mod benchmark;
 mod budget_args;
 pub mod cli_parse;
@@ -21,6 +22,7 @@ mod gpu_args;
 mod path_args;
 mod rays;
 mod view_args;
+pub use bench_tables::*;
 pub use benchmark::*;
 pub use budget_args::BudgetArgs;
 pub use env_args::{EnvArgs, EnvOverrides};

@@ -10,8 +10,9 @@
 //! [`ComputeBvh::prepare_update`] rebuilds the trees the policy marks (on the
 //! CPU; their upload is staged in the frame's ring slot) and the top level's
 //! topology from the bounds the host knows (the last refit roots read
-//! back: with frames in flight, from two frames ago); [`ComputeBvh::record_update`] records the skinned refit and the
-//! GPU fit of the top level's bounds to this frame's roots
+//! back: with frames in flight, from two frames ago);
+//! [`ComputeBvh::record_update`] records the skinned refit and the GPU fit
+//! of the top level's bounds to this frame's roots
 //! ([`TopLevelRefit`]); [`ComputeBvh::finish_update`], after the frame's
 //! fence, takes the roots (a ring download) for the rebuild policy and the next
 //! topology. The topology only decides speed; the bounds tracing uses are
@@ -24,9 +25,9 @@ use glam::{DMat4, Mat4};
 use super::bvh::{triangle_aabbs, Bvh, BvhNode, WideBvh, DEFAULT_ALPHA};
 use super::compute_refit::ComputeRefit;
 use super::compute_top_level::{host_buffer, TopLevelRefit};
+use super::cpu_trace::triangle_positions;
 use super::dynamic::{RebuildPolicy, RefitState, Update};
 use super::flat::{FlatStatic, FlatTriangle};
-use super::watertight::triangle_positions;
 use super::{instance_mask, instance_opaque};
 use crate::gpu::origin::RenderOrigin;
 use crate::gpu::scene::GpuScene;

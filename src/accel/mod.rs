@@ -11,9 +11,9 @@ pub mod bvh;
 pub mod compute_bvh;
 pub mod compute_refit;
 pub mod compute_top_level;
+pub mod cpu_trace;
 pub mod dynamic;
 pub mod flat;
-pub mod watertight;
 
 use dynamic::{DynamicBlases, Update};
 

@@ -8,6 +8,7 @@ mod draw;
 pub mod emitters;
 pub mod env_sampling;
 pub mod env_sh;
+pub mod environment;
 pub mod origin;
 pub mod prt_buffer;
 pub mod scene;

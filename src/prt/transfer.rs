@@ -9,7 +9,7 @@ use glam::{DVec3, Vec3};
 
 use super::WorldVertex;
 use crate::accel::bvh::Bvh;
-use crate::accel::watertight::{traverse_any, traverse_closest};
+use crate::accel::cpu_trace::{traverse_any, traverse_closest};
 use crate::scene::sh::{eval_basis, MAX_BANDS};
 use crate::scene::{Aabb, Scene};
 

@@ -15,6 +15,7 @@ pub mod passes;
 pub mod path;
 mod prt_state;
 pub mod rays;
+pub mod readback;
 pub mod reference;
 pub mod settings;
 pub mod shading;
@@ -24,55 +25,32 @@ pub mod supersample;
 pub mod targets;
 pub mod tone;
 pub mod tracer;
+mod uniforms;
 pub mod uses;
 pub mod visibility;
 
 use anyhow::{Context as _, Result};
 use ash::vk;
-use glam::Mat4;
 
 use crate::accel::dynamic::{RebuildPolicy, Update};
 use crate::gpu::shared::{FRAME_BUDGET, FRAME_FALLBACK_RASTER};
-use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
 use crate::vk::frame_ring::{FrameRing, Uploads};
 use crate::vk::timer::GpuTimer;
 use crate::vk::{Buffer, Context};
 use frame::{Access, Recorder, SharedBuffer, Use};
-use passes::{antialias::final_ldr, composite::HDR, Cx, Init, Pass};
+use passes::{antialias::final_ldr, composite::HDR, Creation, Pass, Recording};
 use shading::{SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;
-use tone::{ExposureState, ToneOperator, ToneSettings};
+use tone::ExposureState;
 use tracer::Tracer;
 
 pub use frame_results::Finished;
 pub use output::FrameOutput;
 pub use path::PathSettings;
 pub use settings::{AmbientMode, DebugView, EnvProjection, PrtOptions, ReferenceSettings, RenderSettings};
-
-/// The frame uniforms' tone-mapping fields.
-fn tone_uniforms(t: &ToneSettings, adapt_dt: Option<f32>) -> GpuFrame {
-    let white = match (t.operator, t.white) {
-        (_, Some(w)) => w,
-        // <= 0: the frame's brightest pixel (measured by `luminance`).
-        (ToneOperator::ReinhardWhite, None) => 0.0,
-        _ => 1.0,
-    };
-    GpuFrame {
-        tonemap: t.operator.code(),
-        auto_exposure: t.auto_exposure.code(),
-        key: t.key,
-        white,
-        adapt_dt: adapt_dt.unwrap_or(0.0),
-        hist_low: t.histogram_low,
-        hist_high: t.histogram_high,
-        speed_brighten: t.speed_brighten,
-        speed_darken: t.speed_darken,
-        ..bytemuck::Zeroable::zeroed()
-    }
-}
 
 /// A pass of the current frame with what it declared.
 struct Recorded {
@@ -355,7 +333,6 @@ impl Renderer {
         self.config.as_ref().map(final_ldr).context("prepare() must run before the output is known")
     }
 
-    /// Names of the passes the current frame records, in order.
     /// The G-buffer draws of the last prepared frame: (recorded, left out
     /// as outside the view frustum). (0, 0) in pure ray-traced mode.
     pub fn raster_draws(&self) -> (usize, u32) {
@@ -390,6 +367,7 @@ impl Renderer {
         self.reference.frames()
     }
 
+    /// Names of the passes the current frame records, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
         let (left_out, vis) = (self.shadow_map_left_out, &self.visibility);
         self.passes.iter().filter(|p| !left_out_this_frame(p.name, left_out, vis)).map(|p| p.name).collect()
@@ -433,7 +411,7 @@ impl Renderer {
         let uses: Vec<Vec<Use>> = chosen.iter().map(|d| (d.uses)(&config)).collect();
         self.allocate_targets(ctx, &config, &uses.iter().flatten().copied().collect::<Vec<_>>())?;
         for (desc, uses) in chosen.into_iter().zip(uses) {
-            let init = Init {
+            let init = Creation {
                 ctx,
                 config: &config,
                 gpu: &self.gpu,
@@ -507,7 +485,6 @@ impl Renderer {
         let camera = &Camera { world: self.gpu.origin.relative(&camera.world), ..camera.clone() };
         let view = camera.view().as_mat4();
         let proj = camera.projection(aspect);
-        let view_proj = proj * view;
         // Only the raster pass draws; pure RT mode and traced visibility find hits by tracing.
         self.draw_list = if self.visibility.before_frame(camera, &scene.bounds, self.config) {
             cull::draw_list(scene, &self.gpu, self.gpu.origin, &(proj.as_dmat4() * camera.view()))
@@ -533,54 +510,25 @@ impl Renderer {
             (_, Some(sh)) => Some(crate::gpu::env_sh::irradiance_uniform(sh, env)),
             _ => None,
         };
-        let mut flags = match settings.budget.map(|b| b.fallback) {
+        let budget_flags = match settings.budget.map(|b| b.fallback) {
             _ if !budget_on => 0,
             Some(budget::Fallback::Raster) => FRAME_BUDGET | FRAME_FALLBACK_RASTER,
             _ => FRAME_BUDGET,
         };
-        if sh.is_some() {
-            flags |= crate::gpu::shared::FRAME_AMBIENT_SH;
-        }
-        let prt = self.prt.radiance().map(|l| crate::gpu::prt_buffer::radiance_uniform(l, env));
-        if prt.is_some() {
-            flags |= crate::gpu::shared::FRAME_AMBIENT_PRT;
-        }
-        let mut frame = GpuFrame {
-            view: view.to_cols_array(),
-            proj: proj.to_cols_array(),
-            view_proj: view_proj.to_cols_array(),
-            inv_view_proj: view_proj.inverse().to_cols_array(),
-            camera_pos: camera.position().to_array(),
-            light_count: self.gpu.light_count,
-            env_color: env.color.to_array(),
-            env_intensity: env.intensity,
-            env_ambient: self.gpu.env_mean.to_array(),
-            env_rotation: env.rotation,
-            resolution: [e.width, e.height],
-            has_env_map: env.map.is_some() as u32,
-            debug_view: settings.debug_view.code(),
-            exposure: settings.exposure,
+        let inputs = uniforms::Inputs {
+            camera,
+            view,
+            proj,
+            extent: e,
+            gpu: &self.gpu,
+            env,
             frame_index: self.frame_index,
-            flags,
-            znear: camera.znear,
-            sh_irradiance: sh.unwrap_or_default(),
-            sh_radiance: prt.unwrap_or([[0.0; 4]; crate::gpu::shared::SH_PRT_MAX_COEFFS as usize]),
-            ..tone_uniforms(&settings.tone, self.adapt_dt)
+            adapt_dt: self.adapt_dt,
+            budget_flags,
+            sh,
+            prt: self.prt.radiance().map(|l| crate::gpu::prt_buffer::radiance_uniform(l, env)),
         };
-        if path_mode {
-            frame.flags |= crate::gpu::shared::FRAME_OPAQUE_OCCLUDERS;
-            frame.accum_bounces = settings.path.max_bounces;
-            frame.path_clamp = settings.path.clamp.unwrap_or(0.0);
-            frame.accum_frame = self.reference.next(&frame);
-        } else if let Some(r) = settings.reference {
-            frame.accum_bounces = r.bounces;
-            frame.accum_frame = self.reference.next(&frame);
-        } else if settings.terms != 0 {
-            // The `terms` pass: the selection where the others keep their path length.
-            frame.accum_bounces = settings.terms;
-            frame.accum_frame = self.reference.next(&frame);
-        }
-        debug_assert!(Mat4::from_cols_array(&frame.view).is_finite());
+        let frame = uniforms::frame(&inputs, settings, &mut self.reference);
         self.gpu.write_frame(&mut Uploads { ring: &mut self.ring, slot }, &frame)
     }
 
@@ -602,7 +550,7 @@ impl Renderer {
         self.record_uploads(ctx, cmd)?;
         let (shadow_map_left_out, vis) = (self.shadow_map_left_out, &self.visibility);
         let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
-        let cx = Cx {
+        let cx = Recording {
             ctx,
             gpu: &self.gpu,
             targets: &self.targets,
@@ -662,43 +610,8 @@ impl Renderer {
         self.prepare(ctx, scene, camera, settings)?;
         let cmd = self.cmd;
         ctx.begin_commands(cmd)?;
-        let (ldr_buf, hdr_buf) = (self.readback_ldr.raw, self.readback_hdr.raw);
-        let ldr = self.output_ldr()?;
-        let uses = outputs(&self.config.context("prepared above")?);
-        self.record_with(ctx, cmd, |rec, t| {
-            rec.pass("readback", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
-                for (desc, buf) in [(ldr, ldr_buf), (&HDR, hdr_buf)] {
-                    let img = t.get(desc).context("output target missing")?;
-                    let region = [vk::BufferImageCopy::default()
-                        .image_subresource(
-                            vk::ImageSubresourceLayers::default().aspect_mask(img.aspect).layer_count(1),
-                        )
-                        .image_extent(vk::Extent3D {
-                            width: t.extent.width,
-                            height: t.extent.height,
-                            depth: 1,
-                        })];
-                    unsafe {
-                        ctx.device.cmd_copy_image_to_buffer(
-                            cmd,
-                            img.raw,
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            buf,
-                            &region,
-                        )
-                    };
-                }
-                // The copies, and the counters and exposure state the
-                // shaders wrote, become visible to the host.
-                crate::vk::memory_barrier(
-                    ctx,
-                    cmd,
-                    (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_WRITE),
-                    (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
-                );
-                Ok(())
-            })
-        })?;
+        let copies = [(self.output_ldr()?, self.readback_ldr.raw), (&HDR, self.readback_hdr.raw)];
+        self.record_with(ctx, cmd, |rec, t| readback::record(ctx, rec, t, &copies))?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
         let done = self.finish_frame(0)?;

@@ -16,7 +16,7 @@ use super::swapchain::Acquired;
 use super::{Flow, FRAMES_IN_FLIGHT};
 use crate::render::frame::{Access, Use};
 use crate::render::{Finished, FrameOutput};
-use crate::vk::{copy_to_host_barrier, image_barrier, Buffer};
+use crate::vk::{copy_image_to_buffer, copy_to_host_barrier, image_barrier, Buffer};
 
 pub(super) struct FrameSlot {
     pub(super) cmd: vk::CommandBuffer,
@@ -349,18 +349,7 @@ impl Viewer {
                     )
                 };
                 if let Some(buf) = shot {
-                    let copy = [vk::BufferImageCopy::default()
-                        .image_subresource(layers)
-                        .image_extent(vk::Extent3D { width: src.width, height: src.height, depth: 1 })];
-                    unsafe {
-                        ctx.device.cmd_copy_image_to_buffer(
-                            cmd,
-                            ldr.raw,
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            buf.raw,
-                            &copy,
-                        )
-                    };
+                    copy_image_to_buffer(ctx, cmd, ldr, buf.raw);
                     copy_to_host_barrier(ctx, cmd);
                 }
                 image_barrier(

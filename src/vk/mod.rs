@@ -397,6 +397,16 @@ pub fn image_barrier(
 /// A global memory barrier (buffers, and images that keep their layout).
 /// The copies recorded before it become visible to the host (read after
 /// the submission's fence).
+/// Records the copy of a whole single-mip image, in TRANSFER_SRC_OPTIMAL,
+/// into `buffer` (tightly packed rows): every readback goes through here.
+pub fn copy_image_to_buffer(ctx: &Context, cmd: vk::CommandBuffer, image: &Image, buffer: vk::Buffer) {
+    let region = [vk::BufferImageCopy::default()
+        .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(image.aspect).layer_count(1))
+        .image_extent(vk::Extent3D { width: image.extent.width, height: image.extent.height, depth: 1 })];
+    let src = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+    unsafe { ctx.device.cmd_copy_image_to_buffer(cmd, image.raw, src, buffer, &region) };
+}
+
 pub fn copy_to_host_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
     memory_barrier(
         ctx,

@@ -12,11 +12,11 @@ use crate::common;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use hybrid_rt::image_diff::diff_stats;
-use hybrid_rt::render::frame::{Access, Use};
+use hybrid_rt::render::readback;
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::animation::find_animation;
 use hybrid_rt::scene::Scene;
-use hybrid_rt::vk::{copy_to_host_barrier, Buffer, Context};
+use hybrid_rt::vk::{Buffer, Context};
 
 const W: u32 = 160;
 const H: u32 = 90;
@@ -61,23 +61,8 @@ fn in_flight(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettin
         r.prepare(ctx, &scene, &camera, settings).unwrap();
         ctx.begin_commands(cmd).unwrap();
         r.record_scene_update(ctx, cmd, &scene).unwrap();
-        let output = r.output_ldr().unwrap();
-        let uses = [Use::image(output, Access::TransferRead)];
-        r.record_with(ctx, cmd, |rec, t| {
-            let ldr = t.get(output).unwrap();
-            rec.pass("readback", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
-                let region = [vk::BufferImageCopy::default()
-                    .image_subresource(
-                        vk::ImageSubresourceLayers::default().aspect_mask(ldr.aspect).layer_count(1),
-                    )
-                    .image_extent(vk::Extent3D { width: W, height: H, depth: 1 })];
-                let src = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
-                unsafe { ctx.device.cmd_copy_image_to_buffer(cmd, ldr.raw, src, readback.raw, &region) };
-                copy_to_host_barrier(ctx, cmd);
-                Ok(())
-            })
-        })
-        .unwrap();
+        let copies = [(r.output_ldr().unwrap(), readback.raw)];
+        r.record_with(ctx, cmd, |rec, t| readback::record(ctx, rec, t, &copies)).unwrap();
         unsafe {
             dev.end_command_buffer(cmd).unwrap();
             dev.reset_fences(&[fence]).unwrap();

@@ -28,14 +28,14 @@ use hybrid_rt::accel::compute_bvh::ComputeBvh;
 use hybrid_rt::accel::dynamic::RebuildPolicy;
 use hybrid_rt::gpu::GpuScene;
 use hybrid_rt::image_diff::diff_stats;
-use hybrid_rt::render::frame::{Access, Use};
+use hybrid_rt::render::readback;
 use hybrid_rt::render::shading::{AaMode, Backend, Mode};
 use hybrid_rt::render::skinning::Skinning;
 use hybrid_rt::render::{RenderSettings, Renderer};
 use hybrid_rt::scene::animation::find_animation;
 use hybrid_rt::scene::{Camera, Scene};
 use hybrid_rt::vk::frame_ring::{FrameRing, Uploads};
-use hybrid_rt::vk::{copy_to_host_barrier, memory_barrier, Buffer, Context};
+use hybrid_rt::vk::{memory_barrier, Buffer, Context};
 
 const W: u32 = 320;
 const H: u32 = 180;
@@ -182,30 +182,8 @@ fn render_in_one_submission(
     ctx.begin_commands(cmd).unwrap();
     r.record_scene_update(ctx, cmd, scene).unwrap();
     // The frame's final image (anti-aliased by default), as `render` reads it.
-    let output = r.output_ldr().unwrap();
-    let uses = [Use::image(output, Access::TransferRead)];
-    r.record_with(ctx, cmd, |rec, t| {
-        let ldr = t.get(output).unwrap();
-        rec.pass("readback", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
-            let region = [vk::BufferImageCopy::default()
-                .image_subresource(
-                    vk::ImageSubresourceLayers::default().aspect_mask(ldr.aspect).layer_count(1),
-                )
-                .image_extent(vk::Extent3D { width: W, height: H, depth: 1 })];
-            unsafe {
-                ctx.device.cmd_copy_image_to_buffer(
-                    cmd,
-                    ldr.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    readback.raw,
-                    &region,
-                );
-            }
-            copy_to_host_barrier(ctx, cmd);
-            Ok(())
-        })
-    })
-    .unwrap();
+    let copies = [(r.output_ldr().unwrap(), readback.raw)];
+    r.record_with(ctx, cmd, |rec, t| readback::record(ctx, rec, t, &copies)).unwrap();
     unsafe { ctx.device.end_command_buffer(cmd).unwrap() };
     let t0 = std::time::Instant::now();
     ctx.submit_and_wait(cmd).unwrap();

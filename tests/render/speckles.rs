@@ -98,8 +98,8 @@ fn speckle_detector_finds_the_coplanar_pane_floor_contact() {
 
 /// Rays have no screen derivatives: without ray cones every ray hit sampled
 /// mip 0, and pure RT scored 26.4 dB against hybrid here (320x180); glass
-/// spheres showed the floor's mip-0 texels as dark specks. With cones on secondary hits and the rasterizer's uv gradients on
-/// pure-RT camera hits (materials and their alpha tests): 45.0 dB, 0.34% of
+/// spheres showed the floor's mip-0 texels as dark specks. With cones on
+/// secondary hits and the rasterizer's uv gradients on pure-RT camera hits (materials and their alpha tests): 45.0 dB, 0.34% of
 /// pixels over 2/255 (33.6 dB while camera rays still alpha-tested mip 0).
 #[test]
 fn pure_rt_matches_hybrid_on_textured_sponza() {

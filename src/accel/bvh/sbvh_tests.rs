@@ -6,7 +6,7 @@
 use std::time::Instant;
 
 use super::*;
-use crate::accel::watertight::{traverse_closest, triangle_positions};
+use crate::accel::cpu_trace::{traverse_closest, triangle_positions};
 use crate::scene::primitives::uv_sphere;
 
 use super::test_rng::Rng;

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use super::build::levels_needed;
 use super::*;
-use crate::accel::watertight::{traverse_closest, triangle_positions};
+use crate::accel::cpu_trace::{traverse_closest, triangle_positions};
 use crate::scene::primitives::uv_sphere;
 
 use super::test_rng::Rng;

@@ -3,7 +3,7 @@
 //! that finds the binary tree's closest hits.
 
 use super::*;
-use crate::accel::watertight::{ray_aabb, traverse_closest, triangle_positions, WatertightRay};
+use crate::accel::cpu_trace::{ray_aabb, traverse_closest, triangle_positions, WatertightRay};
 use crate::scene::primitives::uv_sphere;
 
 use super::test_rng::Rng;

@@ -18,7 +18,7 @@ use gpu_allocator::MemoryLocation;
 use vk::AccessFlags2 as A;
 use vk::PipelineStageFlags2 as S;
 
-use super::fullscreen::Io;
+use super::fullscreen::TargetBinding;
 use crate::gpu::shared::{WORK_COUNT, WORK_GROUPS_X, WORK_HEADER, WORK_HEADER_WORDS, WORK_LIST};
 use crate::render::frame::Access;
 use crate::render::kernel::Kernel;
@@ -31,8 +31,8 @@ pub static LIST: TargetDesc = TargetDesc::new("work list", vk::Format::R32_UINT)
 
 /// The list's set-1 binding (written by the select kernel, read by the
 /// traced one inside the pass).
-pub fn list_io() -> Io {
-    Io::new(WORK_LIST, &LIST, Access::StorageWrite)
+pub fn list_io() -> TargetBinding {
+    TargetBinding::new(WORK_LIST, &LIST, Access::StorageWrite)
 }
 
 /// The header's contents at the start of a frame: no entry, no workgroup,

@@ -4,8 +4,8 @@
 
 use ash::vk;
 
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{direct, gbuffer, reference, specular, terms, Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{direct, gbuffer, reference, specular, terms, Creation, PassDesc};
 use crate::gpu::shared::{DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN, TERMS_IN};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
@@ -15,21 +15,21 @@ use crate::vk::pipeline::Specialization;
 /// Linear radiance of the frame.
 pub static HDR: TargetDesc = TargetDesc::new("hdr radiance", vk::Format::R32G32B32A32_SFLOAT);
 
-fn io(c: &ShadingConfig) -> Vec<Io> {
+fn io(c: &ShadingConfig) -> Vec<TargetBinding> {
     let mut io = gbuffer::reads();
     if !c.debug_view {
-        io.push(Io::new(DIRECT_IN, &direct::DIRECT, Access::StorageRead));
+        io.push(TargetBinding::new(DIRECT_IN, &direct::DIRECT, Access::StorageRead));
     }
     if specular::skip(c).is_none() {
-        io.push(Io::new(SPECULAR_IN, &specular::SPECULAR, Access::StorageRead));
+        io.push(TargetBinding::new(SPECULAR_IN, &specular::SPECULAR, Access::StorageRead));
     }
     if reference::skip(c).is_none() {
-        io.push(Io::new(REFERENCE_IN, &reference::ACCUMULATION, Access::StorageRead));
+        io.push(TargetBinding::new(REFERENCE_IN, &reference::ACCUMULATION, Access::StorageRead));
     }
     if terms::skip(c).is_none() {
-        io.push(Io::new(TERMS_IN, &terms::ACCUMULATION, Access::StorageRead));
+        io.push(TargetBinding::new(TERMS_IN, &terms::ACCUMULATION, Access::StorageRead));
     }
-    io.push(Io::new(HDR_OUT, &HDR, Access::StorageWrite));
+    io.push(TargetBinding::new(HDR_OUT, &HDR, Access::StorageWrite));
     io
 }
 
@@ -59,7 +59,7 @@ pub const PASS: PassDesc = PassDesc {
         u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));
         u
     },
-    create: |i: &Init| {
+    create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "composite", io(i.config), Shader::Compute(shader(i.config)), &spec)
     },

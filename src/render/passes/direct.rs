@@ -5,8 +5,8 @@
 
 use ash::vk;
 
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{gbuffer, Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{gbuffer, Creation, PassDesc};
 use crate::gpu::shared::DIRECT_OUT;
 use crate::render::frame::Access;
 use crate::render::shading::ShadingConfig;
@@ -20,9 +20,9 @@ fn shadows(c: &ShadingConfig) -> bool {
     c.backend.is_some() && c.effects.shadows
 }
 
-fn io(_: &ShadingConfig) -> Vec<Io> {
+fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
     let mut io = gbuffer::reads();
-    io.push(Io::new(DIRECT_OUT, &DIRECT, Access::StorageWrite));
+    io.push(TargetBinding::new(DIRECT_OUT, &DIRECT, Access::StorageWrite));
     io
 }
 
@@ -34,7 +34,7 @@ pub const PASS: PassDesc = PassDesc {
     name: "direct",
     skip,
     uses: |c| fullscreen::uses(&io(c), shadows(c)),
-    create: |i: &Init| {
+    create: |i: &Creation| {
         let shader =
             if shadows(i.config) { Shader::Traced("direct") } else { Shader::Compute("direct.comp") };
         FullScreen::create(

@@ -12,20 +12,20 @@
 //! both modes measure the same depth the same way.
 
 use super::antialias::{self, AA_LDR};
-use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
 use super::tonemap::LDR;
-use super::{gbuffer, Init, PassDesc};
+use super::{gbuffer, Creation, PassDesc};
 use crate::gpu::shared::{AA_IN, AA_OUT, GB_HIT, GB_NORMAL, SPEC_EDGE_AA_TILED};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::{AaMode, ShadingConfig};
 use crate::vk::pipeline::Specialization;
 
-fn io(_: &ShadingConfig) -> Vec<Io> {
+fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
     vec![
-        Io::new(GB_NORMAL, &gbuffer::NORMAL, Access::Sampled),
-        Io::new(GB_HIT, &gbuffer::HIT, Access::Sampled),
-        Io::new(AA_IN, &LDR, Access::StorageRead),
-        Io::new(AA_OUT, &AA_LDR, Access::StorageWrite),
+        TargetBinding::new(GB_NORMAL, &gbuffer::NORMAL, Access::Sampled),
+        TargetBinding::new(GB_HIT, &gbuffer::HIT, Access::Sampled),
+        TargetBinding::new(AA_IN, &LDR, Access::StorageRead),
+        TargetBinding::new(AA_OUT, &AA_LDR, Access::StorageWrite),
     ]
 }
 
@@ -40,7 +40,7 @@ pub const PASS: PassDesc = PassDesc {
     name: "edge aa",
     skip: |c| antialias::skip(c, AaMode::Edge),
     uses,
-    create: |i: &Init| {
+    create: |i: &Creation| {
         FullScreen::create(
             i,
             "edge aa",

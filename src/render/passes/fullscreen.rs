@@ -8,7 +8,7 @@ use anyhow::Result;
 use ash::vk;
 
 use super::compacted::WorkList;
-use super::{Cx, Init, Pass};
+use super::{Creation, Pass, Recording};
 use crate::gpu::shared::WORK_HEADER;
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::kernel::Kernel;
@@ -18,15 +18,15 @@ use crate::vk::Context;
 
 /// One set-1 binding: which target, how it is accessed.
 #[derive(Clone, Copy)]
-pub struct Io {
+pub struct TargetBinding {
     pub binding: u32,
     pub target: &'static TargetDesc,
     pub access: Access,
 }
 
-impl Io {
-    pub const fn new(binding: u32, target: &'static TargetDesc, access: Access) -> Io {
-        Io { binding, target, access }
+impl TargetBinding {
+    pub const fn new(binding: u32, target: &'static TargetDesc, access: Access) -> TargetBinding {
+        TargetBinding { binding, target, access }
     }
 }
 
@@ -43,7 +43,7 @@ pub enum Shader {
 
 /// The declared uses of a full-screen pass with `io`; a traced one also
 /// reads the scene geometry and the acceleration data.
-pub fn uses(io: &[Io], traced: bool) -> Vec<Use> {
+pub fn uses(io: &[TargetBinding], traced: bool) -> Vec<Use> {
     let mut u: Vec<Use> = io.iter().map(|i| Use::image(i.target, i.access)).collect();
     if traced {
         u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));
@@ -55,7 +55,7 @@ pub fn uses(io: &[Io], traced: bool) -> Vec<Use> {
 /// The declared uses of a traced pass that accumulates into `accumulation`
 /// across frames (`reference`, `terms`, `path`): a read-modify-write, so
 /// the previous frames' sum is read too.
-pub fn accumulating_uses(io: &[Io], accumulation: &'static TargetDesc) -> Vec<Use> {
+pub fn accumulating_uses(io: &[TargetBinding], accumulation: &'static TargetDesc) -> Vec<Use> {
     let mut u = uses(io, true);
     u.push(Use::image(accumulation, Access::StorageRead));
     u
@@ -63,7 +63,7 @@ pub fn accumulating_uses(io: &[Io], accumulation: &'static TargetDesc) -> Vec<Us
 
 /// Fails when a variant of the pass's shader declares a storage image with
 /// a format qualifier other than its target's format (undefined behaviour).
-fn check_formats(name: &str, shader: &Shader, io: &[Io]) -> Result<()> {
+fn check_formats(name: &str, shader: &Shader, io: &[TargetBinding]) -> Result<()> {
     use crate::gpu::shared::SET_PASS;
     use crate::vk::reflect::{spirv_image_format, storage_image_formats};
     let traced = |s: &str| vec![format!("{s}_query"), format!("{s}_compute"), format!("{s}.rgen")];
@@ -93,7 +93,7 @@ fn check_formats(name: &str, shader: &Shader, io: &[Io]) -> Result<()> {
 }
 
 pub struct FullScreen {
-    io: Vec<Io>,
+    io: Vec<TargetBinding>,
     set: DescriptorSet,
     layout: vk::PipelineLayout,
     kernel: Kernel,
@@ -106,9 +106,9 @@ pub struct FullScreen {
 impl FullScreen {
     /// Builds the pass (its set, layout and kernel) and binds its targets.
     pub fn create(
-        init: &Init,
+        init: &Creation,
         name: &'static str,
-        io: Vec<Io>,
+        io: Vec<TargetBinding>,
         shader: Shader,
         spec: &Specialization,
     ) -> Result<Box<dyn Pass>> {
@@ -212,7 +212,7 @@ impl Pass for FullScreen {
         }
     }
 
-    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
+    fn record(&self, cx: &Recording, cmd: vk::CommandBuffer) {
         let mut sets = vec![cx.gpu.set.set, self.set.set];
         if self.traced {
             sets.extend(cx.tracer.map(|t| t.set().set));

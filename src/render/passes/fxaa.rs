@@ -6,23 +6,26 @@
 //! threshold are copied unchanged.
 
 use super::antialias::{self, AA_LDR};
-use super::fullscreen::{self, FullScreen, Io, Shader};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
 use super::tonemap::LDR;
-use super::{Init, PassDesc};
+use super::{Creation, PassDesc};
 use crate::gpu::shared::{AA_IN, AA_OUT};
 use crate::render::frame::Access;
 use crate::render::shading::{AaMode, ShadingConfig};
 use crate::vk::pipeline::Specialization;
 
-fn io(_: &ShadingConfig) -> Vec<Io> {
-    vec![Io::new(AA_IN, &LDR, Access::StorageRead), Io::new(AA_OUT, &AA_LDR, Access::StorageWrite)]
+fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
+    vec![
+        TargetBinding::new(AA_IN, &LDR, Access::StorageRead),
+        TargetBinding::new(AA_OUT, &AA_LDR, Access::StorageWrite),
+    ]
 }
 
 pub const PASS: PassDesc = PassDesc {
     name: "fxaa",
     skip: |c| antialias::skip(c, AaMode::Fxaa),
     uses: |c| fullscreen::uses(&io(c), false),
-    create: |i: &Init| {
+    create: |i: &Creation| {
         FullScreen::create(
             i,
             "fxaa",

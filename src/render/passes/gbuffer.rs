@@ -16,8 +16,8 @@
 use anyhow::Result;
 use ash::vk;
 
-use super::fullscreen::Io;
-use super::{Cx, Init, Pass, PassDesc};
+use super::fullscreen::TargetBinding;
+use super::{Creation, Pass, PassDesc, Recording};
 use crate::gpu::clusters::COMMAND_STRIDE;
 use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
 use crate::render::frame::{Access, SharedBuffer, Use};
@@ -53,13 +53,13 @@ pub fn bytes_per_pixel(t: &Targets) -> u32 {
 }
 
 /// The set-1 bindings through which later passes read the primary hit.
-pub fn reads() -> Vec<Io> {
+pub fn reads() -> Vec<TargetBinding> {
     let s = Access::Sampled;
     vec![
-        Io::new(GB_ALBEDO, &ALBEDO, s),
-        Io::new(GB_NORMAL, &NORMAL, s),
-        Io::new(GB_MATERIAL, &MATERIAL, s),
-        Io::new(GB_HIT, &HIT, s),
+        TargetBinding::new(GB_ALBEDO, &ALBEDO, s),
+        TargetBinding::new(GB_NORMAL, &NORMAL, s),
+        TargetBinding::new(GB_MATERIAL, &MATERIAL, s),
+        TargetBinding::new(GB_HIT, &HIT, s),
     ]
 }
 
@@ -87,7 +87,7 @@ pub const PASS: PassDesc = PassDesc {
     name: "gbuffer",
     skip,
     uses,
-    create: |i: &Init| {
+    create: |i: &Creation| {
         let mut p = GBufferPass::new(i.ctx, i.gpu.set.layout)?;
         if i.config.occlusion && !i.gpu.clusters.list.clusters.is_empty() {
             // The cluster draws use the whole draws' pipelines (gbuffer.vert).
@@ -129,7 +129,7 @@ impl GBufferPass {
 
     /// Records the draws of `cx.draws`: whole (phase 0), or the clusters
     /// the cull pass picked for `phase` 1 or 2.
-    fn draw(&self, cx: &Cx, cmd: vk::CommandBuffer, phase: u32) {
+    fn draw(&self, cx: &Recording, cmd: vk::CommandBuffer, phase: u32) {
         let (d, scene) = (&cx.ctx.device, cx.gpu);
         let layout = self.layout;
         unsafe {
@@ -187,7 +187,7 @@ impl GBufferPass {
     }
 
     /// Begins rendering into the hit and depth targets, cleared or kept.
-    fn begin(&self, cx: &Cx, cmd: vk::CommandBuffer, clear: bool) {
+    fn begin(&self, cx: &Recording, cmd: vk::CommandBuffer, clear: bool) {
         let (d, t) = (&cx.ctx.device, cx.targets);
         let (Some(hit), Some(depth_target)) = (t.get(&HIT), t.get(&DEPTH)) else { return };
         let load = if clear { vk::AttachmentLoadOp::CLEAR } else { vk::AttachmentLoadOp::LOAD };
@@ -236,7 +236,7 @@ impl Pass for GBufferPass {
         vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
     }
 
-    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
+    fn record(&self, cx: &Recording, cmd: vk::CommandBuffer) {
         let (ctx, t) = (cx.ctx, cx.targets);
         let (Some(_), Some(depth)) = (t.get(&HIT), t.get(&DEPTH)) else { return };
         let d = &ctx.device;

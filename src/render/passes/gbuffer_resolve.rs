@@ -7,21 +7,21 @@
 //! interpolated per triangle, which is what llvmpipe spent its G-buffer time
 //! on (bench/results/lavapipe-2core-vm-raster.md).
 
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{gbuffer, Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{gbuffer, Creation, PassDesc};
 use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::settings::PrimaryVisibility;
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::vk::pipeline::Specialization;
 
-fn io() -> Vec<Io> {
+fn io() -> Vec<TargetBinding> {
     let w = Access::StorageWrite;
     vec![
-        Io::new(GB_HIT, &gbuffer::HIT, Access::StorageRead),
-        Io::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
-        Io::new(GB_NORMAL, &gbuffer::NORMAL, w),
-        Io::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
+        TargetBinding::new(GB_HIT, &gbuffer::HIT, Access::StorageRead),
+        TargetBinding::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
+        TargetBinding::new(GB_NORMAL, &gbuffer::NORMAL, w),
+        TargetBinding::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
     ]
 }
 
@@ -44,7 +44,7 @@ pub const PASS: PassDesc = PassDesc {
         u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));
         u
     },
-    create: |i: &Init| {
+    create: |i: &Creation| {
         let spec = Specialization::new(&[]);
         FullScreen::create(i, "gbuffer resolve", io(), Shader::Compute("gbuffer_resolve.comp"), &spec)
     },

@@ -4,15 +4,15 @@
 //! host reads them once the frame is done and selects the objects the next
 //! frame traces. Left out without `--budget`.
 
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{gbuffer, Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{gbuffer, Creation, PassDesc};
 use crate::gpu::shared::GB_HIT;
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
 use crate::vk::pipeline::Specialization;
 
-fn io() -> Vec<Io> {
-    vec![Io::new(GB_HIT, &gbuffer::HIT, Access::Sampled)]
+fn io() -> Vec<TargetBinding> {
+    vec![TargetBinding::new(GB_HIT, &gbuffer::HIT, Access::Sampled)]
 }
 
 fn skip(c: &ShadingConfig) -> Option<&'static str> {
@@ -27,7 +27,7 @@ pub const PASS: PassDesc = PassDesc {
         u.push(Use::buffer(SharedBuffer::Budget, Access::ShaderWrite));
         u
     },
-    create: |i: &Init| {
+    create: |i: &Creation| {
         FullScreen::create(i, "heuristic", io(), Shader::Compute("heuristic.comp"), &Specialization::new(&[]))
     },
 };

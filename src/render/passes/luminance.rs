@@ -10,7 +10,7 @@ use anyhow::Result;
 use ash::vk;
 
 use super::composite::HDR;
-use super::{Cx, Init, Pass, PassDesc};
+use super::{Creation, Pass, PassDesc, Recording};
 use crate::gpu::shared::{LUMINANCE_GROUPS, LUMINANCE_IN, SPEC_LUMINANCE_STAGE};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
@@ -30,7 +30,7 @@ pub const PASS: PassDesc = PassDesc {
     uses: |_| {
         vec![Use::image(&HDR, Access::StorageRead), Use::buffer(SharedBuffer::Exposure, Access::ShaderWrite)]
     },
-    create: |i: &Init| Ok(Box::new(Luminance::create(i.ctx, i.gpu.set.layout, i.targets)?)),
+    create: |i: &Creation| Ok(Box::new(Luminance::create(i.ctx, i.gpu.set.layout, i.targets)?)),
 };
 
 struct Luminance {
@@ -75,7 +75,7 @@ impl Pass for Luminance {
         vk::PipelineStageFlags2::COMPUTE_SHADER
     }
 
-    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
+    fn record(&self, cx: &Recording, cmd: vk::CommandBuffer) {
         let ctx = cx.ctx;
         let sets = [cx.gpu.set.set, self.set.set];
         bind_compute(ctx, cmd, self.pipelines[0], self.layout, &sets);

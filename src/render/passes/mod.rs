@@ -35,12 +35,13 @@ use crate::gpu::GpuScene;
 use crate::vk::Context;
 
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
-/// or traced visibility buffer + resolve, or camera rays) -> per-object statistics for the budget -> the budget's
-/// fallback shadow maps -> direct light -> the ambient reference (with
-/// --reference-samples) -> the report's attribution terms ->
-/// reflection/refraction chain ->
-/// composite -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one technique). The scene update (skinning, refit, top level)
-/// comes before it, recorded by `Renderer` and the tracer.
+/// or traced visibility buffer + resolve, or camera rays) -> per-object
+/// statistics for the budget -> the budget's fallback shadow maps -> direct
+/// light -> the ambient reference (with --reference-samples) -> the
+/// report's attribution terms -> reflection/refraction chain -> composite
+/// -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one
+/// technique). The scene update (skinning, refit, top level) comes before
+/// it, recorded by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
     gbuffer::PASS,
     visibility_trace::PASS,
@@ -73,8 +74,8 @@ pub fn frame(config: &ShadingConfig) -> &'static [PassDesc] {
     }
 }
 
-/// What everything a pass needs to be built from.
-pub struct Init<'a> {
+/// What a pass is created from.
+pub struct Creation<'a> {
     pub ctx: &'a Context,
     pub config: &'a ShadingConfig,
     pub gpu: &'a GpuScene,
@@ -83,7 +84,7 @@ pub struct Init<'a> {
 }
 
 /// What a pass records with.
-pub struct Cx<'a> {
+pub struct Recording<'a> {
     pub ctx: &'a Context,
     pub gpu: &'a GpuScene,
     pub targets: &'a Targets,
@@ -98,13 +99,13 @@ pub struct PassDesc {
     pub skip: fn(&ShadingConfig) -> Option<&'static str>,
     /// The resources it reads and writes in this configuration.
     pub uses: fn(&ShadingConfig) -> Vec<Use>,
-    pub create: fn(&Init) -> Result<Box<dyn Pass>>,
+    pub create: fn(&Creation) -> Result<Box<dyn Pass>>,
 }
 
 pub trait Pass {
     /// The shader stage its resource accesses happen in (for barriers).
     fn stage(&self) -> vk::PipelineStageFlags2;
-    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer);
+    fn record(&self, cx: &Recording, cmd: vk::CommandBuffer);
     /// Points the pass at new targets (after a resize).
     fn bind(&self, ctx: &Context, targets: &Targets);
     fn destroy(&mut self, ctx: &Context);

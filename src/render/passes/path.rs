@@ -8,8 +8,8 @@
 use ash::vk;
 
 use super::composite::HDR;
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{Creation, PassDesc};
 use crate::gpu::shared::{PATH_ACCUM, PATH_OUT};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::{Mode, ShadingConfig};
@@ -20,10 +20,10 @@ use crate::vk::pipeline::Specialization;
 /// kept from frame to frame.
 pub static ACCUMULATION: TargetDesc = TargetDesc::kept("path accumulation", vk::Format::R32G32B32A32_SFLOAT);
 
-fn io(_: &ShadingConfig) -> Vec<Io> {
+fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
     vec![
-        Io::new(PATH_ACCUM, &ACCUMULATION, Access::StorageWrite),
-        Io::new(PATH_OUT, &HDR, Access::StorageWrite),
+        TargetBinding::new(PATH_ACCUM, &ACCUMULATION, Access::StorageWrite),
+        TargetBinding::new(PATH_OUT, &HDR, Access::StorageWrite),
     ]
 }
 
@@ -39,7 +39,7 @@ pub const PASS: PassDesc = PassDesc {
         u.push(Use::buffer(SharedBuffer::Counters, Access::ShaderWrite));
         u
     },
-    create: |i: &Init| {
+    create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "path", io(i.config), Shader::Traced("path"), &spec)
     },

@@ -2,20 +2,20 @@
 //! and write them into the G-buffer targets `gbuffer` would fill, so every
 //! later pass is the same in both modes (glsl/passes/primary.glsl).
 
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{gbuffer, Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{gbuffer, Creation, PassDesc};
 use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
 use crate::render::frame::Access;
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::vk::pipeline::Specialization;
 
-fn io(_: &ShadingConfig) -> Vec<Io> {
+fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
     let w = Access::StorageWrite;
     vec![
-        Io::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
-        Io::new(GB_NORMAL, &gbuffer::NORMAL, w),
-        Io::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
-        Io::new(GB_HIT, &gbuffer::HIT, w),
+        TargetBinding::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
+        TargetBinding::new(GB_NORMAL, &gbuffer::NORMAL, w),
+        TargetBinding::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
+        TargetBinding::new(GB_HIT, &gbuffer::HIT, w),
     ]
 }
 
@@ -28,7 +28,7 @@ pub const PASS: PassDesc = PassDesc {
     name: "primary",
     skip,
     uses: |c| fullscreen::uses(&io(c), true),
-    create: |i: &Init| {
+    create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "primary", io(i.config), Shader::Traced("primary"), &spec)
     },

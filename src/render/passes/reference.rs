@@ -6,8 +6,8 @@
 
 use ash::vk;
 
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{gbuffer, Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{gbuffer, Creation, PassDesc};
 use crate::gpu::shared::REFERENCE_OUT;
 use crate::render::frame::Access;
 use crate::render::shading::ShadingConfig;
@@ -19,9 +19,9 @@ use crate::vk::pipeline::Specialization;
 pub static ACCUMULATION: TargetDesc =
     TargetDesc::kept("reference accumulation", vk::Format::R32G32B32A32_SFLOAT);
 
-fn io(_: &ShadingConfig) -> Vec<Io> {
+fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
     let mut io = gbuffer::reads();
-    io.push(Io::new(REFERENCE_OUT, &ACCUMULATION, Access::StorageWrite));
+    io.push(TargetBinding::new(REFERENCE_OUT, &ACCUMULATION, Access::StorageWrite));
     io
 }
 
@@ -39,7 +39,7 @@ pub const PASS: PassDesc = PassDesc {
     name: "reference",
     skip,
     uses: |c| fullscreen::accumulating_uses(&io(c), &ACCUMULATION),
-    create: |i: &Init| {
+    create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "reference", io(i.config), Shader::Traced("reference"), &spec)
     },

@@ -17,7 +17,7 @@
 use anyhow::Result;
 use ash::vk;
 
-use super::{Cx, Init, Pass, PassDesc};
+use super::{Creation, Pass, PassDesc, Recording};
 use crate::gpu::shadow_map::DEPTH_FORMAT;
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
@@ -39,7 +39,7 @@ pub const PASS: PassDesc = PassDesc {
     skip,
     // The shadow maps are the pass's own (transitions inside `record`).
     uses: |_| vec![Use::buffer(SharedBuffer::Geometry, Access::VertexInput)],
-    create: |i: &Init| Ok(Box::new(ShadowMapPass::new(i)?)),
+    create: |i: &Creation| Ok(Box::new(ShadowMapPass::new(i)?)),
 };
 
 pub struct ShadowMapPass {
@@ -48,7 +48,7 @@ pub struct ShadowMapPass {
 }
 
 impl ShadowMapPass {
-    fn new(i: &Init) -> Result<ShadowMapPass> {
+    fn new(i: &Creation) -> Result<ShadowMapPass> {
         let layout = pipeline_layout(i.ctx, "shadow_map layout", &[i.gpu.set.layout], 4)?;
         let pipeline = create_pipeline(i.ctx, layout)
             .inspect_err(|_| unsafe { i.ctx.device.destroy_pipeline_layout(layout, None) })?;
@@ -61,7 +61,7 @@ impl Pass for ShadowMapPass {
         vk::PipelineStageFlags2::VERTEX_SHADER
     }
 
-    fn record(&self, cx: &Cx, cmd: vk::CommandBuffer) {
+    fn record(&self, cx: &Recording, cmd: vk::CommandBuffer) {
         let (ctx, d, scene) = (cx.ctx, &cx.ctx.device, cx.gpu);
         let maps = &scene.shadow;
         let depth_stages =

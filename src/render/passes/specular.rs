@@ -6,8 +6,8 @@
 
 use ash::vk;
 
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{compacted, gbuffer, Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{compacted, gbuffer, Creation, PassDesc};
 use crate::gpu::shared::SPECULAR_OUT;
 use crate::render::frame::Access;
 use crate::render::shading::ShadingConfig;
@@ -17,9 +17,9 @@ use crate::vk::pipeline::Specialization;
 /// Radiance the chain brings back per pixel.
 pub static SPECULAR: TargetDesc = TargetDesc::new("specular chain", vk::Format::R32G32B32A32_SFLOAT);
 
-fn io(_: &ShadingConfig) -> Vec<Io> {
+fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
     let mut io = gbuffer::reads();
-    io.push(Io::new(SPECULAR_OUT, &SPECULAR, Access::StorageWrite));
+    io.push(TargetBinding::new(SPECULAR_OUT, &SPECULAR, Access::StorageWrite));
     io.push(compacted::list_io());
     io
 }
@@ -40,7 +40,7 @@ pub const PASS: PassDesc = PassDesc {
     name: "specular",
     skip,
     uses: |c| fullscreen::uses(&io(c), true),
-    create: |i: &Init| {
+    create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(
             i,

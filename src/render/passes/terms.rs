@@ -9,8 +9,8 @@
 
 use ash::vk;
 
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{direct, gbuffer, Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{direct, gbuffer, Creation, PassDesc};
 use crate::gpu::shared::{DIRECT_IN, TERMS_OUT};
 use crate::render::frame::Access;
 use crate::render::shading::ShadingConfig;
@@ -21,11 +21,11 @@ use crate::vk::pipeline::Specialization;
 /// (a), kept from frame to frame.
 pub static ACCUMULATION: TargetDesc = TargetDesc::kept("terms accumulation", vk::Format::R32G32B32A32_SFLOAT);
 
-fn io(_: &ShadingConfig) -> Vec<Io> {
+fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
     let mut io = gbuffer::reads();
     // The hybrid's direct light, which the caustics term corrects.
-    io.push(Io::new(DIRECT_IN, &direct::DIRECT, Access::StorageRead));
-    io.push(Io::new(TERMS_OUT, &ACCUMULATION, Access::StorageWrite));
+    io.push(TargetBinding::new(DIRECT_IN, &direct::DIRECT, Access::StorageRead));
+    io.push(TargetBinding::new(TERMS_OUT, &ACCUMULATION, Access::StorageWrite));
     io
 }
 
@@ -41,7 +41,7 @@ pub const PASS: PassDesc = PassDesc {
     name: "terms",
     skip,
     uses: |c| fullscreen::accumulating_uses(&io(c), &ACCUMULATION),
-    create: |i: &Init| {
+    create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "terms", io(i.config), Shader::Traced("terms"), &spec)
     },

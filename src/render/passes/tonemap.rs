@@ -5,8 +5,8 @@
 use ash::vk;
 
 use super::composite::HDR;
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{Creation, PassDesc};
 use crate::gpu::shared::{TONEMAP_IN, TONEMAP_OUT};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
@@ -16,8 +16,11 @@ use crate::vk::pipeline::Specialization;
 /// The displayable frame.
 pub static LDR: TargetDesc = TargetDesc::new("tonemapped output", vk::Format::R8G8B8A8_UNORM);
 
-fn io(_: &ShadingConfig) -> Vec<Io> {
-    vec![Io::new(TONEMAP_IN, &HDR, Access::StorageRead), Io::new(TONEMAP_OUT, &LDR, Access::StorageWrite)]
+fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
+    vec![
+        TargetBinding::new(TONEMAP_IN, &HDR, Access::StorageRead),
+        TargetBinding::new(TONEMAP_OUT, &LDR, Access::StorageWrite),
+    ]
 }
 
 pub const PASS: PassDesc = PassDesc {
@@ -32,7 +35,7 @@ pub const PASS: PassDesc = PassDesc {
         }
         u
     },
-    create: |i: &Init| {
+    create: |i: &Creation| {
         FullScreen::create(
             i,
             "tonemap",

@@ -10,21 +10,21 @@
 //! bench/results/lavapipe-2core-vm-raster.md), so `--primary-visibility
 //! auto` measures both and keeps the cheaper (render/visibility.rs).
 
-use super::fullscreen::{self, FullScreen, Io, Shader};
-use super::{gbuffer, Init, PassDesc};
+use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
+use super::{gbuffer, Creation, PassDesc};
 use crate::gpu::shared::{GB_ALBEDO, GB_HIT, GB_MATERIAL, GB_NORMAL};
 use crate::render::frame::Access;
 use crate::render::settings::PrimaryVisibility;
 use crate::render::shading::{Mode, ShadingConfig};
 use crate::vk::pipeline::Specialization;
 
-fn io() -> Vec<Io> {
+fn io() -> Vec<TargetBinding> {
     let w = Access::StorageWrite;
     vec![
-        Io::new(GB_HIT, &gbuffer::HIT, w),
-        Io::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
-        Io::new(GB_NORMAL, &gbuffer::NORMAL, w),
-        Io::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
+        TargetBinding::new(GB_HIT, &gbuffer::HIT, w),
+        TargetBinding::new(GB_ALBEDO, &gbuffer::ALBEDO, w),
+        TargetBinding::new(GB_NORMAL, &gbuffer::NORMAL, w),
+        TargetBinding::new(GB_MATERIAL, &gbuffer::MATERIAL, w),
     ]
 }
 
@@ -40,7 +40,7 @@ pub const PASS: PassDesc = PassDesc {
     name: "visibility trace",
     skip,
     uses: |_| fullscreen::uses(&io(), true),
-    create: |i: &Init| {
+    create: |i: &Creation| {
         // The same specialization as `primary`: ray counting follows it.
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "visibility trace", io(), Shader::Traced("visibility_trace"), &spec)
