@@ -107,7 +107,7 @@ enum Command {
     },
     /// Image error (ꟻLIP, PSNR) against GPU time for every quality knob:
     /// report.md, report.csv, error_vs_time.png and error maps in --out.
-    Report(ReportArgs),
+    Report(Box<ReportArgs>),
     /// Compare two images (PNG with PNG, or Radiance .hdr with .hdr; A is the
     /// reference): prints ꟻLIP mean, PSNR and the share of pixels over a
     /// ꟻLIP threshold; --out writes the per-pixel error map.
@@ -159,7 +159,7 @@ impl Cli {
         let (name, view) = match &self.command {
             Some(Command::Render { view, .. }) => ("render", view),
             Some(Command::Bench { view, .. }) => ("bench", view),
-            Some(Command::Report(args)) => ("report", &args.view),
+            Some(Command::Report(args)) => ("report", &args.common().view),
             Some(Command::View { view, .. }) => ("view", view),
             Some(Command::Info) | Some(Command::Compare { .. }) | None => return,
         };
@@ -248,7 +248,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             app::bench_command(&gpu, &view.job()?, frames, warmup, &variants, csv.as_deref())
         }
-        Some(Command::Report(args)) => args.run(&gpu),
+        Some(Command::Report(args)) => args.kind().run(&gpu),
         Some(Command::Compare { a, b, out, threshold, exposure }) => {
             let c = report::compare::compare(&a, &b, out.as_deref(), threshold, exposure)?;
             print!("{}", c.summary());

@@ -1,10 +1,12 @@
-//! `report`'s command line: its options, the checks across them clap
-//! cannot state, and which report they run.
+//! `report`'s command line: one subcommand per report (`knobs`, the
+//! default, `stability`, `budget-paths`, `tone-sheet`, `prt`), each with
+//! only its own options; the earlier flag spellings (`report --stability`,
+//! ...) stay as aliases. Also the checks across options clap cannot state.
 
 use std::path::PathBuf;
 
 use anyhow::{Context as _, Result};
-use clap::Args;
+use clap::{Args, Subcommand};
 
 use super::{ReferenceSettings, ReportOptions};
 use crate::app::cli_parse::*;
@@ -12,11 +14,40 @@ use crate::app::{GpuOptions, ViewArgs, MAX_PATH_SAMPLES};
 use crate::render::shading::{Backend, Mode};
 use crate::render::supersample::{SampleFilter, Supersample};
 
-// Image error (ꟻLIP, PSNR) against GPU time for every quality knob, or
-// one of the other reports (--stability, --budget-paths, --tone-sheet, --prt);
-// the subcommand's help is the doc comment on `Command::Report` (main.rs).
-#[derive(Args)]
+// The subcommand's help is the doc comment on `Command::Report` (main.rs).
+#[derive(Args, Clone)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct ReportArgs {
+    #[command(subcommand)]
+    kind: Option<ReportKind>,
+    #[command(flatten)]
+    common: Common,
+    #[command(flatten)]
+    knobs: KnobArgs,
+    /// Same as `report stability` (the earlier spelling).
+    #[arg(long, conflicts_with_all = ["knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts", "ref_supersample", "ref_ss_filter"])]
+    stability: bool,
+    /// With --stability: `report stability --cases`.
+    #[arg(long, requires = "stability", value_delimiter = ',')]
+    cases: Vec<String>,
+    /// Same as `report budget-paths --shares` (the earlier spelling).
+    #[arg(long, value_delimiter = ',', value_parser = parse_share, conflicts_with_all = ["stability", "knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts", "tone_sheet"])]
+    budget_paths: Vec<f64>,
+    /// Same as `report tone-sheet --maps` (the earlier spelling).
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["stability", "knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts"])]
+    tone_sheet: Vec<PathBuf>,
+    /// Same as `report prt` (the earlier spelling; --knobs then picks
+    /// among bands, sh-samples, transfer).
+    #[arg(long, conflicts_with_all = ["stability", "budget_paths", "tone_sheet", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "ref_supersample", "ref_ss_filter"])]
+    prt: bool,
+    /// With --prt: `report prt --sweep`.
+    #[arg(long, requires = "prt")]
+    prt_sweep: bool,
+}
+
+/// What every report takes: the scene and settings, frame counts, output.
+#[derive(Args, Clone)]
+pub struct Common {
     #[command(flatten)]
     pub view: ViewArgs,
     /// Timed frames per setting (>= 5), after the warm-up.
@@ -26,6 +57,23 @@ pub struct ReportArgs {
     /// compiles the setting's pipelines).
     #[arg(long, default_value_t = 2, value_parser = parse_count, allow_hyphen_values = true)]
     pub warmup: usize,
+    /// Output directory.
+    // (An Option only so `report <subcommand>` can leave the parent's
+    // unset: clap requires it wherever it parses.)
+    #[arg(long, required = true)]
+    pub out: Option<PathBuf>,
+}
+
+impl Common {
+    /// The options by value, `--out` as clap ensured it.
+    fn parts(self) -> (ViewArgs, usize, usize, PathBuf) {
+        (self.view, self.frames, self.warmup, self.out.expect("clap requires --out"))
+    }
+}
+
+/// The knob report's own options.
+#[derive(Args, Clone)]
+pub struct KnobArgs {
     /// Knobs to sweep, comma-separated, each optionally with its values
     /// after '=' separated by ':' (e.g. "max-depth=0:2:8,mode"); knobs:
     /// max-depth, min-weight, effects, mode, backend, aa, accel-update
@@ -80,102 +128,232 @@ pub struct ReportArgs {
     /// How the aa knob's reference weighs its samples.
     #[arg(long, value_enum, default_value_t = SampleFilter::Box)]
     pub ref_ss_filter: SampleFilter,
-    /// Numerical-stability report instead: stiff and extreme variants
-    /// of the scene (moved far from the origin, scaled, grazing and
-    /// facing mirrors, IOR near 1, a 1e5 environment texel, ...) on
-    /// every available backend, with pass/fail thresholds.
-    #[arg(long, conflicts_with_all = ["knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts", "ref_supersample", "ref_ss_filter"])]
-    pub stability: bool,
-    /// With --stability: only these cases (comma-separated; the
-    /// canonicals they are compared with are added), e.g.
-    /// "translate-1e3,ior-1.0".
-    #[arg(long, requires = "stability", value_delimiter = ',')]
-    pub cases: Vec<String>,
-    /// The ray-tracing budget along the scene's camera path instead:
-    /// paper mode, effects mode and effects mode with the raster
-    /// fallback at these shares of the cost of tracing
-    /// everything (comma-separated in [0, 1]), --frames points along
-    /// the path after --warmup frames at its start; frame ms, heuristic
-    /// share and ꟻLIP/PSNR against full effects per run, table + plot.
-    #[arg(long, value_delimiter = ',', value_parser = parse_share, conflicts_with_all = ["stability", "knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts", "tone_sheet"])]
-    pub budget_paths: Vec<f64>,
-    /// Tone operators side by side instead: a contact sheet per Radiance
-    /// .hdr map (comma-separated), the scene lit by each; rows operators,
-    /// columns key values (log-average auto exposure) and the fixed
-    /// --exposure; tone_sheet.md with the measured exposures and pass ms.
-    #[arg(long, value_delimiter = ',', conflicts_with_all = ["stability", "knobs", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "no_ray_counts"])]
-    pub tone_sheet: Vec<PathBuf>,
-    /// The environment light's ambient instead (SH irradiance and
-    /// diffuse PRT) against a ray-traced reference of the view
-    /// (--reference-samples N (1024) --reference-bounces K (3 here)); --knobs
-    /// picks among bands, sh-samples, transfer, whose product runs.
-    #[arg(long, conflicts_with_all = ["stability", "budget_paths", "tone_sheet", "ref_backend", "ref_max_depth", "ref_min_weight", "ref_mode", "ref_supersample", "ref_ss_filter"])]
-    pub prt: bool,
-    /// With --prt: one knob at a time around the base settings instead
-    /// of the product.
-    #[arg(long, requires = "prt")]
-    pub prt_sweep: bool,
-    /// Output directory.
-    #[arg(long)]
-    pub out: PathBuf,
+}
+
+#[derive(Subcommand, Clone)]
+pub enum ReportKind {
+    /// Image error (ꟻLIP, PSNR) against GPU time for every quality knob
+    /// (what `report` without a subcommand runs).
+    Knobs {
+        #[command(flatten)]
+        common: Common,
+        #[command(flatten)]
+        knobs: KnobArgs,
+    },
+    /// Numerical stability: stiff and extreme variants of the scene (moved
+    /// far from the origin, scaled, grazing and facing mirrors, IOR near 1,
+    /// a 1e5 environment texel, ...) on every available backend, with
+    /// pass/fail thresholds.
+    Stability {
+        #[command(flatten)]
+        common: Common,
+        /// Only these cases (comma-separated; the canonicals they are
+        /// compared with are added), e.g. "translate-1e3,ior-1.0".
+        #[arg(long, value_delimiter = ',')]
+        cases: Vec<String>,
+    },
+    /// The ray-tracing budget along the scene's camera path: paper mode,
+    /// effects mode and effects mode with the raster fallback at each
+    /// share, --frames points along the path after --warmup frames at its
+    /// start; frame ms, heuristic share and ꟻLIP/PSNR against full effects
+    /// per run, table + plot.
+    BudgetPaths {
+        #[command(flatten)]
+        common: Common,
+        /// Shares of the cost of tracing everything, comma-separated in [0, 1].
+        #[arg(long, required = true, value_delimiter = ',', value_parser = parse_share)]
+        shares: Vec<f64>,
+    },
+    /// Tone operators side by side: a contact sheet per map, the scene lit
+    /// by each; rows operators, columns key values (log-average auto
+    /// exposure) and the fixed --exposure; tone_sheet.md with the measured
+    /// exposures and pass ms.
+    ToneSheet {
+        #[command(flatten)]
+        common: Common,
+        /// Radiance .hdr maps, comma-separated.
+        #[arg(long, required = true, value_delimiter = ',')]
+        maps: Vec<PathBuf>,
+    },
+    /// The environment light's ambient (SH irradiance and diffuse PRT)
+    /// against a ray-traced reference of the view (--reference-samples N
+    /// (1024) --reference-bounces K (3 here)).
+    Prt {
+        #[command(flatten)]
+        common: Common,
+        /// Knobs, comma-separated, each optionally with its values after
+        /// '=' separated by ':': bands, sh-samples, transfer; their product
+        /// runs [default: all].
+        #[arg(long)]
+        knobs: Option<String>,
+        /// One knob at a time around the base settings instead of the product.
+        #[arg(long)]
+        sweep: bool,
+    },
 }
 
 impl ReportArgs {
-    /// Checks across options clap cannot state: a usage error's message.
-    pub fn usage_problem(&self) -> Option<String> {
-        match self {
-        Self { ref_kind: RefKind::Own, attribution_samples, .. } if *attribution_samples != 256 => {
-            Some("--attribution-samples measures against the path-traced truth: leave out --ref self".into())
-        }
-        Self { ref_kind: RefKind::Path, ref_mode, ref_max_depth, ref_min_weight, .. }
-            if *ref_mode != Mode::Rt || *ref_max_depth != 16 || *ref_min_weight != 0.001 =>
-        {
-            Some(
-                "--ref-mode, --ref-max-depth and --ref-min-weight set the self reference: add --ref self \
-                 (the default reference is the path-traced truth)"
-                    .into(),
-            )
-        }
-        Self { knobs, stability, tone_sheet, .. }
-            if self.view.fps.is_some()
-                && (*stability
-                    || !tone_sheet.is_empty()
-                    || knobs.as_deref().is_some_and(|k| !k.contains("accel-update"))) =>
-        {
-            Some(
-                "--fps has no effect here: report renders still frames at --time; it steps only the \
-                 accel-update knob's frames"
-                    .into(),
-            )
-        }
-        // (The other report modes read --knobs their own way.)
-        Self { knobs: Some(k), prt: false, stability: false, tone_sheet, budget_paths, .. }
-            if tone_sheet.is_empty() && budget_paths.is_empty() && super::knobs::parse_selection(k).is_err() =>
-        {
-            let e = super::knobs::parse_selection(k).expect_err("checked above");
-            Some(format!("--knobs: {e:#}"))
-        }
-        Self { frames, stability: false, tone_sheet, budget_paths, .. }
-            if *frames < 5 && tone_sheet.is_empty() && budget_paths.is_empty() =>
-        {
-            Some(format!("--frames {frames} is too few for a p95; use at least 5"))
-        }
-        Self { prt: false, .. } if self.view.env.reference_samples.is_some() => Some(
-            "--reference-samples is a report option only with --prt (the ambient's reference): report \
-             renders one frame per variant, and the reference needs ceil(N/4) (render it with `render \
-             --reference-samples N`, then `compare`)"
-                .into(),
-        ),
-            _ => self.view.without_effect("report"),
+    /// The report these options run: the subcommand, else the one an
+    /// earlier flag names, else the knobs.
+    pub fn kind(self) -> ReportKind {
+        let ReportArgs { kind, common, knobs, stability, cases, budget_paths, tone_sheet, prt, prt_sweep } =
+            self;
+        match kind {
+            Some(k) => k,
+            None if prt => ReportKind::Prt { common, knobs: knobs.knobs, sweep: prt_sweep },
+            None if !budget_paths.is_empty() => ReportKind::BudgetPaths { common, shares: budget_paths },
+            None if !tone_sheet.is_empty() => ReportKind::ToneSheet { common, maps: tone_sheet },
+            None if stability => ReportKind::Stability { common, cases },
+            None => ReportKind::Knobs { common, knobs },
         }
     }
 
-    /// Runs the report the options pick.
+    /// Checks across options clap cannot state: a usage error's message.
+    pub fn usage_problem(&self) -> Option<String> {
+        self.clone().kind().usage_problem()
+    }
+
+    /// The options every report shares.
+    pub fn common(&self) -> &Common {
+        match &self.kind {
+            Some(k) => k.common(),
+            None => &self.common,
+        }
+    }
+}
+
+impl ReportKind {
+    /// The subcommand's name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ReportKind::Knobs { .. } => "knobs",
+            ReportKind::Stability { .. } => "stability",
+            ReportKind::BudgetPaths { .. } => "budget-paths",
+            ReportKind::ToneSheet { .. } => "tone-sheet",
+            ReportKind::Prt { .. } => "prt",
+        }
+    }
+
+    pub fn common(&self) -> &Common {
+        match self {
+            ReportKind::Knobs { common, .. }
+            | ReportKind::Stability { common, .. }
+            | ReportKind::BudgetPaths { common, .. }
+            | ReportKind::ToneSheet { common, .. }
+            | ReportKind::Prt { common, .. } => common,
+        }
+    }
+
+    /// Checks across options clap cannot state: a usage error's message.
+    pub fn usage_problem(&self) -> Option<String> {
+        let view = &self.common().view;
+        let fps_rule = "--fps has no effect here: report renders still frames at --time; it steps only the \
+                        accel-update knob's frames";
+        let reference_rule = "--reference-samples is a report option only of `report prt` (the ambient's \
+                              reference): report renders one frame per variant, and the reference needs \
+                              ceil(N/4) (render it with `render --reference-samples N`, then `compare`)";
+        let few_frames = |frames: usize| format!("--frames {frames} is too few for a p95; use at least 5");
+        let problem = match self {
+            ReportKind::Knobs { common, knobs } => knobs.usage_problem(common),
+            ReportKind::Stability { .. } | ReportKind::ToneSheet { .. } if view.fps.is_some() => {
+                Some(fps_rule.into())
+            }
+            ReportKind::Prt { knobs: Some(_), .. } if view.fps.is_some() => Some(fps_rule.into()),
+            ReportKind::Prt { common, .. } if common.frames < 5 => Some(few_frames(common.frames)),
+            _ => None,
+        };
+        let problem = problem.or_else(|| match self {
+            ReportKind::Prt { .. } => None,
+            _ if view.env.reference_samples.is_some() => Some(reference_rule.into()),
+            _ => None,
+        });
+        problem.or_else(|| view.without_effect("report"))
+    }
+
+    /// Runs the report.
     pub fn run(self, gpu: &GpuOptions) -> Result<()> {
-        let ReportArgs {
-            view,
-            frames,
-            warmup,
+        match self {
+            ReportKind::Knobs { common, knobs } => knobs.run(gpu, common),
+            ReportKind::Prt { common, knobs, sweep } => {
+                let (view, frames, warmup, out) = common.parts();
+                let opts = super::prt::PrtReportOptions {
+                    frames,
+                    warmup,
+                    knobs: super::prt::parse_selection(knobs.as_deref().unwrap_or("")).context("--knobs")?,
+                    sweep,
+                    reference: crate::render::ReferenceSettings {
+                        samples: view.env.reference_samples.unwrap_or(super::prt::DEFAULT_REFERENCE.samples),
+                        bounces: view.env.reference_bounces.unwrap_or(super::prt::DEFAULT_REFERENCE.bounces),
+                    },
+                    ..super::prt::PrtReportOptions::new(view.job()?, out)
+                };
+                super::prt::command(gpu, &opts)
+            }
+            ReportKind::BudgetPaths { common, shares } => {
+                let (view, frames, warmup, out) = common.parts();
+                let opts =
+                    super::budget_paths::BudgetPathOptions { job: view.job()?, out, frames, warmup, shares };
+                super::budget_paths::command(gpu, &opts)
+            }
+            ReportKind::ToneSheet { common, maps } => {
+                let (view, _, warmup, out) = common.parts();
+                let job = view.job()?;
+                let files = crate::app::with_context(gpu, |ctx| {
+                    super::tone_sheet::tone_sheets(ctx, &job, &maps, warmup, &out)
+                })?;
+                for f in files {
+                    println!("wrote {}", f.display());
+                }
+                Ok(())
+            }
+            ReportKind::Stability { common, cases } => {
+                let (view, frames, warmup, out) = common.parts();
+                let opts = super::stability::StabilityOptions {
+                    frames,
+                    warmup,
+                    cases,
+                    ..super::stability::StabilityOptions::new(view.job()?, out)
+                };
+                super::stability::stability_command(gpu, &opts)
+            }
+        }
+    }
+}
+
+impl KnobArgs {
+    fn usage_problem(&self, common: &Common) -> Option<String> {
+        if self.ref_kind == RefKind::Own && self.attribution_samples != 256 {
+            return Some(
+                "--attribution-samples measures against the path-traced truth: leave out --ref self".into(),
+            );
+        }
+        if self.ref_kind == RefKind::Path
+            && (self.ref_mode != Mode::Rt || self.ref_max_depth != 16 || self.ref_min_weight != 0.001)
+        {
+            return Some(
+                "--ref-mode, --ref-max-depth and --ref-min-weight set the self reference: add --ref self \
+                 (the default reference is the path-traced truth)"
+                    .into(),
+            );
+        }
+        if common.view.fps.is_some() && self.knobs.as_deref().is_some_and(|k| !k.contains("accel-update")) {
+            return Some(
+                "--fps has no effect here: report renders still frames at --time; it steps only the \
+                 accel-update knob's frames"
+                    .into(),
+            );
+        }
+        if let Some(Err(e)) = self.knobs.as_deref().map(super::knobs::parse_selection) {
+            return Some(format!("--knobs: {e:#}"));
+        }
+        if common.frames < 5 {
+            return Some(format!("--frames {} is too few for a p95; use at least 5", common.frames));
+        }
+        None
+    }
+
+    fn run(self, gpu: &GpuOptions, common: Common) -> Result<()> {
+        let KnobArgs {
             knobs,
             ref_kind,
             ref_samples,
@@ -190,69 +368,12 @@ impl ReportArgs {
             no_ray_counts,
             ref_supersample,
             ref_ss_filter,
-            stability,
-            cases,
-            budget_paths,
-            tone_sheet,
-            prt,
-            prt_sweep,
-            out,
         } = self;
-        if prt {
-            let opts = crate::report::prt::PrtReportOptions {
-                frames,
-                warmup,
-                knobs: crate::report::prt::parse_selection(knobs.as_deref().unwrap_or(""))
-                    .context("--knobs")?,
-                sweep: prt_sweep,
-                reference: crate::render::ReferenceSettings {
-                    samples: view
-                        .env
-                        .reference_samples
-                        .unwrap_or(crate::report::prt::DEFAULT_REFERENCE.samples),
-                    bounces: view
-                        .env
-                        .reference_bounces
-                        .unwrap_or(crate::report::prt::DEFAULT_REFERENCE.bounces),
-                },
-                ..crate::report::prt::PrtReportOptions::new(view.job()?, out)
-            };
-            return crate::report::prt::command(gpu, &opts);
-        }
-        if !budget_paths.is_empty() {
-            let opts = crate::report::budget_paths::BudgetPathOptions {
-                job: view.job()?,
-                out,
-                frames,
-                warmup,
-                shares: budget_paths,
-            };
-            return crate::report::budget_paths::command(gpu, &opts);
-        }
-        if !tone_sheet.is_empty() {
-            let job = view.job()?;
-            let files = crate::app::with_context(gpu, |ctx| {
-                crate::report::tone_sheet::tone_sheets(ctx, &job, &tone_sheet, warmup, &out)
-            })?;
-            for f in files {
-                println!("wrote {}", f.display());
-            }
-            return Ok(());
-        }
-        if stability {
-            let opts = crate::report::stability::StabilityOptions {
-                frames,
-                warmup,
-                cases,
-                ..crate::report::stability::StabilityOptions::new(view.job()?, out)
-            };
-            return crate::report::stability::stability_command(gpu, &opts);
-        }
+        let (view, frames, warmup, out) = common.parts();
         let opts = ReportOptions {
             frames,
             warmup,
-            knobs: crate::report::knobs::parse_selection(knobs.as_deref().unwrap_or(""))
-                .context("--knobs")?,
+            knobs: super::knobs::parse_selection(knobs.as_deref().unwrap_or("")).context("--knobs")?,
             reference: ReferenceSettings {
                 max_depth: ref_max_depth,
                 min_weight: ref_min_weight,
@@ -264,14 +385,14 @@ impl ReportArgs {
             truth_cache: match (no_ref_cache, ref_cache) {
                 (true, _) => None,
                 (false, Some(dir)) => Some(dir),
-                (false, None) => crate::report::truth::default_cache_dir(),
+                (false, None) => super::truth::default_cache_dir(),
             },
             count_rays: !no_ray_counts,
             attribution_samples,
             aa_reference: Supersample { factor: ref_supersample, filter: ref_ss_filter },
             ..ReportOptions::new(view.job()?, out)
         };
-        crate::report::report_command(gpu, &opts)
+        super::report_command(gpu, &opts)
     }
 }
 

@@ -1,4 +1,4 @@
-//! `report --budget-paths`: the per-object ray-tracing budget's image error
+//! `report budget-paths`: the per-object ray-tracing budget's image error
 //! against run time along the scene's camera path. For each budget mode
 //! (paper; effects; effects with the raster fallback)
 //! and each share of the full cost, one renderer (so the selection, its
@@ -164,7 +164,7 @@ fn summarize(
 /// Runs every mode and share along the path (writes nothing).
 pub fn run(ctx: &Context, opts: &BudgetPathOptions) -> Result<Vec<PathRun>> {
     if opts.frames < 2 {
-        bail!("report --budget-paths: --frames {} is too few for a path; use at least 2", opts.frames);
+        bail!("report budget-paths: --frames {} is too few for a path; use at least 2", opts.frames);
     }
     let extent = opts.job.extent()?;
     let (scene, _) = load_posed(&opts.job)?;
@@ -174,7 +174,7 @@ pub fn run(ctx: &Context, opts: &BudgetPathOptions) -> Result<Vec<PathRun>> {
     }
     let cams = cameras(&scene, &base_camera, opts.frames);
     let full = RenderSettings { budget: None, ..opts.job.settings };
-    eprintln!("report --budget-paths: full effects along the path ({} frames)", opts.frames);
+    eprintln!("report budget-paths: full effects along the path ({} frames)", opts.frames);
     let (reference, mut r) = run_path(ctx, &scene, &cams, extent, &full, opts.warmup)?;
     // Paper mode's unit: its cost of everything visible at the path's start.
     let paper_all = (|| {
@@ -187,7 +187,7 @@ pub fn run(ctx: &Context, opts: &BudgetPathOptions) -> Result<Vec<PathRun>> {
     let ray_all = median_p95(&reference.iter().map(|f| f.ray_ms).collect::<Vec<_>>()).0;
     let mut runs = vec![summarize("full effects", None, None, &reference, &reference)?];
     let none = Effects { shadows: false, reflections: false, refractions: false, ..full.effects };
-    eprintln!("report --budget-paths: raster only");
+    eprintln!("report budget-paths: raster only");
     let (raster, mut r) =
         run_path(ctx, &scene, &cams, extent, &RenderSettings { effects: none, ..full }, opts.warmup)?;
     r.destroy(ctx);
@@ -203,7 +203,7 @@ pub fn run(ctx: &Context, opts: &BudgetPathOptions) -> Result<Vec<PathRun>> {
                 fallback: mode.fallback,
             };
             eprintln!(
-                "report --budget-paths [{}/{total}]: {} mode, share {share} (T = {:.3})",
+                "report budget-paths [{}/{total}]: {} mode, share {share} (T = {:.3})",
                 m * opts.shares.len() + k + 1,
                 mode.label,
                 b.budget
@@ -282,7 +282,7 @@ pub fn csv(runs: &[PathRun]) -> String {
     s
 }
 
-/// `report --budget-paths`: runs, then writes budget_paths.{md,csv,png}.
+/// `report budget-paths`: runs, then writes budget_paths.{md,csv,png}.
 pub fn command(gpu: &GpuOptions, opts: &BudgetPathOptions) -> Result<()> {
     with_context(gpu, |ctx| {
         let runs = run(ctx, opts)?;

@@ -8,9 +8,9 @@
 //! One technique per file: `metrics` (ꟻLIP, PSNR, relMSE), `knobs` (the
 //! knob table), `measure` (warm-up and GPU timing), `write` (tables),
 //! `plot` (the chart and the Pareto front), `compare` (two image files),
-//! `stability` (`report --stability`: stiff and extreme variants of a scene),
-//! `tone_sheet` (`report --tone-sheet`: tone operators side by side),
-//! `prt` and `prt_write` (`report --prt`: the environment light's ambient
+//! `stability` (`report stability`: stiff and extreme variants of a scene),
+//! `tone_sheet` (`report tone-sheet`: tone operators side by side),
+//! `prt` and `prt_write` (`report prt`: the environment light's ambient
 //! against a ray-traced reference).
 
 pub mod args;

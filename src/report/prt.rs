@@ -1,4 +1,4 @@
-//! `report --prt`: the environment light's ambient (SH irradiance and
+//! `report prt`: the environment light's ambient (SH irradiance and
 //! diffuse PRT) against a converged ray-traced reference of the same view
 //! (`--reference-samples N --reference-bounces K`, render/reference.rs),
 //! every other setting equal, so ꟻLIP measures the ambient's error only.
@@ -111,7 +111,7 @@ fn parse_transfer(s: &str) -> Result<(AmbientMode, Option<u32>)> {
 pub fn find(name: &str) -> Result<&'static Knob> {
     PRT_KNOBS.iter().find(|k| k.name == name).with_context(|| {
         let names: Vec<_> = PRT_KNOBS.iter().map(|k| k.name).collect();
-        format!("unknown knob '{name}' for report --prt (knobs: {})", names.join(", "))
+        format!("unknown knob '{name}' for report prt (knobs: {})", names.join(", "))
     })
 }
 
@@ -268,7 +268,7 @@ fn plan(opts: &PrtReportOptions, base: &Variant) -> Result<Plan> {
         }
     }
     if out.is_empty() {
-        bail!("report --prt: no variant to run (every selected setting was skipped)");
+        bail!("report prt: no variant to run (every selected setting was skipped)");
     }
     Ok((out, skipped))
 }
@@ -342,7 +342,7 @@ fn render_reference(
             half_image = Some(HdrImage::from_rgba(o.width, o.height, &o.hdr).0);
         }
         if i % 16 == 0 {
-            eprintln!("report --prt: reference frame {i}/{frames}, {:.0} s", start.elapsed().as_secs_f64());
+            eprintln!("report prt: reference frame {i}/{frames}, {:.0} s", start.elapsed().as_secs_f64());
         }
         out = Some(o);
     }
@@ -363,7 +363,7 @@ pub fn run(ctx: &Context, opts: &PrtReportOptions) -> Result<PrtReport> {
     let extent = opts.job.extent()?;
     let (scene, _) = load_posed(&opts.job)?;
     let Some(map) = scene.environment.map.clone() else {
-        bail!("report --prt: {} has no environment map (give --env MAP.hdr)", opts.job.scene.display());
+        bail!("report prt: {} has no environment map (give --env MAP.hdr)", opts.job.scene.display());
     };
     let env = scene.environment.map_path.as_ref().map_or("(scene)".into(), |p| p.display().to_string());
     let camera = opts.job.camera.resolve(&scene)?;
@@ -371,11 +371,7 @@ pub fn run(ctx: &Context, opts: &PrtReportOptions) -> Result<PrtReport> {
     base_settings.prt.projection = EnvProjection::Exact;
     let base = Variant::new(base_settings);
     let (variants, skipped) = plan(opts, &base)?;
-    eprintln!(
-        "report --prt: {} variants ({})",
-        variants.len(),
-        if opts.sweep { "sweeps" } else { "product" }
-    );
+    eprintln!("report prt: {} variants ({})", variants.len(), if opts.sweep { "sweeps" } else { "product" });
 
     // CPU side first: every distinct transfer and projection, timed.
     let mut precomputes: Vec<(PrtSettings, Precompute)> = Vec::new();
@@ -383,7 +379,7 @@ pub fn run(ctx: &Context, opts: &PrtReportOptions) -> Result<PrtReport> {
     for (v, _) in &variants {
         if let Some(s) = prt_settings(&v.settings) {
             if !precomputes.iter().any(|(x, _)| *x == s) {
-                eprintln!("report --prt: precompute {s:?}");
+                eprintln!("report prt: precompute {s:?}");
                 precomputes.push((s, precompute(&scene, &s)?));
             }
         }
@@ -405,7 +401,7 @@ pub fn run(ctx: &Context, opts: &PrtReportOptions) -> Result<PrtReport> {
     let mut renderer = Renderer::new(ctx, &scene, extent)?;
     let result = (|| -> Result<(HdrImage, HdrImage, f64, Vec<Measured>)> {
         eprintln!(
-            "report --prt: the reference, {} samples per pixel, {} ray(s) per path",
+            "report prt: the reference, {} samples per pixel, {} ray(s) per path",
             opts.reference.samples, opts.reference.bounces
         );
         let (half, reference, seconds) =
@@ -414,9 +410,9 @@ pub fn run(ctx: &Context, opts: &PrtReportOptions) -> Result<PrtReport> {
         let started = Instant::now();
         for (i, (v, s)) in variants.iter().enumerate() {
             let m = measure::measure(ctx, &mut renderer, &scene, &camera, v, opts.warmup, opts.frames, false)
-                .with_context(|| format!("report --prt: measuring {s:?}"))?;
+                .with_context(|| format!("report prt: measuring {s:?}"))?;
             eprintln!(
-                "report --prt [{}/{}] {} bands {} sh-samples {}: {:.3} ms median ({:.0} s so far)",
+                "report prt [{}/{}] {} bands {} sh-samples {}: {:.3} ms median ({:.0} s so far)",
                 i + 1,
                 variants.len(),
                 s.transfer,
@@ -479,7 +475,7 @@ pub fn run(ctx: &Context, opts: &PrtReportOptions) -> Result<PrtReport> {
     })
 }
 
-/// `report --prt`: runs it in its own context and writes `opts.out`.
+/// `report prt`: runs it in its own context and writes `opts.out`.
 pub fn command(gpu: &GpuOptions, opts: &PrtReportOptions) -> Result<()> {
     with_context(gpu, |ctx| {
         let report = run(ctx, opts)?;

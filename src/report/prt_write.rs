@@ -1,4 +1,4 @@
-//! What `report --prt` writes: `prt.md`, `prt.csv`, two plots (ꟻLIP
+//! What `report prt` writes: `prt.md`, `prt.csv`, two plots (ꟻLIP
 //! against the GPU frame time and against the precompute time) and the
 //! pictures: the environment, its SH radiance reconstruction at 3 and 7
 //! bands and the 3-band irradiance (equirect, 256x128, one exposure), the

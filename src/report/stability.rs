@@ -1,4 +1,4 @@
-//! `report --stability`: the scene's stiff and extreme variants (far from
+//! `report stability`: the scene's stiff and extreme variants (far from
 //! the origin, tiny and huge, grazing and facing mirrors, IOR near 1, total
 //! internal reflection, a 1e5 environment texel, emission past half-float,
 //! tiny and zero-area triangles, a wall at the camera) rendered on every
@@ -70,7 +70,7 @@ impl Row {
     }
 }
 
-/// What `report --stability` measured.
+/// What `report stability` measured.
 pub struct Stability {
     pub scene: PathBuf,
     pub device: String,
@@ -128,7 +128,7 @@ fn backends(
 /// only the case files: OBJ meshes and .hdr maps in `opts.out/cases/`).
 pub fn run(ctx: &Context, opts: &StabilityOptions) -> Result<Stability> {
     if opts.frames < 3 {
-        bail!("report --stability: --frames {} is too few for a median; use at least 3", opts.frames);
+        bail!("report stability: --frames {} is too few for a median; use at least 3", opts.frames);
     }
     let extent = opts.job.extent()?;
     let (scene, _) = load_posed(&opts.job)?;
@@ -139,7 +139,7 @@ pub fn run(ctx: &Context, opts: &StabilityOptions) -> Result<Stability> {
     let base = RenderSettings { mode: Mode::Hybrid, ..opts.job.settings };
     let (available, skipped) = backends(ctx, &scene, &base);
     if available.is_empty() {
-        bail!("report --stability: no ray backend can run on {}: {}", ctx.caps.name, skipped.join("; "));
+        bail!("report stability: no ray backend can run on {}: {}", ctx.caps.name, skipped.join("; "));
     }
 
     let n = cases.len();
@@ -327,7 +327,7 @@ fn compare(case: &Case, r: &Rendered, cases: &[Case], all: &[Rendered], exposure
     row
 }
 
-/// `report --stability`: runs it in its own context and writes `opts.out`.
+/// `report stability`: runs it in its own context and writes `opts.out`.
 pub fn stability_command(gpu: &GpuOptions, opts: &StabilityOptions) -> Result<()> {
     with_context(gpu, |ctx| {
         let report = run(ctx, opts)?;

@@ -1,4 +1,4 @@
-//! `report --tone-sheet MAP,...`: the tone operators side by side under
+//! `report tone-sheet --maps MAP,...`: the tone operators side by side under
 //! several HDR environments. Per map, one contact sheet PNG: a row per
 //! operator, a column per key value (log-average auto exposure, converged),
 //! plus a column at the fixed --exposure; and one table (tone_sheet.md)
@@ -46,7 +46,7 @@ pub fn tone_sheets(
     warmup: usize,
     out: &Path,
 ) -> Result<Vec<PathBuf>> {
-    anyhow::ensure!(!maps.is_empty(), "--tone-sheet: give at least one .hdr map");
+    anyhow::ensure!(!maps.is_empty(), "report tone-sheet: give at least one .hdr map (--maps)");
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     super::plot::register_font()?;
     let mut written = Vec::new();
@@ -63,7 +63,7 @@ pub fn tone_sheets(
     for (m, map) in maps.iter().enumerate() {
         let (mut scene, _) = load_posed(job)?;
         let hdr = crate::scene::scene_file::load_hdr(map)
-            .with_context(|| format!("--tone-sheet map {}", map.display()))?;
+            .with_context(|| format!("report tone-sheet: map {}", map.display()))?;
         scene.environment.map = Some(hdr);
         scene.environment.map_path = Some(map.clone());
         let camera = job.camera.resolve(&scene)?;

@@ -549,3 +549,42 @@ fn view_help_lists_the_keys() {
         assert!(help.contains(key) && help.contains(what), "{key} not in:\n{help}");
     }
 }
+
+/// `report`'s subcommands take only their own options, each check reaches
+/// through them (exit 2, the problem named, nothing written), and `report`
+/// alone is `report knobs`.
+#[test]
+fn report_subcommands_take_their_own_options() {
+    let d = tmp("report_subcommands");
+    let _ = std::fs::remove_dir_all(&d);
+    for (args, needle) in [
+        (&["knobs", "--knobs", "depth"][..], "max-depth"),
+        (&["knobs", "--frames", "3"], "at least 5"),
+        (&["knobs", "--cases", "origin"], "unexpected argument '--cases'"),
+        (&["stability", "--ref", "self"], "unexpected argument '--ref'"),
+        (&["budget-paths", "--shares", "2"], "--shares"),
+        (&["budget-paths"], "--shares"),
+        (&["tone-sheet"], "--maps"),
+        (&["tone-sheet", "--maps", "a.hdr", "--fps", "5", "--animation", "0"], "--fps has no effect"),
+        (&["prt", "--frames", "3"], "at least 5"),
+        (&["prt", "--knobs", "bands", "--shares", "1"], "unexpected argument '--shares'"),
+    ] {
+        let out = bin()
+            .arg("report")
+            .args(args)
+            .args(["--width", "16", "--height", "9", "--out"])
+            .arg(&d)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: '{needle}' not in {stderr}");
+        assert!(!d.exists(), "{args:?} wrote {}", d.display());
+    }
+    let help = |sub: &str| {
+        String::from_utf8_lossy(&bin().args(["report", sub, "--help"]).output().unwrap().stdout).to_string()
+    };
+    assert!(help("knobs").contains("--ref-samples") && !help("knobs").contains("--cases"));
+    assert!(help("stability").contains("--cases") && !help("stability").contains("--ref-samples"));
+    assert!(help("prt").contains("--sweep") && help("prt").contains("--reference-samples"));
+}

@@ -1,4 +1,4 @@
-//! `report --stability` on a subset of its cases at 64x36 on the bundled
+//! `report stability` on a subset of its cases at 64x36 on the bundled
 //! default scene, every available backend, validation on: the thresholds
 //! of those cases hold, report.csv parses with the exact header, report.md
 //! states the thresholds; and the command line refuses bad input.
@@ -167,32 +167,39 @@ fn stability_subset_meets_its_thresholds() {
 }
 
 /// The command line: progress per case on stderr, the files written; bad
-/// case names, --cases without --stability and too few frames refused.
+/// case names, options of other reports, --cases without --stability (the
+/// earlier spelling) and too few frames refused.
 #[test]
 fn stability_cli() {
     let d = tmp("cli");
-    let run = |args: &[&str]| {
+    // `report stability ARGS` (sub = true) or `report ARGS`.
+    let run_as = |sub: bool, args: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_hybrid-rt"))
             .env("HYBRID_RT_VALIDATION", "1")
-            .args(["report", "--width", "64", "--height", "36", "--out"])
+            .arg("report")
+            .args(if sub { &["stability"][..] } else { &[] })
+            .args(["--width", "64", "--height", "36", "--out"])
             .arg(&d)
             .args(args)
             .output()
             .unwrap()
     };
+    let run = |args: &[&str]| run_as(true, args);
     let mut p = Problems::default();
-    for (args, needle) in [
-        (&["--stability", "--cases", "nope"][..], "translate-1e3"),
-        (&["--cases", "origin"], "--stability"),
-        (&["--stability", "--frames", "2"], "at least 3"),
-        (&["--stability", "--knobs", "mode"], "--knobs"),
+    for (sub, args, needle) in [
+        (true, &["--cases", "nope"][..], "translate-1e3"),
+        (true, &["--frames", "2"], "at least 3"),
+        (true, &["--knobs", "mode"], "unexpected argument '--knobs'"),
+        (true, &["--ref-samples", "64"], "unexpected argument '--ref-samples'"),
+        (false, &["--cases", "origin"], "--stability"),
+        (false, &["--stability", "--knobs", "mode"], "--knobs"),
     ] {
-        let out = run(args);
+        let out = run_as(sub, args);
         let stderr = String::from_utf8_lossy(&out.stderr);
         p.check(!out.status.success() && !stderr.contains("panicked"), || format!("{args:?} ran: {stderr}"));
         p.check(stderr.contains(needle), || format!("{args:?}: '{needle}' not in {stderr}"));
     }
-    let out = run(&["--stability", "--cases", "scale-1e3", "--frames", "3", "--warmup", "1"]);
+    let out = run(&["--cases", "scale-1e3", "--frames", "3", "--warmup", "1"]);
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     p.check(out.status.success(), || format!("the run failed: {stderr}"));
     p.check(

@@ -1,4 +1,4 @@
-//! `report --prt` end to end (src/report/prt.rs) on the plane under a
+//! `report prt` end to end (src/report/prt.rs) on the plane under a
 //! sphere (tests/common/scenes.rs) under a constant environment: the report
 //! renders the ray-traced reference and the selected transfers and gives
 //! one row per variant with its precompute, composite and frame times; PRT
@@ -77,9 +77,9 @@ fn prt_report_rows_and_shadowed_beats_unshadowed() {
     drop(ctx); // validation errors, teardown included, fail here
 }
 
-/// Bad `report --prt` input: an error naming the knob and value (exit 1,
-/// checked before anything renders), or a usage error (exit 2); no panic,
-/// nothing written.
+/// Bad `report prt` input (or its earlier spelling `report --prt`): an
+/// error naming the knob and value (exit 1, checked before anything
+/// renders), or a usage error (exit 2); no panic, nothing written.
 #[test]
 fn prt_report_bad_input_is_named() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("prt-report-bad");
@@ -88,7 +88,9 @@ fn prt_report_bad_input_is_named() {
         (&["--prt", "--knobs", "bands=9"][..], 1, "bands 9"),
         (&["--prt", "--knobs", "sh-samples=many"], 1, "sh-samples 'many'"),
         (&["--prt", "--knobs", "transfer=prt-interreflected-0"], 1, "transfer 'prt-interreflected-0'"),
-        (&["--prt", "--knobs", "max-depth"], 1, "unknown knob 'max-depth' for report --prt"),
+        (&["prt", "--knobs", "max-depth"], 1, "unknown knob 'max-depth' for report prt"),
+        (&["prt", "--sweep", "--knobs", "bands=9"], 1, "bands 9"),
+        (&["prt", "--ref-samples", "64"], 2, "unexpected argument '--ref-samples'"),
         (&["--prt-sweep"], 2, "--prt"),
         (&["--prt", "--stability"], 2, "--stability"),
     ] {

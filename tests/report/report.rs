@@ -394,7 +394,7 @@ fn budget_knob_spans_raster_only_to_every_object_traced() {
     assert!(one.timing.pass("heuristic").is_some(), "the budget's pass is timed: {:?}", one.timing.passes);
 }
 
-/// `report --budget-paths`: every mode and share runs along the path; the
+/// `report budget-paths`: every mode and share runs along the path; the
 /// full-effects run is its own reference, share 0 renders the raster-only
 /// frames in the modes without fallback (so the same error), and the
 /// effects show.

@@ -481,7 +481,7 @@ fn write_env(scene: &Scene, hot: bool, path: &Path) -> Result<()> {
 /// (the camera), no normals (the reader generates them), plus the case's
 /// tiny or zero-area triangles.
 fn obj_text(case: &str, h: f32) -> String {
-    let mut s = String::from("# written by hybrid-rt report --stability\n");
+    let mut s = String::from("# written by hybrid-rt report stability\n");
     for (x, y) in [(-h, -h), (h, -h), (h, h), (-h, h)] {
         s += &format!("v {x:.9e} {y:.9e} 0\n");
     }
