@@ -35,7 +35,7 @@ use crate::gpu::shared::{BVH_FLAT_ROOT, BVH_WIDE_HEADER};
 use crate::scene::{Aabb, Instance, Scene};
 use crate::vk::frame_ring::{FrameRing, Source, Uploads};
 use crate::vk::pipeline::{Binding, DescriptorSet};
-use crate::vk::{memory_barrier, Buffer, Context};
+use crate::vk::{built, memory_barrier, Buffer, Context};
 
 /// Mirrors `BvhInstance` in glsl/trace/compute.glsl and
 /// glsl/anim/tlas_refit.comp.
@@ -228,7 +228,7 @@ impl ComputeBvh {
         }
         // Every GPU object lands in `bvh` as it is made, so an error half-way
         // destroys what exists.
-        let mut bvh = ComputeBvh {
+        let bvh = ComputeBvh {
             blas,
             skinned,
             refit: None,
@@ -255,38 +255,28 @@ impl ComputeBvh {
             origin: gpu.origin,
         };
         let data = TreeData { nodes: &nodes, prims: &prims, flat_tris: &flat.triangles };
-        if let Err(e) = bvh.create_buffers(ctx, scene, gpu, data) {
-            bvh.destroy(ctx);
-            return Err(e);
-        }
-        // Fit the skinned trees (and the top level) to the GPU's vertices:
-        // the CPU pose they were built from may differ in the last bit. A
-        // load-time submission, not part of any frame.
-        let updates = vec![Update::Refit; bvh.skinned.len()];
-        let mut ring = match FrameRing::new(1, "compute BVH load") {
-            Ok(r) => r,
-            Err(e) => {
-                bvh.destroy(ctx);
-                return Err(e);
-            }
-        };
-        let fitted = (|| {
-            ring.begin(0)?;
-            bvh.write_top_level(&mut Uploads { ring: &mut ring, slot: 0 }, scene)?;
-            let roots = bvh.roots_source().map(|r| ring.download(0, r)).transpose()?;
-            ctx.one_shot("refit skinned BVHs", |cmd| {
-                ring.record_uploads(ctx, cmd, 0)?;
-                bvh.record_update(ctx, cmd);
-                ring.record_downloads(ctx, cmd, 0)
-            })?;
-            let roots = roots.map(|d| ring.read(0, d)).transpose()?;
-            bvh.finish_update(&updates, &RebuildPolicy::default(), roots)
-        })();
-        ring.destroy(ctx);
-        if let Err(e) = fitted {
-            bvh.destroy(ctx);
-            return Err(e);
-        }
+        let mut bvh = built(ctx, bvh, |bvh| {
+            bvh.create_buffers(ctx, scene, gpu, data)?;
+            // Fit the skinned trees (and the top level) to the GPU's vertices:
+            // the CPU pose they were built from may differ in the last bit. A
+            // load-time submission, not part of any frame.
+            let updates = vec![Update::Refit; bvh.skinned.len()];
+            let mut ring = FrameRing::new(1, "compute BVH load")?;
+            let fitted = (|| {
+                ring.begin(0)?;
+                bvh.write_top_level(&mut Uploads { ring: &mut ring, slot: 0 }, scene)?;
+                let roots = bvh.roots_source().map(|r| ring.download(0, r)).transpose()?;
+                ctx.one_shot("refit skinned BVHs", |cmd| {
+                    ring.record_uploads(ctx, cmd, 0)?;
+                    bvh.record_update(ctx, cmd);
+                    ring.record_downloads(ctx, cmd, 0)
+                })?;
+                let roots = roots.map(|d| ring.read(0, d)).transpose()?;
+                bvh.finish_update(&updates, &RebuildPolicy::default(), roots)
+            })();
+            ring.destroy(ctx);
+            fitted
+        })?;
         bvh.build_ms = t0.elapsed().as_secs_f64() * 1e3;
         let flattened = flat.flattened.iter().filter(|f| **f).count();
         log::info!(
@@ -640,3 +630,5 @@ fn top_level<'a>(
     }
     (tlas, records)
 }
+
+crate::destroy_by_method!(ComputeBvh);

@@ -15,7 +15,7 @@ use crate::gpu::shared::{
 };
 use crate::vk::frame_ring::{upload_now, Source, Uploads};
 use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
-use crate::vk::{memory_barrier, Buffer, Context};
+use crate::vk::{built, memory_barrier, Buffer, Context};
 
 /// Mirrors `RefitJob` in glsl/anim/bvh_refit.comp.
 #[repr(C)]
@@ -72,7 +72,7 @@ impl ComputeRefit {
             order_len += order_capacity(r.index_count / 3);
         }
         // Objects land in `refit` as they are made: an error destroys them.
-        let mut refit = ComputeRefit {
+        let refit = ComputeRefit {
             jobs: Buffer::null(),
             order: Buffer::null(),
             roots: Buffer::null(),
@@ -81,19 +81,15 @@ impl ComputeRefit {
             layout: vk::PipelineLayout::null(),
             pipeline: vk::Pipeline::null(),
         };
-        let created = refit.create(ctx, gpu, nodes, prims, order_len).and_then(|()| {
+        built(ctx, refit, |refit| {
+            refit.create(ctx, gpu, nodes, prims, order_len)?;
             upload_now(ctx, "BVH refit levels", |up| {
                 for (slot, (bvh, _, _)) in bvhs.iter().enumerate() {
                     refit.set_levels(up, slot, bvh)?;
                 }
                 Ok(())
             })
-        });
-        if let Err(e) = created {
-            refit.destroy(ctx);
-            return Err(e);
-        }
-        Ok(refit)
+        })
     }
 
     fn create(
@@ -183,3 +179,5 @@ impl ComputeRefit {
         }
     }
 }
+
+crate::destroy_by_method!(ComputeRefit);

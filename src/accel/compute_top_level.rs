@@ -15,7 +15,7 @@ use crate::gpu::shared::{
 use super::bvh::{Bvh, MAX_DEPTH};
 use crate::vk::frame_ring::Uploads;
 use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
-use crate::vk::{memory_barrier, Buffer, Context};
+use crate::vk::{built, memory_barrier, Buffer, Context};
 
 /// Top-level buffers are rewritten every frame something moves, through
 /// the frame's ring slot (never in place: a frame in flight reads them);
@@ -59,14 +59,14 @@ impl TopLevelRefit {
         let capacity = (2 * instances.max(1) - 1) + MAX_DEPTH + 2;
         let order = host_buffer(ctx, "BVH top-level refit order", 4 * capacity)?;
         // Objects land in `fit` as they are made: an error destroys them.
-        let mut fit = TopLevelRefit {
+        let fit = TopLevelRefit {
             order,
             levels: Levels::default(),
             set: DescriptorSet::null(),
             layout: vk::PipelineLayout::null(),
             pipeline: vk::Pipeline::null(),
         };
-        let created = (|| {
+        built(ctx, fit, |fit| {
             fit.set = DescriptorSet::storage_buffers(
                 ctx,
                 "BVH top-level refit set",
@@ -82,13 +82,8 @@ impl TopLevelRefit {
             fit.layout = pipeline_layout(ctx, "BVH top-level refit layout", &[fit.set.layout], push)?;
             fit.pipeline =
                 compute_pipeline(ctx, "anim/tlas_refit.comp", fit.layout, &Specialization::new(&[]))?;
-            anyhow::Ok(())
-        })();
-        if let Err(e) = created {
-            fit.destroy(ctx);
-            return Err(e);
-        }
-        Ok(fit)
+            Ok(())
+        })
     }
 
     /// Takes the level order of a new top-level topology (None: the top
@@ -143,3 +138,5 @@ impl TopLevelRefit {
         self.order.destroy(ctx);
     }
 }
+
+crate::destroy_by_method!(TopLevelRefit);

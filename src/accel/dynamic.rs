@@ -11,7 +11,7 @@ use gpu_allocator::MemoryLocation;
 use super::{blas_sizes, triangles, AccelStruct};
 use crate::gpu::scene::{GpuScene, PrimitiveRange};
 use crate::scene::Aabb;
-use crate::vk::{Buffer, Context};
+use crate::vk::{built, Buffer, Context};
 
 /// When a refit BLAS is rebuilt instead: after `max_refits` refits in a row
 /// (None = no limit; Some(0) rebuilds every frame), or when the deformed bounds' surface area has grown past
@@ -109,12 +109,8 @@ impl DynamicBlases {
     /// vertices must already hold a pose.
     pub fn new(ctx: &Context, gpu: &GpuScene, bounds: &[Aabb], align: u64) -> Result<DynamicBlases> {
         // Objects land in `d` as they are made: an error destroys them.
-        let mut d = DynamicBlases { blases: Vec::new(), scratch: None, scratch_address: 0 };
-        if let Err(e) = d.create(ctx, gpu, bounds, align) {
-            d.destroy(ctx);
-            return Err(e);
-        }
-        Ok(d)
+        let d = DynamicBlases { blases: Vec::new(), scratch: None, scratch_address: 0 };
+        built(ctx, d, |d| d.create(ctx, gpu, bounds, align))
     }
 
     fn create(&mut self, ctx: &Context, gpu: &GpuScene, bounds: &[Aabb], align: u64) -> Result<()> {
@@ -205,6 +201,8 @@ impl DynamicBlases {
         }
     }
 }
+
+crate::destroy_by_method!(DynamicBlases);
 
 #[cfg(test)]
 mod tests {

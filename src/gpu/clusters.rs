@@ -21,7 +21,7 @@ use gpu_allocator::MemoryLocation;
 use super::draw::Draw;
 use super::shared::{CLUSTER_STRIDE, CLUSTER_TRIANGLES, OCC_COUNTER_SLOTS};
 use crate::scene::{Aabb, Scene};
-use crate::vk::{Buffer, Context};
+use crate::vk::{built, Buffer, Context};
 
 /// One cluster as the shaders see it (glsl/common/cluster.glsl).
 #[repr(C)]
@@ -134,12 +134,7 @@ impl Clusters {
     }
 
     pub fn upload(ctx: &Context, scene: &Scene, draws: &[Draw]) -> Result<Clusters> {
-        let mut c = Clusters::null();
-        if let Err(e) = c.fill(ctx, scene, draws) {
-            c.destroy(ctx);
-            return Err(e);
-        }
-        Ok(c)
+        built(ctx, Clusters::null(), |c| c.fill(ctx, scene, draws))
     }
 
     fn fill(&mut self, ctx: &Context, scene: &Scene, draws: &[Draw]) -> Result<()> {
@@ -184,3 +179,5 @@ impl Clusters {
         }
     }
 }
+
+crate::destroy_by_method!(Clusters);

@@ -24,7 +24,7 @@ use crate::scene::{Aabb, AlphaMode, Filter, Instance, LightKind, SamplerDesc, Sc
 use crate::vk::frame_ring::{upload_now, Uploads};
 use crate::vk::memory::TextureDesc;
 use crate::vk::pipeline::{Binding, DescriptorSet};
-use crate::vk::{Buffer, Context, Image};
+use crate::vk::{built, Buffer, Context, Image};
 
 /// Written by the GPU and the frame ring, read through ring downloads.
 const TRANSFER_BOTH: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
@@ -92,11 +92,7 @@ impl GpuScene {
         // Every object created lands in `gs` at once, so a failure half-way
         // (out of memory, a driver error) destroys what exists: an error
         // exit leaks nothing.
-        let mut gs = GpuScene::empty();
-        if let Err(e) = gs.fill(ctx, scene) {
-            gs.destroy(ctx);
-            return Err(e);
-        }
+        let gs = built(ctx, GpuScene::empty(), |gs| gs.fill(ctx, scene))?;
         log::info!(
             "uploaded scene: {} triangles, {} instances, {} materials, {} textures, {:.1} MiB GPU memory, {:.0} ms",
             scene.triangle_count(),
@@ -635,3 +631,5 @@ fn create_sampler(ctx: &Context, d: &SamplerDesc) -> Result<vk::Sampler> {
     ctx.name(s, &format!("sampler {d:?}"));
     Ok(s)
 }
+
+crate::destroy_by_method!(GpuScene);

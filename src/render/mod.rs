@@ -7,7 +7,7 @@ pub mod budget;
 pub mod cull;
 pub mod frame;
 mod frame_results;
-pub mod inject;
+
 pub mod kernel;
 pub mod occlusion;
 pub mod output;
@@ -40,7 +40,9 @@ use crate::vk::frame_ring::{FrameRing, Uploads};
 use crate::vk::timer::GpuTimer;
 use crate::vk::{Buffer, Context};
 use frame::{Access, Recorder, SharedBuffer, Use};
-use passes::{antialias::final_ldr, composite::HDR, Creation, Pass, Recording};
+use passes::{
+    antialias::final_ldr, composite::HDR, Creation, FrameState, Pass, PassDesc, Recording, Upstream,
+};
 use shading::{SceneNeeds, ShadingConfig};
 use skinning::Skinning;
 use targets::Targets;
@@ -54,16 +56,9 @@ pub use settings::{AmbientMode, DebugView, EnvProjection, PrtOptions, ReferenceS
 
 /// A pass of the current frame with what it declared.
 struct Recorded {
-    name: &'static str,
+    desc: &'static PassDesc,
     uses: Vec<Use>,
     pass: Box<dyn Pass>,
-}
-
-/// Whether the current frame leaves out its pass `name`: `shadow_map`
-/// records only when the budget leaves some visible object's shadows out
-/// (`shadow_map_left_out` says why not); auto visibility records one technique.
-fn left_out_this_frame(name: &str, shadow_map_left_out: Option<&str>, vis: &visibility::Chooser) -> bool {
-    name == passes::shadow_map::PASS.name && shadow_map_left_out.is_some() || vis.leaves_out(name)
 }
 
 /// The readback and the viewer's blit copy these out of the frame: its
@@ -112,7 +107,7 @@ pub struct Renderer {
     /// at once (a still frame: no adaptation history).
     pub adapt_dt: Option<f32>,
     /// Test fault injection into the HDR frame (`inject_radiance`).
-    injection: Option<inject::Injection>,
+    injection: Vec<passes::inject::Injected>,
     /// The per-object ray-tracing budget's selection across frames.
     budget: budget::BudgetState,
     /// Why this frame leaves out the `shadow_map` pass it has (None: it
@@ -166,7 +161,7 @@ impl Renderer {
             readback_hdr: Buffer::null(),
             frame_index: 0,
             adapt_dt: None,
-            injection: None,
+            injection: Vec::new(),
             budget: budget::BudgetState::default(),
             shadow_map_left_out: None,
             passes_new: false,
@@ -369,15 +364,23 @@ impl Renderer {
 
     /// Names of the passes the current frame records, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
-        let (left_out, vis) = (self.shadow_map_left_out, &self.visibility);
-        self.passes.iter().filter(|p| !left_out_this_frame(p.name, left_out, vis)).map(|p| p.name).collect()
+        let state = self.frame_state();
+        self.passes.iter().filter(|p| (p.desc.this_frame)(&state).is_none()).map(|p| p.desc.name).collect()
+    }
+
+    /// What decides, per frame, which of the created passes record.
+    fn frame_state(&self) -> FrameState {
+        FrameState { shadow_maps_left_out: self.shadow_map_left_out, visibility: self.visibility.technique() }
     }
 
     /// Makes the frame's passes, tracer and targets match `settings`. Waits
     /// for the GPU when it has to rebuild.
     fn ensure_frame(&mut self, ctx: &Context, scene: &Scene, settings: &RenderSettings) -> Result<()> {
         let settings = &visibility::effective(settings, self.visibility.measure);
-        let config = ShadingConfig::resolve(ctx, self.needs, settings)?;
+        let config = ShadingConfig {
+            inject: !self.injection.is_empty(),
+            ..ShadingConfig::resolve(ctx, self.needs, settings)?
+        };
         if self.config == Some(config) {
             return Ok(());
         }
@@ -408,18 +411,29 @@ impl Renderer {
         }
         // Targets first (passes bind them), from what the passes declare.
         self.passes = Vec::new();
-        let uses: Vec<Vec<Use>> = chosen.iter().map(|d| (d.uses)(&config)).collect();
+        // Each pass sees what the passes before it write (its inputs' handles).
+        let mut upstream = vec![Upstream::default()];
+        let mut uses: Vec<Vec<Use>> = Vec::new();
+        for d in &chosen {
+            let before = upstream.last().expect("one per pass and the start");
+            let u = (d.uses)(&config, before);
+            let mut after = before.clone();
+            after.add(&u);
+            upstream.push(after);
+            uses.push(u);
+        }
         self.allocate_targets(ctx, &config, &uses.iter().flatten().copied().collect::<Vec<_>>())?;
-        for (desc, uses) in chosen.into_iter().zip(uses) {
+        for ((desc, uses), upstream) in chosen.into_iter().zip(uses).zip(&upstream) {
             let init = Creation {
                 ctx,
                 config: &config,
                 gpu: &self.gpu,
                 targets: &self.targets,
                 tracer: self.tracer.as_deref(),
+                upstream,
             };
             let pass = (desc.create)(&init).with_context(|| format!("creating pass {}", desc.name))?;
-            self.passes.push(Recorded { name: desc.name, uses, pass });
+            self.passes.push(Recorded { desc, uses, pass });
         }
         self.passes_new = true;
         self.visibility.passes_rebuilt(&config);
@@ -548,7 +562,7 @@ impl Renderer {
     ) -> Result<()> {
         anyhow::ensure!(self.config.is_some(), "prepare() must run before record()");
         self.record_uploads(ctx, cmd)?;
-        let (shadow_map_left_out, vis) = (self.shadow_map_left_out, &self.visibility);
+        let state = self.frame_state();
         let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
         let cx = Recording {
             ctx,
@@ -556,18 +570,16 @@ impl Renderer {
             targets: &self.targets,
             tracer: self.tracer.as_deref(),
             draws: &self.draw_list,
+            injected: &self.injection,
         };
         for p in &self.passes {
-            if left_out_this_frame(p.name, shadow_map_left_out, vis) {
+            if (p.desc.this_frame)(&state).is_some() {
                 continue;
             }
-            rec.pass(p.name, p.pass.stage(), &p.uses, |cmd| {
+            rec.pass(p.desc.name, p.pass.stage(), &p.uses, |cmd| {
                 p.pass.record(&cx, cmd);
                 Ok(())
             })?;
-            if let (Some(inj), "composite") = (&self.injection, p.name) {
-                inj.record(&mut rec, &self.targets)?;
-            }
         }
         tail(&mut rec, &self.targets)?;
         self.frame_index = self.frame_index.wrapping_add(1);
@@ -635,15 +647,11 @@ impl Renderer {
     }
 
     /// Fault injection for tests: from the next frame on, these HDR pixels
-    /// are overwritten after `composite` (empty: disarmed).
-    pub fn inject_radiance(&mut self, ctx: &Context, pixels: &[inject::Injected]) -> Result<()> {
-        unsafe { ctx.device.device_wait_idle()? };
-        if let Some(mut old) = self.injection.take() {
-            old.destroy(ctx);
-        }
-        if !pixels.is_empty() {
-            self.injection = Some(inject::Injection::new(ctx, pixels)?);
-        }
+    /// are overwritten after `composite` by the pass `inject`, which exists
+    /// only while armed (empty: disarmed; the next frame rebuilds its passes).
+    pub fn inject_radiance(&mut self, pixels: &[passes::inject::Injected]) -> Result<()> {
+        passes::inject::check(pixels)?;
+        self.injection = pixels.to_vec();
         Ok(())
     }
 
@@ -670,10 +678,9 @@ impl Renderer {
         if let Some(mut t) = self.tracer.take() {
             t.destroy(ctx);
         }
-        if let Some(mut i) = self.injection.take() {
-            i.destroy(ctx);
-        }
         self.targets.destroy(ctx);
         self.gpu.destroy(ctx);
     }
 }
+
+crate::destroy_by_method!(Renderer);

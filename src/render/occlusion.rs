@@ -36,7 +36,7 @@ use crate::gpu::GpuScene;
 use crate::vk::pipeline::{
     bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,
 };
-use crate::vk::{image_barrier, memory_barrier, Context, Image};
+use crate::vk::{built, image_barrier, memory_barrier, Context, Image};
 
 /// The cull shader's push constants (glsl/occlusion/cull.comp).
 #[repr(C)]
@@ -79,12 +79,8 @@ impl Pyramid {
             count,
             usage,
         )?;
-        let mut p = Pyramid { image, levels: Vec::new(), sets: Vec::new(), extent };
-        if let Err(e) = p.fill(ctx, depth, sampler, count) {
-            p.destroy(ctx);
-            return Err(e);
-        }
-        Ok(p)
+        let p = Pyramid { image, levels: Vec::new(), sets: Vec::new(), extent };
+        built(ctx, p, |p| p.fill(ctx, depth, sampler, count))
     }
 
     fn fill(&mut self, ctx: &Context, depth: vk::ImageView, sampler: vk::Sampler, count: u32) -> Result<()> {
@@ -334,3 +330,5 @@ impl Occlusion {
         }
     }
 }
+
+crate::destroy_by_method!(Pyramid);

@@ -170,6 +170,9 @@ pub struct ShadingConfig {
     /// asked for, the pass rasterizes, and the device has multi-draw
     /// indirect with a first instance.
     pub occlusion: bool,
+    /// Fault injection is armed (tests: `Renderer::inject_radiance`): the
+    /// `inject` pass exists.
+    pub inject: bool,
 }
 
 impl ShadingConfig {
@@ -224,6 +227,7 @@ impl ShadingConfig {
             && needs.shadow_maps
             && settings.budget.is_some_and(|b| b.fallback == crate::render::budget::Fallback::Raster);
         Ok(ShadingConfig {
+            inject: false,
             mode,
             effects,
             backend,
@@ -257,6 +261,7 @@ impl ShadingConfig {
         }
         let backend = pick_backend(settings.backend, &ctx.rt, &ctx.caps.limits, &needs, software(ctx))?;
         Ok(ShadingConfig {
+            inject: false,
             mode: Mode::Path,
             effects: Effects { count_rays: settings.effects.count_rays, ..Effects::NONE },
             backend: Some(backend),

@@ -15,7 +15,7 @@ use crate::gpu::shared::{SKIN_BOUNDS, SKIN_DEST, SKIN_JOINTS, SKIN_SOURCE};
 use crate::scene::{Aabb, Scene, Vertex};
 use crate::vk::frame_ring::{Source, Uploads};
 use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
-use crate::vk::{Buffer, Context};
+use crate::vk::{built, Buffer, Context};
 
 /// Mirrors `SkinVertex` in glsl/anim/skinning.comp.
 #[repr(C)]
@@ -106,7 +106,7 @@ impl Skinning {
             joint_count += scene.skins[skin].joints.len() as u32;
         }
         // GPU objects land in `sk` as they are made: an error destroys them.
-        let mut sk = Skinning {
+        let sk = Skinning {
             jobs,
             sources,
             source: Buffer::null(),
@@ -116,10 +116,7 @@ impl Skinning {
             layout: vk::PipelineLayout::null(),
             pipeline: vk::Pipeline::null(),
         };
-        if let Err(e) = sk.create(ctx, gpu, &source_data, joint_count) {
-            sk.destroy(ctx);
-            return Err(e);
-        }
+        let sk = built(ctx, sk, |sk| sk.create(ctx, gpu, &source_data, joint_count))?;
         log::info!(
             "skinning: {} skinned instances, {} bind-pose vertices, {} joints",
             sk.jobs.len(),
@@ -225,6 +222,8 @@ impl Skinning {
         }
     }
 }
+
+crate::destroy_by_method!(Skinning);
 
 #[cfg(test)]
 mod tests {

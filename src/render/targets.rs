@@ -8,7 +8,7 @@ use ash::vk;
 
 pub use super::uses::TargetDesc;
 use super::uses::{Access, Resource, Use};
-use crate::vk::{Context, Image};
+use crate::vk::{built, Context, Image};
 
 /// One allocated target.
 pub struct Target {
@@ -73,16 +73,12 @@ impl Targets {
                 None => wanted.push((t, usage(u))),
             }
         }
-        let mut out = Targets::empty(extent);
-        for (desc, usage) in wanted {
-            match Target::new(ctx, desc, usage, extent) {
-                Ok(t) => out.targets.push(t),
-                Err(e) => {
-                    out.destroy(ctx); // what was allocated before the failure
-                    return Err(e);
-                }
+        let out = built(ctx, Targets::empty(extent), |out| {
+            for (desc, usage) in wanted {
+                out.targets.push(Target::new(ctx, desc, usage, extent)?);
             }
-        }
+            Ok(())
+        })?;
         Ok(out)
     }
 
@@ -114,3 +110,5 @@ pub fn bytes_per_pixel(f: vk::Format) -> u32 {
         _ => 0,
     }
 }
+
+crate::destroy_by_method!(Targets);

@@ -31,36 +31,7 @@ use super::settings::{PrimaryVisibility, RenderSettings};
 use super::shading::{Mode, ShadingConfig};
 use crate::scene::{Aabb, Camera};
 
-/// The two techniques, by the name of the pass that implements each.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Technique {
-    Raster,
-    Traced,
-}
-
-impl Technique {
-    pub fn pass(self) -> &'static str {
-        match self {
-            Technique::Raster => super::passes::gbuffer::PASS.name,
-            Technique::Traced => super::passes::visibility_trace::PASS.name,
-        }
-    }
-    fn name(self) -> &'static str {
-        match self {
-            Technique::Raster => "raster",
-            Technique::Traced => "traced",
-        }
-    }
-    fn index(self) -> usize {
-        self as usize
-    }
-    fn other(self) -> Technique {
-        match self {
-            Technique::Raster => Technique::Traced,
-            Technique::Traced => Technique::Raster,
-        }
-    }
-}
+pub use super::passes::Technique;
 
 /// Frames after which a still view is measured again.
 pub const REPROBE_FRAMES: u32 = 300;
@@ -195,17 +166,10 @@ impl Chooser {
         Some(r)
     }
 
-    /// Whether the prepared frame leaves out pass `name`: the technique it
-    /// does not record, and with traced visibility the resolve of the
-    /// raster's hits (the traced pass resolves its own).
-    pub fn leaves_out(&self, name: &str) -> bool {
-        match self.recording.map(Recording::technique) {
-            Some(Technique::Raster) => name == Technique::Traced.pass(),
-            Some(Technique::Traced) => {
-                name == Technique::Raster.pass() || name == super::passes::gbuffer_resolve::PASS.name
-            }
-            None => false,
-        }
+    /// The technique the prepared frame records (None: not auto, or not
+    /// hybrid; the passes' `this_frame` read it).
+    pub fn technique(&self) -> Option<Technique> {
+        self.recording.map(Recording::technique)
     }
 
     /// After a frame completed, with its GPU pass times (which may be a
@@ -273,6 +237,7 @@ impl Chooser {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::passes::{gbuffer, gbuffer_resolve, visibility_trace, FrameState};
 
     fn hybrid_auto() -> ShadingConfig {
         let needs = super::super::shading::SceneNeeds {
@@ -284,6 +249,7 @@ mod tests {
             instances: 1,
         };
         ShadingConfig {
+            inject: false,
             mode: Mode::Hybrid,
             effects: super::super::shading::Effects::NONE,
             backend: None,
@@ -307,10 +273,15 @@ mod tests {
         let r = c.choose(pos, Vec3::NEG_Z, 10.0).unwrap();
         // The resolve pass takes 1 ms (part of the raster's cost).
         let mut t = Vec::new();
-        for (name, ms) in [("gbuffer", raster - 1.0), ("visibility trace", traced), ("gbuffer resolve", 1.0)]
-        {
-            if !c.leaves_out(name) {
-                t.push((name, ms));
+        let state = FrameState { visibility: c.technique(), ..Default::default() };
+        let passes = [
+            (&gbuffer::PASS, raster - 1.0),
+            (&visibility_trace::PASS, traced),
+            (&gbuffer_resolve::PASS, 1.0),
+        ];
+        for (pass, ms) in passes {
+            if (pass.this_frame)(&state).is_none() {
+                t.push((pass.name, ms));
             }
         }
         let n = match r.technique() {
@@ -443,7 +414,7 @@ mod tests {
             let mut c = Chooser::default();
             c.passes_rebuilt(&config);
             assert_eq!(c.choose(Vec3::ZERO, Vec3::NEG_Z, 1.0), None);
-            assert!(!c.leaves_out("gbuffer") && !c.leaves_out("visibility trace"));
+            assert_eq!(c.technique(), None, "no technique chosen: every pass records");
         }
         let s = RenderSettings::default();
         assert_eq!(effective(&s, false).primary_visibility, PrimaryVisibility::Raster);

@@ -23,7 +23,7 @@ use crate::app::{CameraChoice, RenderJob};
 use crate::render::budget::BudgetSettings;
 use crate::render::{RenderSettings, Renderer};
 use crate::scene::Scene;
-use crate::vk::{Context, ContextOptions, RenderDocUse};
+use crate::vk::{built, Context, ContextOptions, RenderDocUse};
 
 pub(super) struct Viewer {
     pub(super) renderer: Renderer,
@@ -123,22 +123,14 @@ impl Viewer {
             },
             capture_frame: g.capture_frame,
         })?;
-        let mut renderer = Renderer::new(&ctx, &scene, requested)?;
         // The renderer stages host writes and reads results per frame slot,
         // so a frame is recorded while the previous one runs.
-        if let Err(e) = renderer.set_frames_in_flight(&ctx, FRAMES_IN_FLIGHT) {
-            renderer.destroy(&ctx);
-            return Err(e);
-        }
+        let renderer = Renderer::new(&ctx, &scene, requested)?;
+        let mut renderer = built(&ctx, renderer, |r| r.set_frames_in_flight(&ctx, FRAMES_IN_FLIGHT))?;
         // An interactive view: auto primary visibility measures per view.
         renderer.visibility.measure = true;
-        let presenter = match Presenter::new(&ctx, &window, opts.present_mode) {
-            Ok(p) => p,
-            Err(e) => {
-                renderer.destroy(&ctx);
-                return Err(e);
-            }
-        };
+        let presenter =
+            Presenter::new(&ctx, &window, opts.present_mode).inspect_err(|_| renderer.destroy(&ctx))?;
         let controller = CameraController::new(scene.bounds, scene.cameras.clone(), camera, start_index);
         let now = Instant::now();
         let mut v = Viewer {

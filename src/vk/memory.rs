@@ -71,20 +71,9 @@ impl Buffer {
 
     /// A device-local buffer filled from `data` through a staging copy.
     pub fn with_data(ctx: &Context, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Buffer> {
-        let mut buf = Buffer::new(
-            ctx,
-            name,
-            data.len() as u64,
-            usage | vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuOnly,
-        )?;
-        if !data.is_empty() {
-            if let Err(e) = buf.upload(ctx, 0, data) {
-                buf.destroy(ctx);
-                return Err(e);
-            }
-        }
-        Ok(buf)
+        let usage = usage | vk::BufferUsageFlags::TRANSFER_DST;
+        let buf = Buffer::new(ctx, name, data.len() as u64, usage, MemoryLocation::GpuOnly)?;
+        super::built(ctx, buf, |b| if data.is_empty() { Ok(()) } else { b.upload(ctx, 0, data) })
     }
 
     /// Copies `data` into a device-local buffer (made by `with_data`) at
@@ -237,7 +226,7 @@ impl Image {
         .inspect_err(|_| unsafe { ctx.device.destroy_image(raw, None) })
         .with_context(|| format!("allocate image '{name}'"))?;
         // From here the image owns its memory: a failure destroys both.
-        let mut image = Image {
+        let image = Image {
             raw,
             view: vk::ImageView::null(),
             allocation: Some(allocation),
@@ -246,8 +235,9 @@ impl Image {
             mip_levels,
             aspect,
         };
-        let a = image.allocation.as_ref().unwrap();
-        let view = unsafe { ctx.device.bind_image_memory(raw, a.memory(), a.offset()) }.and_then(|()| {
+        let image = super::built(ctx, image, |image| {
+            let a = image.allocation.as_ref().expect("allocated above");
+            unsafe { ctx.device.bind_image_memory(raw, a.memory(), a.offset()) }?;
             let info = vk::ImageViewCreateInfo::default()
                 .image(raw)
                 .view_type(if array.is_some() {
@@ -262,15 +252,10 @@ impl Image {
                         .level_count(mip_levels)
                         .layer_count(layers),
                 );
-            unsafe { ctx.device.create_image_view(&info, None) }
-        });
-        match view {
-            Ok(v) => image.view = v,
-            Err(e) => {
-                image.destroy(ctx);
-                return Err(e).with_context(|| format!("bind memory / create view of image '{name}'"));
-            }
-        }
+            image.view = unsafe { ctx.device.create_image_view(&info, None) }?;
+            Ok(())
+        })
+        .with_context(|| format!("bind memory / create view of image '{name}'"))?;
         ctx.name(raw, name);
         ctx.name(image.view, &format!("{name} view"));
         Ok(image)
@@ -479,3 +464,5 @@ impl Image {
         }
     }
 }
+
+crate::destroy_by_method!(Buffer, Image);

@@ -1,6 +1,7 @@
 //! Vulkan core: instance, device, memory, commands, debug names and labels,
 //! timestamp queries, shader modules.
 
+mod built;
 pub mod device;
 pub mod features;
 pub mod frame_ring;
@@ -23,6 +24,7 @@ use anyhow::{Context as _, Result};
 use ash::{ext, khr, vk};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
+pub use built::{built, Destroy};
 pub use device::{Capabilities, DeviceSelector, RtEnables};
 pub use features::FeaturePath;
 pub use instance::{Instance, InstanceOptions, ValidationCounters};

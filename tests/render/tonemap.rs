@@ -301,7 +301,7 @@ impl Frames {
             self.renderers.push((name.to_string(), r));
         }
         let r = &mut self.renderers.iter_mut().find(|(n, _)| n == name).unwrap().1;
-        r.inject_radiance(ctx, inject).unwrap();
+        r.inject_radiance(inject).unwrap();
         r.render(ctx, scene, &scene.cameras[0], settings).unwrap()
     }
 

@@ -24,7 +24,7 @@ use crate::render::frame::Access;
 use crate::render::kernel::Kernel;
 use crate::render::targets::TargetDesc;
 use crate::vk::pipeline::{bind_compute, compute_pipeline, DescriptorSet, Specialization};
-use crate::vk::{memory_barrier, Buffer, Context};
+use crate::vk::{built, memory_barrier, Buffer, Context};
 
 /// The listed pixels, packed x | y << 16, read as a linear array.
 pub static LIST: TargetDesc = TargetDesc::new("work list", vk::Format::R32_UINT);
@@ -70,17 +70,14 @@ impl WorkList {
             usage |= vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
         }
         let size = 4 * u64::from(WORK_HEADER_WORDS);
-        let mut header =
-            Buffer::new(ctx, &format!("{name} work header"), size, usage, MemoryLocation::GpuOnly)?;
-        let select = match compute_pipeline(ctx, select, layout, spec) {
-            Ok(p) => p,
-            Err(e) => {
-                header.destroy(ctx);
-                return Err(e);
-            }
-        };
-        set.write_buffer(ctx, WORK_HEADER, header.raw);
-        Ok(WorkList { select, header })
+        let header = Buffer::new(ctx, &format!("{name} work header"), size, usage, MemoryLocation::GpuOnly)?;
+        let work = WorkList { select: vk::Pipeline::null(), header };
+        let work = built(ctx, work, |w| {
+            w.select = compute_pipeline(ctx, select, layout, spec)?;
+            Ok(())
+        })?;
+        set.write_buffer(ctx, WORK_HEADER, work.header.raw);
+        Ok(work)
     }
 
     /// Records reset, select and the listed launch of `kernel` with the
@@ -130,6 +127,8 @@ impl WorkList {
         self.header.destroy(ctx);
     }
 }
+
+crate::destroy_by_method!(WorkList);
 
 #[cfg(test)]
 mod tests {

@@ -5,7 +5,7 @@
 use ash::vk;
 
 use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
-use super::{direct, gbuffer, reference, specular, terms, Creation, PassDesc};
+use super::{direct, gbuffer, reference, specular, terms, Creation, PassDesc, Upstream};
 use crate::gpu::shared::{DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN, TERMS_IN};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
@@ -15,29 +15,47 @@ use crate::vk::pipeline::Specialization;
 /// Linear radiance of the frame.
 pub static HDR: TargetDesc = TargetDesc::new("hdr radiance", vk::Format::R32G32B32A32_SFLOAT);
 
-fn io(c: &ShadingConfig) -> Vec<TargetBinding> {
+/// The optional inputs, as handles from the passes before: each is there
+/// when a pass of this frame writes it.
+struct Inputs {
+    specular: Option<&'static TargetDesc>,
+    reference: Option<&'static TargetDesc>,
+    terms: Option<&'static TargetDesc>,
+}
+
+impl Inputs {
+    fn of(up: &Upstream) -> Inputs {
+        Inputs {
+            specular: up.get(&specular::SPECULAR),
+            reference: up.get(&reference::ACCUMULATION),
+            terms: up.get(&terms::ACCUMULATION),
+        }
+    }
+}
+
+fn io(c: &ShadingConfig, inputs: &Inputs) -> Vec<TargetBinding> {
     let mut io = gbuffer::reads();
     if !c.debug_view {
         io.push(TargetBinding::new(DIRECT_IN, &direct::DIRECT, Access::StorageRead));
     }
-    if specular::skip(c).is_none() {
-        io.push(TargetBinding::new(SPECULAR_IN, &specular::SPECULAR, Access::StorageRead));
-    }
-    if reference::skip(c).is_none() {
-        io.push(TargetBinding::new(REFERENCE_IN, &reference::ACCUMULATION, Access::StorageRead));
-    }
-    if terms::skip(c).is_none() {
-        io.push(TargetBinding::new(TERMS_IN, &terms::ACCUMULATION, Access::StorageRead));
+    for (binding, input) in
+        [(SPECULAR_IN, inputs.specular), (REFERENCE_IN, inputs.reference), (TERMS_IN, inputs.terms)]
+    {
+        if let Some(t) = input {
+            io.push(TargetBinding::new(binding, t, Access::StorageRead));
+        }
     }
     io.push(TargetBinding::new(HDR_OUT, &HDR, Access::StorageWrite));
     io
 }
 
-fn shader(c: &ShadingConfig) -> &'static str {
+/// The shader variant that reads exactly the inputs there are.
+fn shader(c: &ShadingConfig, inputs: &Inputs) -> &'static str {
     // (ShadingConfig::resolve allows terms neither beside the reference
     // nor in a debug view.)
-    let (reference, terms) = (reference::skip(c).is_none(), terms::skip(c).is_none());
-    match (c.debug_view, specular::skip(c).is_none(), reference, terms) {
+    let (specular, reference, terms) =
+        (inputs.specular.is_some(), inputs.reference.is_some(), inputs.terms.is_some());
+    match (c.debug_view, specular, reference, terms) {
         (true, ..) => "composite_debug",
         (false, true, true, _) => "composite_specular_reference",
         (false, true, false, true) => "composite_specular_terms",
@@ -50,17 +68,25 @@ fn shader(c: &ShadingConfig) -> &'static str {
 
 pub const PASS: PassDesc = PassDesc {
     name: "composite",
+    this_frame: super::every_frame,
     skip: |_| None,
-    uses: |c| {
+    uses: |c, up| {
         // The primary hit's emission is looked up from its triangle's
         // material (no G-buffer target): the scene geometry is read, and
         // skinning may have just written it.
-        let mut u = fullscreen::uses(&io(c), false);
+        let mut u = fullscreen::uses(&io(c, &Inputs::of(up)), false);
         u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));
         u
     },
     create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
-        FullScreen::create(i, "composite", io(i.config), Shader::Compute(shader(i.config)), &spec)
+        let inputs = Inputs::of(i.upstream);
+        FullScreen::create(
+            i,
+            "composite",
+            io(i.config, &inputs),
+            Shader::Compute(shader(i.config, &inputs)),
+            &spec,
+        )
     },
 };

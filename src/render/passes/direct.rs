@@ -32,8 +32,9 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "direct",
+    this_frame: super::every_frame,
     skip,
-    uses: |c| fullscreen::uses(&io(c), shadows(c)),
+    uses: |c, _| fullscreen::uses(&io(c), shadows(c)),
     create: |i: &Creation| {
         let shader =
             if shadows(i.config) { Shader::Traced("direct") } else { Shader::Compute("direct.comp") };

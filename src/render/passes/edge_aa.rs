@@ -38,8 +38,9 @@ fn uses(c: &ShadingConfig) -> Vec<Use> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "edge aa",
+    this_frame: super::every_frame,
     skip: |c| antialias::skip(c, AaMode::Edge),
-    uses,
+    uses: |c, _| uses(c),
     create: |i: &Creation| {
         FullScreen::create(
             i,

@@ -14,7 +14,7 @@ use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::kernel::Kernel;
 use crate::render::targets::{TargetDesc, Targets};
 use crate::vk::pipeline::{pipeline_layout, Binding, DescriptorSet, Specialization};
-use crate::vk::Context;
+use crate::vk::{built, Context};
 
 /// One set-1 binding: which target, how it is accessed.
 #[derive(Clone, Copy)]
@@ -137,67 +137,41 @@ impl FullScreen {
             ),
             Shader::Compute(_) => None,
         };
-        let mut set = DescriptorSet::numbered(ctx, &format!("{name} set"), &bindings)?;
-        let mut sets = vec![init.gpu.set.layout, set.layout];
-        sets.extend(tracer.map(|t| t.set().layout));
-        // What exists is destroyed when a later step fails.
-        let layout = match pipeline_layout(ctx, &format!("{name} layout"), &sets, 0) {
-            Ok(l) => l,
-            Err(e) => {
-                set.destroy(ctx);
-                return Err(e);
-            }
-        };
-        let kernel = match (shader, tracer) {
-            (Shader::Traced(s) | Shader::Listed { traced: s, .. }, Some(t)) => t.kernel(ctx, s, layout, spec),
-            (Shader::Compute(s) | Shader::Traced(s) | Shader::Listed { traced: s, .. }, _) => {
-                Kernel::compute(ctx, s, layout, spec)
-            }
-        };
-        let kernel = match kernel {
-            Ok(k) => k,
-            Err(e) => {
-                unsafe { ctx.device.destroy_pipeline_layout(layout, None) };
-                set.destroy(ctx);
-                return Err(e);
-            }
-        };
-        let sampler = unsafe {
-            ctx.device.create_sampler(
-                &vk::SamplerCreateInfo::default()
-                    .mag_filter(vk::Filter::NEAREST)
-                    .min_filter(vk::Filter::NEAREST)
-                    .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                    .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-                None,
-            )
-        };
-        let mut pass = FullScreen {
+        let pass = FullScreen {
             io,
-            set,
-            layout,
-            kernel,
+            set: DescriptorSet::null(),
+            layout: vk::PipelineLayout::null(),
+            kernel: Kernel::Compute(vk::Pipeline::null()),
             sampler: vk::Sampler::null(),
             traced: tracer.is_some(),
             work: None,
         };
-        match sampler {
-            Ok(s) => pass.sampler = s,
-            Err(e) => {
-                pass.destroy(ctx);
-                return Err(e.into());
-            }
-        }
-        ctx.name(pass.sampler, &format!("{name} point sampler"));
-        if let Some(select) = select {
-            match WorkList::create(ctx, name, select, pass.layout, spec, &pass.set) {
-                Ok(w) => pass.work = Some(w),
-                Err(e) => {
-                    pass.destroy(ctx);
-                    return Err(e);
+        // Filled step by step; a failed step destroys what exists.
+        let pass = built(ctx, pass, |p| {
+            p.set = DescriptorSet::numbered(ctx, &format!("{name} set"), &bindings)?;
+            let mut sets = vec![init.gpu.set.layout, p.set.layout];
+            sets.extend(tracer.map(|t| t.set().layout));
+            p.layout = pipeline_layout(ctx, &format!("{name} layout"), &sets, 0)?;
+            p.kernel = match (shader, tracer) {
+                (Shader::Traced(s) | Shader::Listed { traced: s, .. }, Some(t)) => {
+                    t.kernel(ctx, s, p.layout, spec)
                 }
+                (Shader::Compute(s) | Shader::Traced(s) | Shader::Listed { traced: s, .. }, _) => {
+                    Kernel::compute(ctx, s, p.layout, spec)
+                }
+            }?;
+            let sampler = vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::NEAREST)
+                .min_filter(vk::Filter::NEAREST)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE);
+            p.sampler = unsafe { ctx.device.create_sampler(&sampler, None) }?;
+            ctx.name(p.sampler, &format!("{name} point sampler"));
+            if let Some(select) = select {
+                p.work = Some(WorkList::create(ctx, name, select, p.layout, spec, &p.set)?);
             }
-        }
+            Ok(())
+        })?;
         pass.bind(ctx, init.targets);
         Ok(Box::new(pass))
     }

@@ -23,8 +23,9 @@ fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "fxaa",
+    this_frame: super::every_frame,
     skip: |c| antialias::skip(c, AaMode::Fxaa),
-    uses: |c| fullscreen::uses(&io(c), false),
+    uses: |c, _| fullscreen::uses(&io(c), false),
     create: |i: &Creation| {
         FullScreen::create(
             i,

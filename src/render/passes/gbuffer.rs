@@ -85,8 +85,11 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "gbuffer",
+    this_frame: |f| {
+        (f.visibility == Some(super::Technique::Traced)).then_some("traced visibility this frame")
+    },
     skip,
-    uses,
+    uses: |c, _| uses(c),
     create: |i: &Creation| {
         let mut p = GBufferPass::new(i.ctx, i.gpu.set.layout)?;
         if i.config.occlusion && !i.gpu.clusters.list.clusters.is_empty() {

@@ -37,8 +37,12 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "gbuffer resolve",
+    // The traced pass resolves its own hits.
+    this_frame: |f| {
+        (f.visibility == Some(super::Technique::Traced)).then_some("traced visibility this frame")
+    },
     skip,
-    uses: |_| {
+    uses: |_, _| {
         // The triangle's vertices are read (skinning may have just written them).
         let mut u = fullscreen::uses(&io(), false);
         u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));

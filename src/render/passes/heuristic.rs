@@ -21,8 +21,9 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "heuristic",
+    this_frame: super::every_frame,
     skip,
-    uses: |_| {
+    uses: |_, _| {
         let mut u = fullscreen::uses(&io(), false);
         u.push(Use::buffer(SharedBuffer::Budget, Access::ShaderWrite));
         u

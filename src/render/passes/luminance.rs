@@ -18,7 +18,7 @@ use crate::render::targets::Targets;
 use crate::vk::pipeline::{
     bind_compute, compute_pipeline, pipeline_layout, Binding, DescriptorSet, Specialization,
 };
-use crate::vk::Context;
+use crate::vk::{built, Context};
 
 fn skip(c: &ShadingConfig) -> Option<&'static str> {
     (!c.luminance).then_some("fixed exposure: no luminance is measured")
@@ -26,8 +26,9 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "luminance",
+    this_frame: super::every_frame,
     skip,
-    uses: |_| {
+    uses: |_, _| {
         vec![Use::image(&HDR, Access::StorageRead), Use::buffer(SharedBuffer::Exposure, Access::ShaderWrite)]
     },
     create: |i: &Creation| Ok(Box::new(Luminance::create(i.ctx, i.gpu.set.layout, i.targets)?)),
@@ -47,13 +48,9 @@ impl Luminance {
             "luminance set",
             &[(LUMINANCE_IN, Binding::one(vk::DescriptorType::STORAGE_IMAGE))],
         )?;
-        // Built empty and filled, so a failure destroys what exists.
-        let mut pass =
+        let pass =
             Luminance { set, layout: vk::PipelineLayout::null(), pipelines: [vk::Pipeline::null(); 2] };
-        if let Err(e) = pass.fill(ctx, scene_layout) {
-            pass.destroy(ctx);
-            return Err(e);
-        }
+        let pass = built(ctx, pass, |p| p.fill(ctx, scene_layout))?;
         pass.bind(ctx, targets);
         Ok(pass)
     }

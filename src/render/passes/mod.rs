@@ -13,6 +13,7 @@ pub mod fxaa;
 pub mod gbuffer;
 pub mod gbuffer_resolve;
 pub mod heuristic;
+pub mod inject;
 pub mod luminance;
 pub mod path;
 pub mod primary;
@@ -31,8 +32,10 @@ use super::frame::Use;
 use super::shading::ShadingConfig;
 use super::targets::Targets;
 use super::tracer::Tracer;
+use super::uses::TargetDesc;
 use crate::gpu::GpuScene;
 use crate::vk::Context;
+use inject::Injected;
 
 /// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
 /// or traced visibility buffer + resolve, or camera rays) -> per-object
@@ -54,6 +57,7 @@ pub const FRAME: &[PassDesc] = &[
     terms::PASS,
     specular::PASS,
     composite::PASS,
+    inject::PASS,
     luminance::PASS,
     tonemap::PASS,
     edge_aa::PASS,
@@ -81,6 +85,82 @@ pub struct Creation<'a> {
     pub gpu: &'a GpuScene,
     pub targets: &'a Targets,
     pub tracer: Option<&'a dyn Tracer>,
+    /// What the passes before it in this frame write.
+    pub upstream: &'a Upstream,
+}
+
+/// The targets the frame's passes so far write: a consumer takes the
+/// handle of an input from here (None: no pass of this frame makes it)
+/// instead of re-deriving whether its producer runs.
+#[derive(Clone, Default)]
+pub struct Upstream {
+    written: Vec<&'static TargetDesc>,
+}
+
+impl Upstream {
+    /// The handle of `target` if a pass before this one writes it.
+    pub fn get(&self, target: &'static TargetDesc) -> Option<&'static TargetDesc> {
+        self.written.iter().copied().find(|t| std::ptr::eq(*t, target))
+    }
+
+    /// Adds what a pass writes.
+    pub fn add(&mut self, uses: &[Use]) {
+        for u in uses.iter().filter(|u| u.access.writes()) {
+            if let super::uses::Resource::Image(t) = u.resource {
+                if self.get(t).is_none() {
+                    self.written.push(t);
+                }
+            }
+        }
+    }
+}
+
+/// Hybrid mode's two primary-visibility techniques, by the pass that
+/// implements each (render/visibility.rs chooses between them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Technique {
+    Raster,
+    Traced,
+}
+
+impl Technique {
+    pub fn pass(self) -> &'static str {
+        match self {
+            Technique::Raster => gbuffer::PASS.name,
+            Technique::Traced => visibility_trace::PASS.name,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Technique::Raster => "raster",
+            Technique::Traced => "traced",
+        }
+    }
+    pub fn index(self) -> usize {
+        self as usize
+    }
+    pub fn other(self) -> Technique {
+        match self {
+            Technique::Raster => Technique::Traced,
+            Technique::Traced => Technique::Raster,
+        }
+    }
+}
+
+/// What varies from frame to frame within one configuration, which some
+/// passes record or not by (`PassDesc::this_frame`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameState {
+    /// Why the budget's fallback shadow maps are not needed this frame.
+    pub shadow_maps_left_out: Option<&'static str>,
+    /// The primary-visibility technique this frame records (auto: raster
+    /// and traced frames alternate while measuring).
+    pub visibility: Option<Technique>,
+}
+
+/// `this_frame` of a pass that records in every frame of its configuration.
+pub fn every_frame(_: &FrameState) -> Option<&'static str> {
+    None
 }
 
 /// What a pass records with.
@@ -91,14 +171,20 @@ pub struct Recording<'a> {
     pub tracer: Option<&'a dyn Tracer>,
     /// The frame's G-buffer draws after frustum culling (render/cull.rs).
     pub draws: &'a DrawList,
+    /// The pixels the armed fault injection overwrites (tests only).
+    pub injected: &'a [Injected],
 }
 
 pub struct PassDesc {
     pub name: &'static str,
-    /// Why the pass is left out of a frame with this configuration (None: it runs).
+    /// Why the pass is left out of a frame with this configuration (None:
+    /// it is created).
     pub skip: fn(&ShadingConfig) -> Option<&'static str>,
-    /// The resources it reads and writes in this configuration.
-    pub uses: fn(&ShadingConfig) -> Vec<Use>,
+    /// Why a created pass is left out of this frame (None: it records).
+    pub this_frame: fn(&FrameState) -> Option<&'static str>,
+    /// The resources it reads and writes in this configuration, given what
+    /// the passes before it write.
+    pub uses: fn(&ShadingConfig, &Upstream) -> Vec<Use>,
     pub create: fn(&Creation) -> Result<Box<dyn Pass>>,
 }
 
@@ -109,4 +195,11 @@ pub trait Pass {
     /// Points the pass at new targets (after a resize).
     fn bind(&self, ctx: &Context, targets: &Targets);
     fn destroy(&mut self, ctx: &Context);
+}
+
+/// A pass under construction is destroyed like any pass (`vk::built`).
+impl<P: Pass> crate::vk::Destroy for P {
+    fn destroy(&mut self, ctx: &Context) {
+        Pass::destroy(self, ctx)
+    }
 }

@@ -33,8 +33,9 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "path",
+    this_frame: super::every_frame,
     skip,
-    uses: |c| {
+    uses: |c, _| {
         let mut u = fullscreen::accumulating_uses(&io(c), &ACCUMULATION);
         u.push(Use::buffer(SharedBuffer::Counters, Access::ShaderWrite));
         u

@@ -26,8 +26,9 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "primary",
+    this_frame: super::every_frame,
     skip,
-    uses: |c| fullscreen::uses(&io(c), true),
+    uses: |c, _| fullscreen::uses(&io(c), true),
     create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "primary", io(i.config), Shader::Traced("primary"), &spec)

@@ -37,8 +37,9 @@ pub fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "reference",
+    this_frame: super::every_frame,
     skip,
-    uses: |c| fullscreen::accumulating_uses(&io(c), &ACCUMULATION),
+    uses: |c, _| fullscreen::accumulating_uses(&io(c), &ACCUMULATION),
     create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "reference", io(i.config), Shader::Traced("reference"), &spec)

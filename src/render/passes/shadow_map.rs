@@ -36,9 +36,10 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "shadow_map",
+    this_frame: |f| f.shadow_maps_left_out,
     skip,
     // The shadow maps are the pass's own (transitions inside `record`).
-    uses: |_| vec![Use::buffer(SharedBuffer::Geometry, Access::VertexInput)],
+    uses: |_, _| vec![Use::buffer(SharedBuffer::Geometry, Access::VertexInput)],
     create: |i: &Creation| Ok(Box::new(ShadowMapPass::new(i)?)),
 };
 

@@ -38,8 +38,9 @@ pub fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "specular",
+    this_frame: super::every_frame,
     skip,
-    uses: |c| fullscreen::uses(&io(c), true),
+    uses: |c, _| fullscreen::uses(&io(c), true),
     create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(

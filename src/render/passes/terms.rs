@@ -39,8 +39,9 @@ pub fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "terms",
+    this_frame: super::every_frame,
     skip,
-    uses: |c| fullscreen::accumulating_uses(&io(c), &ACCUMULATION),
+    uses: |c, _| fullscreen::accumulating_uses(&io(c), &ACCUMULATION),
     create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
         FullScreen::create(i, "terms", io(i.config), Shader::Traced("terms"), &spec)

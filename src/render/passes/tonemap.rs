@@ -25,8 +25,9 @@ fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "tonemap",
+    this_frame: super::every_frame,
     skip: |_| None,
-    uses: |c| {
+    uses: |c, _| {
         let mut u = fullscreen::uses(&io(c), false);
         // The bad-pixel counter; the measured exposure when there is one.
         u.push(Use::buffer(SharedBuffer::Counters, Access::ShaderWrite));

@@ -38,8 +38,11 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 
 pub const PASS: PassDesc = PassDesc {
     name: "visibility trace",
+    this_frame: |f| {
+        (f.visibility == Some(super::Technique::Raster)).then_some("raster visibility this frame")
+    },
     skip,
-    uses: |_| fullscreen::uses(&io(), true),
+    uses: |_, _| fullscreen::uses(&io(), true),
     create: |i: &Creation| {
         // The same specialization as `primary`: ray counting follows it.
         let spec = Specialization::new(&i.config.specialization());
