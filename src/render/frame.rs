@@ -46,6 +46,9 @@ pub struct Recorder<'a> {
     pub cmd: vk::CommandBuffer,
     timer: &'a mut GpuTimer,
     targets: Option<&'a Targets>,
+    /// Images from outside the frame's targets (the swapchain's), by the
+    /// declaration passes use them under: (image, aspect).
+    imported: HashMap<&'static str, (vk::Image, vk::ImageAspectFlags)>,
     images: HashMap<&'static str, State>,
     buffers: HashMap<SharedBuffer, State>,
     /// Names of the passes recorded, in order.
@@ -70,6 +73,7 @@ impl<'a> Recorder<'a> {
             cmd,
             timer,
             targets,
+            imported: HashMap::new(),
             images: HashMap::new(),
             buffers: HashMap::new(),
             recorded: Vec::new(),
@@ -105,6 +109,22 @@ impl<'a> Recorder<'a> {
         }
         ctx.end_label(cmd);
         r
+    }
+
+    /// Makes `image`, which the frame does not own (a swapchain image),
+    /// usable by passes as `desc`: its barriers are derived like a target's,
+    /// from undefined contents that earlier work on the queue (the
+    /// acquire's semaphore wait) may still touch.
+    pub fn import(&mut self, desc: &'static TargetDesc, image: vk::Image, aspect: vk::ImageAspectFlags) {
+        self.imported.insert(desc.name, (image, aspect));
+    }
+
+    /// Records only the barriers that make `uses` safe (no pass, label or
+    /// timestamp): an imported image's hand-over, e.g. to presentation.
+    pub fn transition(&mut self, uses: &[Use]) -> Result<()> {
+        let barriers = self.barrier_list(vk::PipelineStageFlags2::NONE, uses)?;
+        barriers.record(self.ctx, self.cmd);
+        Ok(())
     }
 
     /// Where `t` stands at the start of the frame: undefined, or for a
@@ -163,15 +183,14 @@ impl<'a> Recorder<'a> {
             if let Some(src) = src {
                 match res {
                     Resource::Image(t) => {
-                        let img = self
-                            .targets
-                            .and_then(|ts| ts.get(t))
-                            .ok_or_else(|| anyhow::anyhow!("target '{}' used but not allocated", t.name))?;
+                        let (raw, aspect) = image_of(self.targets, &self.imported, t)?;
                         let old = if first.discards() { vk::ImageLayout::UNDEFINED } else { state.layout };
-                        img.laid_out.set(t.kept && layout == vk::ImageLayout::GENERAL);
+                        if let Some(img) = self.targets.and_then(|ts| ts.get(t)) {
+                            img.laid_out.set(t.kept && layout == vk::ImageLayout::GENERAL);
+                        }
                         images.push(
                             vk::ImageMemoryBarrier2::default()
-                                .image(img.raw)
+                                .image(raw)
                                 .old_layout(old)
                                 .new_layout(layout)
                                 .src_stage_mask(nonempty(src.0))
@@ -182,7 +201,7 @@ impl<'a> Recorder<'a> {
                                 .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                                 .subresource_range(
                                     vk::ImageSubresourceRange::default()
-                                        .aspect_mask(img.aspect)
+                                        .aspect_mask(aspect)
                                         .level_count(1)
                                         .layer_count(1),
                                 ),
@@ -216,6 +235,18 @@ impl<'a> Recorder<'a> {
         };
         Ok(Barriers { images, memory })
     }
+}
+
+/// The image behind `t` and its aspect: a target, or an imported image.
+fn image_of(
+    targets: Option<&Targets>,
+    imported: &HashMap<&'static str, (vk::Image, vk::ImageAspectFlags)>,
+    t: &'static TargetDesc,
+) -> Result<(vk::Image, vk::ImageAspectFlags)> {
+    if let Some(img) = targets.and_then(|ts| ts.get(t)) {
+        return Ok((img.raw, img.aspect));
+    }
+    imported.get(t.name).copied().ok_or_else(|| anyhow::anyhow!("target '{}' used but not allocated", t.name))
 }
 
 /// The barriers before one pass.

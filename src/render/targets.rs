@@ -53,6 +53,7 @@ fn usage(u: &Use) -> vk::ImageUsageFlags {
             Access::ColorAttachment => U::COLOR_ATTACHMENT,
             Access::DepthAttachment => U::DEPTH_STENCIL_ATTACHMENT,
             Access::TransferRead => U::TRANSFER_SRC,
+            Access::TransferWrite => U::TRANSFER_DST,
             _ => U::empty(),
         }
 }

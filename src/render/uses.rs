@@ -60,6 +60,11 @@ pub enum Access {
     DepthAttachment,
     /// Source of a copy or blit.
     TransferRead,
+    /// Destination of a copy or blit (the viewer's swapchain image).
+    TransferWrite,
+    /// Handed to the presentation engine (an imported swapchain image's
+    /// last use; no later access in the command buffer).
+    Present,
     /// Storage-buffer or acceleration-structure reads in shaders.
     ShaderRead,
     /// Storage-buffer writes in shaders.
@@ -111,6 +116,7 @@ impl Access {
                 | Access::DepthAttachment
                 | Access::ShaderWrite
                 | Access::AsBuildWrite
+                | Access::TransferWrite
         )
     }
 
@@ -126,6 +132,8 @@ impl Access {
             Access::ColorAttachment => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
             Access::DepthAttachment => vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
             Access::TransferRead => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            Access::TransferWrite => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            Access::Present => vk::ImageLayout::PRESENT_SRC_KHR,
             _ => vk::ImageLayout::GENERAL,
         }
     }
@@ -147,6 +155,9 @@ impl Access {
                 A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE,
             ),
             Access::TransferRead => (S::COPY | S::BLIT, A::TRANSFER_READ),
+            Access::TransferWrite => (S::COPY | S::BLIT, A::TRANSFER_WRITE),
+            // Presentation waits on the frame's semaphore, not a stage.
+            Access::Present => (S::BOTTOM_OF_PIPE, A::NONE),
             Access::ShaderRead => (shader, A::SHADER_READ | as_read),
             Access::ShaderWrite => (shader, A::SHADER_STORAGE_WRITE),
             Access::VertexInput => {

@@ -15,8 +15,9 @@ use super::session::Viewer;
 use super::swapchain::Acquired;
 use super::{Flow, FRAMES_IN_FLIGHT};
 use crate::render::frame::{Access, Use};
+use crate::render::uses::TargetDesc;
 use crate::render::{Finished, FrameOutput};
-use crate::vk::{copy_image_to_buffer, copy_to_host_barrier, image_barrier, Buffer};
+use crate::vk::{copy_image_to_buffer, copy_to_host_barrier, Buffer};
 
 pub(super) struct FrameSlot {
     pub(super) cmd: vk::CommandBuffer,
@@ -32,6 +33,10 @@ pub(super) struct PendingShot {
     pub(super) extent: vk::Extent2D,
     pub(super) path: PathBuf,
 }
+
+/// The acquired swapchain image as the present blit declares it (imported
+/// into the frame's recorder each frame; never allocated).
+static SWAPCHAIN: TargetDesc = TargetDesc::new("swapchain image", vk::Format::UNDEFINED);
 
 impl Viewer {
     pub(super) fn about_to_wait(&mut self, el: &ActiveEventLoop) -> Result<Flow> {
@@ -309,24 +314,16 @@ impl Viewer {
         let dst = self.presenter.extent;
         // The frame's final LDR image: anti-aliased, or tone mapping's.
         let final_ldr = self.renderer.output_ldr()?;
-        let uses = [Use::image(final_ldr, Access::TransferRead)];
+        let uses =
+            [Use::image(final_ldr, Access::TransferRead), Use::image(&SWAPCHAIN, Access::TransferWrite)];
         self.renderer.record_with(ctx, cmd, |rec, t| {
             let ldr = t.get(final_ldr).context("no displayable output")?;
+            // The swapchain image is imported: its barriers are derived
+            // like a target's (the first waits for the acquire semaphore's
+            // stage, the last hands it to presentation).
+            rec.import(&SWAPCHAIN, image, vk::ImageAspectFlags::COLOR);
             rec.pass("present blit", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
                 let src = t.extent;
-                // The swapchain image is outside the frame's targets: its
-                // barriers are written here. Waits for the image-available
-                // semaphore (its wait stage is BLIT).
-                image_barrier(
-                    ctx,
-                    cmd,
-                    image,
-                    vk::ImageAspectFlags::COLOR,
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::NONE),
-                    (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::TRANSFER_WRITE),
-                );
                 let layers = vk::ImageSubresourceLayers::default()
                     .aspect_mask(vk::ImageAspectFlags::COLOR)
                     .layer_count(1);
@@ -352,18 +349,9 @@ impl Viewer {
                     copy_image_to_buffer(ctx, cmd, ldr, buf.raw);
                     copy_to_host_barrier(ctx, cmd);
                 }
-                image_barrier(
-                    ctx,
-                    cmd,
-                    image,
-                    vk::ImageAspectFlags::COLOR,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    vk::ImageLayout::PRESENT_SRC_KHR,
-                    (vk::PipelineStageFlags2::BLIT, vk::AccessFlags2::TRANSFER_WRITE),
-                    (vk::PipelineStageFlags2::BOTTOM_OF_PIPE, vk::AccessFlags2::NONE),
-                );
                 Ok(())
-            })
+            })?;
+            rec.transition(&[Use::image(&SWAPCHAIN, Access::Present)])
         })?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         Ok(())
