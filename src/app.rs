@@ -11,7 +11,8 @@ use crate::render::shading::{Backend, SceneNeeds, ShadingConfig};
 use crate::render::supersample::{self, Supersample};
 use crate::render::{FrameOutput, RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
-use crate::vk::{Context, ContextOptions, DeviceSelector, RenderDocUse};
+pub use crate::vk::GpuOptions;
+use crate::vk::{Context, ContextOptions, RenderDocUse};
 
 mod bench_tables;
 mod benchmark;
@@ -60,38 +61,14 @@ pub fn find_default_scene(candidates: &[PathBuf]) -> Result<PathBuf> {
     )
 }
 
-/// Options shared by every command that touches the GPU.
-#[derive(Clone, Debug, Default)]
-pub struct GpuOptions {
-    pub validation: bool,
-    pub sync_validation: bool,
-    pub device: DeviceSelector,
-    pub disable_ray_tracing: bool,
-    /// `--no-ray-query`: ray tracing without VK_KHR_ray_query.
-    pub disable_ray_query: bool,
-    /// No indirect ray-tracing launch even where the device has one (tests).
-    pub disable_trace_rays_indirect: bool,
-    /// `--vulkan-api 1.2`: use the device as a Vulkan 1.2 device.
-    pub max_api_version: Option<u32>,
-    /// `--capture-frame N` (render, bench, view): capture frame N with
-    /// RenderDoc's in-application API.
-    pub capture_frame: Option<u64>,
-}
-
 impl GpuOptions {
     pub fn context(&self) -> Result<Context> {
+        let renderdoc = if self.capture_frame.is_some() { RenderDocUse::Required } else { RenderDocUse::Off };
         Context::new(&ContextOptions {
-            validation: self.validation,
-            sync_validation: self.sync_validation,
-            device: self.device.clone(),
-            disable_ray_tracing: self.disable_ray_tracing,
-            disable_ray_query: self.disable_ray_query,
-            disable_trace_rays_indirect: self.disable_trace_rays_indirect,
+            gpu: self.clone(),
             surface_extensions: Vec::new(),
             swapchain: false,
-            max_api_version: self.max_api_version,
-            renderdoc: if self.capture_frame.is_some() { RenderDocUse::Required } else { RenderDocUse::Off },
-            capture_frame: self.capture_frame,
+            renderdoc,
         })
     }
 }

@@ -106,22 +106,15 @@ impl Viewer {
             .to_vec();
         let g = &opts.gpu;
         let ctx = Context::new(&ContextOptions {
-            validation: g.validation,
-            sync_validation: g.sync_validation,
-            device: g.device.clone(),
-            disable_ray_tracing: g.disable_ray_tracing,
-            disable_ray_query: g.disable_ray_query,
-            disable_trace_rays_indirect: g.disable_trace_rays_indirect,
+            gpu: g.clone(),
             surface_extensions,
             swapchain: true,
-            max_api_version: g.max_api_version,
             // The capture key works whenever the viewer runs under RenderDoc.
             renderdoc: if g.capture_frame.is_some() {
                 RenderDocUse::Required
             } else {
                 RenderDocUse::IfRunning
             },
-            capture_frame: g.capture_frame,
         })?;
         // The renderer stages host writes and reads results per frame slot,
         // so a frame is recorded while the previous one runs.

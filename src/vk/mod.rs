@@ -34,25 +34,30 @@ pub use renderdoc::RenderDoc;
 /// How to create the Vulkan context.
 #[derive(Clone, Debug, Default)]
 pub struct ContextOptions {
+    /// Which device, validation, and the features left off.
+    pub gpu: GpuOptions,
+    pub surface_extensions: Vec<*const std::ffi::c_char>,
+    pub swapchain: bool,
+    /// RenderDoc's in-application API: load it (before the instance).
+    pub renderdoc: RenderDocUse,
+}
+
+/// The device options every command that touches the GPU takes (the
+/// command line's `GpuArgs` make them once).
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
     pub validation: bool,
     pub sync_validation: bool,
     pub device: DeviceSelector,
-    /// Enable no ray-tracing extension even where the device has them
-    /// (tests the compute-only path on RT-capable drivers).
     pub disable_ray_tracing: bool,
-    /// Enable no VK_KHR_ray_query: the path of drivers that offer only the
-    /// ray-tracing pipeline (NVIDIA's on some machines).
+    /// `--no-ray-query`: ray tracing without VK_KHR_ray_query.
     pub disable_ray_query: bool,
-    /// Leave rayTracingPipelineTraceRaysIndirect off (tests the full-frame
-    /// launch of drivers without it: render/kernel.rs).
+    /// No indirect ray-tracing launch even where the device has one (tests).
     pub disable_trace_rays_indirect: bool,
-    pub surface_extensions: Vec<*const std::ffi::c_char>,
-    pub swapchain: bool,
-    /// At most this Vulkan API version (see `InstanceOptions`).
+    /// `--vulkan-api 1.2`: use the device as a Vulkan 1.2 device.
     pub max_api_version: Option<u32>,
-    /// RenderDoc's in-application API: load it (before the instance).
-    pub renderdoc: RenderDocUse,
-    /// `--capture-frame N`: the frame to capture with RenderDoc.
+    /// `--capture-frame N` (render, bench, view): capture frame N with
+    /// RenderDoc's in-application API.
     pub capture_frame: Option<u64>,
 }
 
@@ -119,23 +124,23 @@ impl Context {
             RenderDocUse::Required => Some(renderdoc::RenderDoc::load()?),
         };
         let instance = Instance::new(&InstanceOptions {
-            validation: opts.validation,
-            sync_validation: opts.sync_validation,
+            validation: opts.gpu.validation,
+            sync_validation: opts.gpu.sync_validation,
             surface_extensions: opts.surface_extensions.clone(),
-            max_api_version: opts.max_api_version,
+            max_api_version: opts.gpu.max_api_version,
         })?;
         let devices = device::enumerate(&instance.raw, instance.api_version)?;
         for (_, c) in &devices {
             log::debug!("found {}", c.report().trim_end());
         }
-        let (pd, mut caps) = device::select(&devices, &opts.device)?;
-        caps.trace_rays_indirect &= !opts.disable_trace_rays_indirect;
-        let rt = if opts.disable_ray_tracing {
+        let (pd, mut caps) = device::select(&devices, &opts.gpu.device)?;
+        caps.trace_rays_indirect &= !opts.gpu.disable_trace_rays_indirect;
+        let rt = if opts.gpu.disable_ray_tracing {
             RtEnables::default()
         } else {
             RtEnables {
                 acceleration_structure: caps.acceleration_structure,
-                ray_query: caps.ray_query && !opts.disable_ray_query,
+                ray_query: caps.ray_query && !opts.gpu.disable_ray_query,
                 ray_tracing_pipeline: caps.ray_tracing_pipeline,
             }
         };
@@ -195,10 +200,10 @@ impl Context {
             rt,
             accel,
             rt_pipeline,
-            sync_validation: opts.validation && opts.sync_validation,
+            sync_validation: opts.gpu.validation && opts.gpu.sync_validation,
             alloc_fault: AllocationFault::default(),
             renderdoc,
-            capture_frame: opts.capture_frame,
+            capture_frame: opts.gpu.capture_frame,
         };
         ctx.name(ctx.queue, "main queue");
         ctx.name(ctx.command_pool, "main command pool");
