@@ -1,5 +1,5 @@
 #version 460
-// Fault injection for tests (render/inject.rs): overwrites up to
+// Fault injection for tests (render/passes/inject.rs): overwrites up to
 // INJECT_MAX pixels of the HDR frame with given values (NaN, Inf, 1e30...)
 // between `composite` and `luminance`, so the tone-mapping passes are
 // tested on radiance no sanitized scene input can produce.

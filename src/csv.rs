@@ -20,3 +20,20 @@ pub fn csv_number(v: f64, digits: usize) -> String {
         format!("{v:.digits$}")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fields_and_numbers() {
+        assert_eq!(csv_field("max-depth"), "max-depth");
+        assert_eq!(csv_field("a,b"), "\"a,b\"");
+        assert_eq!(csv_field("two\nlines"), "\"two\nlines\"");
+        assert_eq!(csv_field("say \"hi\""), "\"say \"\"hi\"\"\"");
+        assert_eq!(csv_number(1.23456, 3), "1.235");
+        assert_eq!(csv_number(f64::INFINITY, 3), "inf");
+        assert_eq!(csv_number(f64::NEG_INFINITY, 3), "-inf");
+        assert_eq!(csv_number(f64::NAN, 3), "nan");
+    }
+}

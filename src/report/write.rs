@@ -304,13 +304,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn csv_fields_and_numbers() {
-        assert_eq!(csv_field("max-depth"), "max-depth");
-        assert_eq!(csv_field("a,b"), "\"a,b\"");
-        assert_eq!(csv_field("say \"hi\""), "\"say \"\"hi\"\"\"");
-        assert_eq!(csv_number(1.23456, 3), "1.235");
-        assert_eq!(csv_number(f64::INFINITY, 3), "inf");
-        assert_eq!(csv_number(f64::NAN, 3), "nan");
+    fn the_fixed_columns_stay_seven() {
         assert_eq!(CSV_HEADER.split(',').count(), 7);
     }
 }
