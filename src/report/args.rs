@@ -247,18 +247,15 @@ impl ReportKind {
     /// Checks across options clap cannot state: a usage error's message.
     pub fn usage_problem(&self) -> Option<String> {
         let view = &self.common().view;
-        let fps_rule = "--fps has no effect here: report renders still frames at --time; it steps only the \
-                        accel-update knob's frames";
         let reference_rule = "--reference-samples is a report option only of `report prt` (the ambient's \
                               reference): report renders one frame per variant, and the reference needs \
                               ceil(N/4) (render it with `render --reference-samples N`, then `compare`)";
-        let few_frames = |frames: usize| format!("--frames {frames} is too few for a p95; use at least 5");
         let problem = match self {
             ReportKind::Knobs { common, knobs } => knobs.usage_problem(common),
             ReportKind::Stability { .. } | ReportKind::ToneSheet { .. } if view.fps.is_some() => {
-                Some(fps_rule.into())
+                Some(FPS_RULE.into())
             }
-            ReportKind::Prt { knobs: Some(_), .. } if view.fps.is_some() => Some(fps_rule.into()),
+            ReportKind::Prt { knobs: Some(_), .. } if view.fps.is_some() => Some(FPS_RULE.into()),
             ReportKind::Prt { common, .. } if common.frames < 5 => Some(few_frames(common.frames)),
             _ => None,
         };
@@ -337,17 +334,13 @@ impl KnobArgs {
             );
         }
         if common.view.fps.is_some() && self.knobs.as_deref().is_some_and(|k| !k.contains("accel-update")) {
-            return Some(
-                "--fps has no effect here: report renders still frames at --time; it steps only the \
-                 accel-update knob's frames"
-                    .into(),
-            );
+            return Some(FPS_RULE.into());
         }
         if let Some(Err(e)) = self.knobs.as_deref().map(super::knobs::parse_selection) {
             return Some(format!("--knobs: {e:#}"));
         }
         if common.frames < 5 {
-            return Some(format!("--frames {} is too few for a p95; use at least 5", common.frames));
+            return Some(few_frames(common.frames));
         }
         None
     }
@@ -394,6 +387,15 @@ impl KnobArgs {
         };
         super::report_command(gpu, &opts)
     }
+}
+
+/// `--fps` outside the one place it steps frames.
+const FPS_RULE: &str = "--fps has no effect here: report renders still frames at --time; it steps only the \
+                        accel-update knob's frames";
+
+/// A timed report with too few frames for its p95.
+fn few_frames(frames: usize) -> String {
+    format!("--frames {frames} is too few for a p95; use at least 5")
 }
 
 /// What `report` measures against.
