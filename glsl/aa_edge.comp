@@ -1,20 +1,10 @@
 #version 460
-// Pass `edge aa`: geometric edge anti-aliasing of the tone-mapped frame.
-// Which pixels change is the document's edge detection (Shishkovtsov,
-// "Deferred Shading in S.T.A.L.K.E.R.", GPU Gems 2 ch. 9; Sabino's
-// Eq. 4.2): the squared depth and normal differences to the 8 neighbours,
-// summed, give the blur factor B; B = 0 copies the input bits unchanged.
-//
-// How much of each neighbour an edge pixel takes is not a plain mean of
-// the 8 neighbours (Eq. 4.2's blend): that softens every edge by a pixel on
-// both sides and raised ꟻLIP against a 4x4 supersampled reference on
-// assets/aa_edges.toml (0.0062 -> 0.0105 at full strength, still 0.0073 at
-// B/20) although PSNR rose. The G-buffer knows each pixel's triangle, so
-// the weight is that neighbour's surface's coverage of this pixel: where
-// the triangle seen here, or the neighbour's, ends between the two pixel
-// centres (exact screen-space edges, as in Persson's geometry-buffer AA).
-// The result is (1 - B sum w_k) c + B sum w_k c_k over the 4 edge-sharing
-// neighbours, in linear display values like a supersampled pixel.
+// Pass `edge aa`: edge detection as in Shishkovtsov (GPU Gems 2 ch. 9; Sabino Eq. 4.2): squared
+// depth and normal differences to the 8 neighbours give the blur factor B; B = 0 copies the input bits.
+// The blend is not Eq. 4.2's plain neighbour mean: that softens every edge by a pixel and raised ꟻLIP vs
+// a 4x4 supersampled reference on assets/aa_edges.toml (0.0062 -> 0.0105). Instead each of the 4
+// edge-sharing neighbours weighs by its surface's exact screen-space coverage of this pixel (as in
+// Persson's geometry-buffer AA), blended in linear display values.
 #include "common/primary_hit.glsl"
 #include "common/srgb.glsl"
 #include "common/gbuffer_pack.glsl"
@@ -25,15 +15,11 @@ layout(set = SET_PASS, binding = GB_HIT) uniform usampler2D gb_hit;
 layout(set = SET_PASS, binding = AA_IN, rgba8) uniform readonly image2D ldr_in;
 layout(set = SET_PASS, binding = AA_OUT, rgba8) uniform writeonly image2D ldr_out;
 
-// Edge strength E (the weighted sum below) where blurring starts, and
-// where it is full (B = 1). Measured on the test scenes: curved,
-// smooth-shaded surfaces stay below 0.05 except within a pixel or two of
-// their silhouettes; a crease of 30 degrees on one side of a pixel gives
-// 3 x 0.27 = 0.8, a silhouette against the sky >= 3.
+// Measured on the test scenes: smooth curved surfaces stay below 0.05 away from silhouettes; a
+// 30-degree crease gives 0.8, a silhouette against the sky >= 3.
 const float EDGE_START = 0.05;
 const float EDGE_FULL = 0.5;
-// Weight of the relative depth term against the normal term: a normal
-// flip counts 4, one neighbour at half or twice the distance 8 x 2 x 0.25 = 4.
+// A normal flip counts 4, as does one neighbour at half or twice the distance (8 x 2 x 0.25).
 const float DEPTH_WEIGHT = 8.0;
 
 const ivec2 NEIGHBOURS[8] = ivec2[](
@@ -41,10 +27,8 @@ const ivec2 NEIGHBOURS[8] = ivec2[](
     ivec2(1, 0), ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1));
 // NEIGHBOURS[7 - k] is the opposite of NEIGHBOURS[k].
 
-// Reversed-Z depth (znear / view depth) where the camera ray through `px`
-// meets its primary hit's triangle plane; 0 where it missed (the sky is
-// at infinity). On a plane this is affine in screen space, which the
-// depth term relies on.
+// Reversed-Z depth (znear / view depth) of the hit's triangle plane; 0 on a miss (sky at infinity).
+// Affine in screen space on a plane, which the depth term relies on.
 float hit_depth(ivec2 px) {
     uvec2 hit = texelFetch(gb_hit, px, 0).xy;
     if (hit.x == 0u) return 0.0;
@@ -52,26 +36,21 @@ float hit_depth(ivec2 px) {
     vec3 d = camera_ray_dir(vec2(px) + 0.5);
     vec3 n = cross(t.p1 - t.p0, t.p2 - t.p0);
     float dn = dot(d, n);
-    // Ray distance to the plane; a degenerate or edge-on triangle has none
-    // and counts as a hit at the triangle's first vertex.
+    // Degenerate or edge-on triangle: take the first vertex.
     float dist = abs(dn) > 0.0 ? dot(t.p0 - frame.camera_pos, n) / dn : length(t.p0 - frame.camera_pos);
     vec3 forward = -transpose(mat3(frame.view))[2];
     float z = dist * dot(d, forward);
     return z > 0.0 && !isinf(z) ? frame.znear / z : 0.0;
 }
 
-// Unnormalized direction of the camera ray through `pixel`: affine in
-// screen space (unlike camera_ray_dir, which is normalized).
+// Affine in screen space, unlike the normalized camera_ray_dir.
 vec3 ray_dir_affine(vec2 pixel) {
     vec2 ndc = pixel / vec2(frame.resolution) * 2.0 - 1.0;
     return transpose(mat3(frame.view)) * vec3(ndc.x / frame.proj[0][0], ndc.y / frame.proj[1][1], -1.0);
 }
 
-// Homogeneous barycentrics (n0, n1, n2) and their sum `det` of the camera
-// ray through `pixel` on triangle t's plane (Moller-Trumbore with the
-// unnormalized direction): each is affine in screen space, so where an
-// edge's barycentric reaches 0 along a segment is found by linear
-// interpolation, perspective-exact.
+// Homogeneous barycentrics (n0, n1, n2, det) via Moller-Trumbore with the unnormalized direction:
+// affine in screen space, so an edge crossing is found by perspective-exact linear interpolation.
 vec4 homogeneous_barycentrics(TriangleWorld t, vec2 pixel) {
     vec3 d = ray_dir_affine(pixel);
     vec3 e1 = t.p1 - t.p0;
@@ -83,12 +62,9 @@ vec4 homogeneous_barycentrics(TriangleWorld t, vec2 pixel) {
     return vec4(det - n1 - n2, n1, n2, det);
 }
 
-// How far, from a (0) towards b (1), the surface of `instance` seen
-// through a continues: the exit from triangle `primitive` along the
-// segment, walking on across an edge it shares (by vertex index) with one
-// of the nearby primitives (a quad's other half, the next quad of a ring),
-// so a mesh's inner edges do not pass for its outline. >= 1 when it covers
-// b too (or a plane is edge-on, or crosses the horizon in between).
+// How far from a (0) towards b (1) the surface of `instance` seen through a continues, walking across
+// edges shared with nearby primitives so a mesh's inner edges don't pass for its outline.
+// >= 1 when it covers b too (or a plane is edge-on or crosses the horizon).
 float exit_along(uint instance, uint primitive, vec2 a, vec2 b) {
     Instance inst = instances[instance];
     uint count = inst.index_count / 3u;
@@ -99,8 +75,7 @@ float exit_along(uint instance, uint primitive, vec2 a, vec2 b) {
         vec4 ha = homogeneous_barycentrics(t, a);
         vec4 hb = homogeneous_barycentrics(t, b);
         if (!(ha.w * hb.w > 0.0)) return 1.0;
-        // Signs as if det > 0: inside is all three >= 0; each is affine in
-        // the segment's parameter, so the inside part is an interval.
+        // Inside is all three >= 0 (det > 0); each is affine along the segment, so inside is an interval.
         vec3 na = ha.xyz * sign(ha.w);
         vec3 nb = hb.xyz * sign(hb.w);
         float hi = 2.0;
@@ -115,9 +90,8 @@ float exit_along(uint instance, uint primitive, vec2 a, vec2 b) {
             }
         }
         if (hi >= 1.0 || edge < 0) return 1.0;
-        // Past the edge it entered by (rounding aside).
+        // Monotonic: rounding could put this exit before the edge it entered by.
         t_exit = max(hi, t_exit);
-        // The exit edge is opposite vertex `edge`; is it shared?
         uint base = inst.first_index + 3u * cur;
         uint ia = indices[base + uint(edge + 1) % 3u];
         uint ib = indices[base + uint(edge + 2) % 3u];
@@ -138,7 +112,6 @@ float exit_along(uint instance, uint primitive, vec2 a, vec2 b) {
     return t_exit;
 }
 
-// The primary hit's shading normal; 0 where the camera ray missed.
 vec3 hit_normal(ivec2 px) {
     if (texelFetch(gb_hit, px, 0).x == 0u) return vec3(0.0);
     return oct_decode(texelFetch(gb_normal, px, 0).x);
@@ -148,23 +121,16 @@ bool inside(ivec2 p) {
     return all(greaterThanEqual(p, ivec2(0))) && all(lessThan(uvec2(p), frame.resolution));
 }
 
-// The workgroup's 8x8 pixels and a one-pixel border around them (TILE x
-// TILE) share what their neighbours need: each pixel's hit, depth and
-// normal are computed once instead of by all 9 pixels around it, and each
-// surface's exit towards an edge neighbour once instead of by both pixels
-// of the pair (the pass got 1.35-1.6x faster on lavapipe:
-// bench/results/lavapipe-2core-vm-frame-passes.md). Same values, same
-// arithmetic: the image is that of the per-pixel version, bit for bit,
-// which EDGE_AA_TILED = false runs (tests/render/antialias.rs compares the two).
+// The 8x8 group and its one-pixel border share hits, depths, normals and exits so each is computed
+// once (1.35-1.6x faster on lavapipe: bench/results/lavapipe-2core-vm-frame-passes.md). Bit-identical
+// to the per-pixel EDGE_AA_TILED = false path; tests/render/antialias.rs compares the two.
 layout(constant_id = SPEC_EDGE_AA_TILED) const bool EDGE_AA_TILED = true;
 const int TILE = 10;
 shared uvec2 s_hit[TILE * TILE];
 shared float s_depth[TILE * TILE];
 shared vec3 s_normal[TILE * TILE];
-// Blur factor B of the workgroup's own pixels (0 outside the frame).
 shared float s_blur[64];
-// exit_along from a pixel's centre towards its edge-sharing neighbour in
-// direction d (EDGE_DIRS), where a coverage needs it; else unset.
+// Exit from a pixel towards EDGE_DIRS[d], only where a coverage needs it; else unset.
 shared float s_exit[TILE * TILE][4];
 
 // The 4 edge-sharing directions; EDGE_DIRS[3 - d] is the opposite of d.
@@ -174,19 +140,15 @@ int tile_index(ivec2 t) {
     return t.x + TILE * t.y;
 }
 
-// The blur factor of the workgroup's pixel at `t` (1..8 in the tile).
 float blur_at(ivec2 t) {
     return s_blur[(t.x - 1) + 8 * (t.y - 1)];
 }
 
-// How far the surface seen through `p` continues towards `q` (0..1+;
-// exit_along), from the pixel centres.
 float exit_towards(uvec2 hit, ivec2 p, ivec2 q) {
     return exit_along(hit.x - 1u, hit.y, vec2(p) + 0.5, vec2(q) + 0.5);
 }
 
-// What pixel `q` (at `t` in the tile) shows and its exit towards
-// EDGE_DIRS[d]: from the tile, or computed here (per-pixel version).
+// Tile lookups, or recomputed per pixel when !EDGE_AA_TILED.
 uvec2 hit_at(ivec2 t, ivec2 q) {
     return EDGE_AA_TILED ? s_hit[tile_index(t)] : texelFetch(gb_hit, q, 0).xy;
 }
@@ -206,7 +168,6 @@ float exit_at(ivec2 t, ivec2 q, int d) {
 void main() {
     ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 - 1;
     uint lid = gl_LocalInvocationIndex;
-    // 1. Hit, depth and normal of every tile pixel in the frame.
     for (uint i = lid; EDGE_AA_TILED && i < uint(TILE * TILE); i += 64u) {
         ivec2 q = origin + ivec2(int(i) % TILE, int(i) / TILE);
         bool in_frame = inside(q);
@@ -233,13 +194,8 @@ void main() {
             vec3 dn = in_frame[k] ? normal_at(qt, q) - nc : vec3(0.0);
             normal_sum += dot(dn, dn);
         }
-        // Depth: a slanted plane changes depth by the same step every pixel,
-        // so the plain difference to a neighbour would blur every floor. Each
-        // neighbour is compared with the depth the centre's plane predicts for
-        // it from the opposite neighbour, 2 dc - d_opposite (exact on a plane,
-        // see hit_depth): (d_k + d_opposite - 2 dc)^2, relative to the largest
-        // of the three so the measure does not depend on the scene's scale.
-        // Both neighbours of a pair count; a pair leaving the frame counts 0.
+        // A slanted plane changes depth by a constant step, so compare each neighbour with the centre plane's
+        // prediction 2 dc - d_opposite, relative to the largest depth (scale-free). Off-frame pairs count 0.
         float depth_sum = 0.0;
         for (int k = 0; k < 4; k++) {
             if (!in_frame[k] || !in_frame[7 - k]) continue;
@@ -253,10 +209,8 @@ void main() {
     s_blur[lid] = blur;
     barrier();
 
-    // 2. The exits the coverages below need: this pixel's towards each edge
-    // neighbour where either of the two blurs (a neighbour in the border
-    // blurs in its own workgroup, which computes this exit itself); and
-    // one border pixel's towards the tile, per invocation of the first 32.
+    // Exits the coverages need: this pixel's towards each neighbour where either blurs (a border
+    // pixel blurs in its own workgroup, which computes that exit); plus one border pixel's towards the tile.
     if (EDGE_AA_TILED && inside(px)) {
         for (int d = 0; d < 4; d++) {
             ivec2 nt = t + EDGE_DIRS[d];
@@ -269,8 +223,7 @@ void main() {
         }
     }
     if (EDGE_AA_TILED && lid < 32u) {
-        // Border pixel `lid` (8 per side: top, left, right, bottom, as
-        // EDGE_DIRS) and the tile pixel it faces, in direction 3 - side.
+        // Border pixel `lid` (8 per side, in EDGE_DIRS order) faces its tile pixel in direction 3 - side.
         int side = int(lid) / 8, j = int(lid) % 8;
         ivec2 inner = side == 0 ? ivec2(j + 1, 1) : side == 1 ? ivec2(1, j + 1) : side == 2 ? ivec2(8, j + 1) : ivec2(j + 1, 8);
         ivec2 b = inner + EDGE_DIRS[side];
@@ -289,11 +242,8 @@ void main() {
         imageStore(ldr_out, px, centre);  // bit-identical away from edges
         return;
     }
-    // The edge-sharing neighbours, weighted by the coverage of this pixel by
-    // what they show (0..0.5): the edge between them lies where this
-    // pixel's triangle ends (its exit t), or where the neighbour's begins
-    // (its exit s reaches past the pixel border at 0.5), between the two
-    // centres. s >= 1 means it lies behind what this pixel shows there.
+    // Weight = coverage of this pixel (0..0.5) by the neighbour's surface: the edge lies where this
+    // triangle ends (exit t) or the neighbour's begins (exit s past the border at 0.5); s >= 1: hidden here.
     vec3 sum = vec3(0.0);
     float total = 0.0;
     uvec2 hp = hit_at(t, px);
@@ -315,7 +265,7 @@ void main() {
         imageStore(ldr_out, px, centre);
         return;
     }
-    // Corners covered from two sides: the weights are shares of one pixel.
+    // Corners covered from two sides: weights are shares of one pixel.
     float scale = blur / max(total, 1.0);
     vec3 col = (1.0 - scale * total) * srgb_decode(centre.rgb) + scale * sum;
     imageStore(ldr_out, px, vec4(srgb_encode(col), centre.a));

@@ -1,26 +1,17 @@
 #version 460
-// Pass `fxaa`: luminance edge anti-aliasing of the tone-mapped frame in the
-// manner of FXAA 3.11's quality preset (T. Lottes, 2011): a local contrast
-// test picks edge pixels, the edge's orientation and the side it lies on
-// come from luma second differences, a search along the edge finds its
-// ends, and the pixel is resampled towards the edge by how far it is from
-// the nearer end (plus a sub-pixel term for isolated features). Luma is
-// taken from the sRGB-encoded values: FXAA's thresholds are perceptual.
-// Pixels below the contrast threshold, or with no offset, are copied
-// unchanged.
+// Pass `fxaa`: FXAA 3.11 quality preset (T. Lottes, 2011). Luma from sRGB-encoded values because
+// FXAA's thresholds are perceptual. Low-contrast or zero-offset pixels are copied unchanged.
 #include "common/scene.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = SET_PASS, binding = AA_IN, rgba8) uniform readonly image2D ldr_in;
 layout(set = SET_PASS, binding = AA_OUT, rgba8) uniform writeonly image2D ldr_out;
 
-// FXAA 3.11's "quality" defaults: minimum contrast (dark regions), contrast
-// relative to the local maximum, and the share of the sub-pixel term.
+// FXAA 3.11's "quality" defaults.
 const float CONTRAST_MIN = 0.0312;
 const float CONTRAST_REL = 0.125;
 const float SUBPIXEL = 0.75;
-// The edge-end search: step lengths in pixels (longer once far out), 12
-// steps reach 26 pixels each way.
+// Longer steps far out: 12 steps reach 26 pixels each way.
 const int SEARCH_STEPS = 12;
 const float STEP[SEARCH_STEPS] = float[](1.0, 1.0, 1.0, 1.0, 1.0, 1.5, 2.0, 2.0, 2.0, 2.0, 4.0, 8.0);
 
@@ -32,8 +23,7 @@ float luma(vec3 c) {
     return dot(c, vec3(0.299, 0.587, 0.114));
 }
 
-// Bilinear interpolation at `pos` (pixel units, centres at +0.5), edges
-// clamped; by hand so every device filters alike (no sampler precision).
+// By hand (pixel units, centres at +0.5, edges clamped) so every device filters alike.
 vec3 bilinear(vec2 pos) {
     vec2 p = pos - 0.5;
     vec2 f = p - floor(p);
@@ -64,11 +54,11 @@ void main() {
     float lsw = luma(fetch(px + ivec2(-1, 1)));
     float lse = luma(fetch(px + ivec2(1, 1)));
 
-    // Orientation: a horizontal edge changes luma down the columns.
+    // A horizontal edge changes luma down the columns.
     float horizontal = abs(lnw + lsw - 2.0 * lw) + 2.0 * abs(ln + ls - 2.0 * lc) + abs(lne + lse - 2.0 * le);
     float vertical = abs(lnw + lne - 2.0 * ln) + 2.0 * abs(lw + le - 2.0 * lc) + abs(lsw + lse - 2.0 * ls);
     bool horz = horizontal >= vertical;
-    // The side of the edge: towards the neighbour across it with the larger step.
+    // The edge lies towards the neighbour across it with the larger step.
     float l_neg = horz ? ln : lw;
     float l_pos = horz ? ls : le;
     bool neg = abs(l_neg - lc) >= abs(l_pos - lc);
@@ -77,9 +67,8 @@ void main() {
     vec2 across = (horz ? vec2(0.0, 1.0) : vec2(1.0, 0.0)) * (neg ? -1.0 : 1.0);
     vec2 along = horz ? vec2(1.0, 0.0) : vec2(0.0, 1.0);
 
-    // Search both ways along the edge, on the line between this pixel and
-    // the one across (bilinear: the two rows' mean), until the luma leaves
-    // the edge's average by a quarter of its gradient.
+    // Search along the line between this pixel and the one across (bilinear: the two rows' mean) until
+    // luma leaves the edge's average by a quarter of its gradient.
     float edge_luma = 0.5 * (lc + l_other);
     float threshold = 0.25 * gradient;
     vec2 start = vec2(px) + 0.5 + 0.5 * across;
@@ -105,14 +94,12 @@ void main() {
     float d2 = dot(p2 - start, along);
     bool nearer1 = d1 < d2;
     float dist = min(d1, d2);
-    // Resample towards the edge only if this pixel is on the side the
-    // nearer end bends away from (otherwise the other side's pixel moves).
+    // Only the pixel on the side the nearer end bends away from moves (else the other side's does).
     bool centre_darker = lc < edge_luma;
     bool bends = ((nearer1 ? e1 : e2) < 0.0) != centre_darker;
     float edge_offset = bends ? 0.5 - dist / (d1 + d2) : 0.0;
 
-    // Sub-pixel aliasing: a pixel that differs from its neighbourhood's
-    // mean by much of the local range (a thin line, a dot) blends too.
+    // Sub-pixel aliasing (a thin line, a dot) blends too.
     float mean = (2.0 * (ln + ls + lw + le) + lnw + lne + lsw + lse) / 12.0;
     float s = clamp(abs(mean - lc) / range, 0.0, 1.0);
     s = (3.0 - 2.0 * s) * s * s;

@@ -1,11 +1,8 @@
 #version 460
-// Pass `composite`: the primary hit's emission + direct light (pass
-// `direct`) + ambient environment light + the traced reflection/refraction
-// chain (pass `specular`, variant HAS_SPECULAR); the environment where the
-// camera ray missed; variant REFERENCE takes the ambient radiance from the
-// `reference` pass's accumulation; variant TERMS adds the `terms` pass's
-// (the report's attribution: terms supplied by the path tracer). Variant DEBUG_VIEWS shows a G-buffer view instead and
-// reads neither light pass.
+// Pass `composite`: emission + direct light (`direct`) + ambient + the traced specular chain (variant
+// HAS_SPECULAR); the environment on a miss. Variant REFERENCE takes the ambient from `reference`'s
+// accumulation; TERMS adds `terms`' (the report's attribution); DEBUG_VIEWS shows a G-buffer view
+// and reads neither light pass.
 #include "common/gbuffer_read.glsl"
 #include "common/integrator.glsl"
 #include "common/prt.glsl"
@@ -74,7 +71,7 @@ void main() {
 #else
     g_effects = budget_effects(p.instance, px);
 #ifdef REFERENCE
-    // The ray-traced reference replaces the ambient radiance (pass `reference`).
+    // The ray-traced reference replaces the ambient radiance.
     vec4 acc = imageLoad(reference_in, px);
     vec3 ambient = ambient_light_from(s, is_mirror(s, 0u), acc.rgb / max(acc.a, 1.0));
 #else
@@ -88,7 +85,7 @@ void main() {
     color += imageLoad(specular_in, px).rgb;
 #endif
 #ifdef TERMS
-    // (Noise in a term can take a dark pixel below zero.)
+    // Noise in a term can take a dark pixel below zero.
     vec4 terms = imageLoad(terms_in, px);
     color = max(color + terms.rgb / max(terms.a, 1.0), vec3(0.0));
 #endif

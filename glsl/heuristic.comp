@@ -1,9 +1,6 @@
 #version 460
-// Pass `heuristic`: what the ray-tracing budget (render/budget) needs to
-// know of each object from the primary hits, in one pass over the hit ids:
-// its covered pixels and their bounds, by atomics into set 0's budget
-// statistics (reset by the host before the frame). No per-object draw and
-// no occlusion query: the G-buffer already says who is visible where.
+// Pass `heuristic`: per-object covered pixels and bounds for the budget (render/budget), by atomics
+// over the hit ids. No per-object draw or occlusion query: the G-buffer already says who is visible.
 #include "common/scene.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;

@@ -1,13 +1,8 @@
 #version 460
-// Pass `luminance`: measures the frame's luminance and adapts the exposure
-// (render/passes/luminance.rs). Two kernels, chosen by SPEC_LUMINANCE_STAGE:
-//  0: LUMINANCE_GROUPS groups stride over the HDR image; each writes its
-//     partial sums (log(delta + L), finite pixels, maximum) and its own
-//     log-luminance histogram. A fixed grid keeps the scratch a fixed size
-//     and the sums in a fixed order (the same result every run).
-//  1: one group sums the partials, finds this frame's target luminance
-//     (log-average, or the histogram's mean between two percentiles) and
-//     adapts the state kept across frames.
+// Pass `luminance` (render/passes/luminance.rs), two kernels by SPEC_LUMINANCE_STAGE:
+//  0: LUMINANCE_GROUPS groups stride over the image writing partial sums and a histogram each; a fixed
+//     grid keeps the scratch fixed-size and the sum order (so the result) the same every run.
+//  1: one group sums the partials, finds the target luminance and adapts the kept state.
 // Non-finite pixels are left out of every sum (tone mapping counts them).
 #extension GL_EXT_scalar_block_layout : require
 #include "common/scene.glsl"
@@ -24,12 +19,11 @@ shared float s_max[LUMINANCE_THREADS];
 shared uint s_hist[HIST_BINS];
 
 uint histogram_bin(float l) {
-    // log2 of 0 is -inf: black lands in bin 0 with everything darker than the range.
+    // Black (log2 0 = -inf) lands in bin 0.
     float t = (log2(max(l, 1e-30)) - HIST_MIN_LOG2) / (HIST_MAX_LOG2 - HIST_MIN_LOG2);
     return uint(clamp(t * float(HIST_BINS), 0.0, float(HIST_BINS - 1u)));
 }
 
-// Tree reduction of the three shared arrays into element 0.
 void reduce_shared(uint t) {
     for (uint stride = LUMINANCE_THREADS / 2u; stride > 0u; stride >>= 1u) {
         barrier();
@@ -67,8 +61,7 @@ void partials() {
     for (uint b = t; b < HIST_BINS; b += LUMINANCE_THREADS) lum_histograms[g * HIST_BINS + b] = s_hist[b];
 }
 
-// The mean log2 luminance of the pixels between the low and high
-// percentiles (bin centres), or `fallback` when the window is empty.
+// Between the low and high percentiles (bin centres); `fallback` when the window is empty.
 float histogram_mean_log2(uint total, float fallback) {
     float lo = frame.hist_low * float(total), hi = frame.hist_high * float(total);
     float below = 0.0, weight = 0.0, sum = 0.0;
@@ -105,15 +98,14 @@ void finalize() {
     if (t != 0u) return;
     ExposureState s = exposure_state;
     uint finite = s_count[0];
-    // No finite pixel at all: keep what was adapted to (or 1 on a first frame).
+    // No finite pixel: keep what was adapted to (or 1 on a first frame).
     float log_average = finite > 0u ? exp(s_sum[0] / float(finite)) : (s.valid != 0u ? s.adapted : 1.0);
     float target = log_average;
     if (frame.auto_exposure == AUTO_EXPOSURE_HISTOGRAM && finite > 0u) {
         target = exp2(histogram_mean_log2(finite, log2(log_average)));
     }
-    // Finite and positive, so the exposure stays finite on black and on
-    // blinding frames (the histogram itself reads 2^HIST_MIN_LOG2 ..
-    // 2^HIST_MAX_LOG2; the log-average has no such range).
+    // Keeps the exposure finite on black and blinding frames (the log-average, unlike the histogram,
+    // has no range limit).
     target = clamp(target, 1e-30, 1e30);
     float dt = s.valid != 0u ? frame.adapt_dt : 0.0;
     float adapted = frame.auto_exposure == AUTO_EXPOSURE_HISTOGRAM

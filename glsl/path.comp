@@ -1,6 +1,5 @@
 #version 460
-// Pass `path`, compute entry point (ray-query or compute-BVH traversal, by
-// variant: glsl/variants.txt). See path/path.glsl.
+// Pass `path`, compute entry point; traversal per variant (glsl/variants.txt).
 #include "path/path.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;

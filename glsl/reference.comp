@@ -1,6 +1,5 @@
 #version 460
-// Pass `reference`, compute entry point (ray-query or compute-BVH traversal,
-// by variant: glsl/variants.txt). See passes/reference.glsl.
+// Pass `reference`, compute entry point; traversal per variant (glsl/variants.txt).
 #include "passes/reference.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;

@@ -1,9 +1,7 @@
 #version 460
-// Pass `tonemap`: exposure (fixed, or the luminance pass's adapted one),
-// the tone curve, sRGB encoding into the 8-bit output. A NaN or Inf pixel
-// is counted (ray counter RAY_COUNTER_BAD_PIXELS) and shown magenta, the
-// convention the render command's PNGs use: never hidden, and never
-// allowed to spread (no reduction reads it).
+// Pass `tonemap`: exposure, tone curve, sRGB encode to 8 bits. NaN/Inf pixels are counted
+// (RAY_COUNTER_BAD_PIXELS) and shown magenta, as in the render command's PNGs: never hidden and never
+// spread (no reduction reads them).
 #extension GL_EXT_scalar_block_layout : require
 #include "common/scene.glsl"
 #include "common/srgb.glsl"
@@ -26,7 +24,7 @@ void main() {
     if (frame.debug_view == DEBUG_NONE) {
         bool automatic = frame.auto_exposure != AUTO_EXPOSURE_OFF;
         float exposure = automatic ? exposure_state.exposure : frame.exposure;
-        // Bounded, so that no curve overflows (1e18 squared is finite).
+        // Bounded so no curve overflows (1e18 squared is finite).
         c = min(max(c, vec3(0.0)) * exposure, vec3(1e18));
         // No explicit white point: the frame's brightest pixel, exposed.
         float white = frame.white > 0.0 ? frame.white : exposure_state.max_luminance * exposure;

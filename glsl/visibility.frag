@@ -1,11 +1,8 @@
 #version 460
-// G-buffer raster, visibility-buffer variant: stores only each pixel's
-// (instance + 1, primitive) and depth; the `gbuffer_resolve` pass fills the
-// material targets from that triangle. On llvmpipe the old pass (four MRTs,
-// nine interpolated floats) spent most of its time setting up and
-// interpolating attributes of tiny triangles (bench/results/
-// lavapipe-2core-vm-raster.md). Alpha-masked geometry (GB_ALPHA_TEST) still
-// interpolates uv and tests the base colour's alpha as before.
+// G-buffer raster, visibility-buffer variant: stores only (instance + 1, primitive) and depth;
+// `gbuffer_resolve` fills the material targets. The old four-MRT pass spent most of its llvmpipe time
+// on attribute set-up of tiny triangles (bench/results/lavapipe-2core-vm-raster.md). GB_ALPHA_TEST
+// geometry still interpolates uv for its alpha test.
 #include "common/scene.glsl"
 #ifdef GB_ALPHA_TEST
 #define MAT_SAMPLE(index, uv, fallback) sample_tex(index, uv, fallback)
@@ -13,9 +10,7 @@
 layout(location = 2) in vec2 v_uv;
 #endif
 
-// Draws of one instance (a whole one or clusters of it): its index is a
-// push constant, the triangle a flat varying (gbuffer.vert; not
-// gl_PrimitiveID: common/gbuffer_draw.glsl).
+// The triangle comes as a flat varying, not gl_PrimitiveID (see common/gbuffer_draw.glsl).
 #include "common/gbuffer_draw.glsl"
 #define v_instance gb_draw.instance
 layout(location = 4) flat in uint v_primitive;

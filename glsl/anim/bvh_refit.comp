@@ -1,11 +1,8 @@
 #version 460
-// Refit of the compute backend's per-instance BVHs for skinned meshes after
-// skinning: one workgroup per BVH walks its levels from the deepest up,
-// the threads of a level working in parallel. Leaves take the exact min/max
-// of their triangles' skinned vertices (what the CPU build computes, so a
-// refit tree equals a CPU refit bit for bit); interior nodes the union of
-// their two children. The root also lands in `roots`, which the host reads
-// after the frame (rebuild policy, next top-level topology).
+// Refit of skinned meshes' per-instance BVHs (compute backend): one workgroup per BVH, levels deepest
+// first. Leaves take their skinned triangles' exact min/max, as the CPU build does, so a refit tree
+// equals a CPU refit bit for bit. The root also lands in `roots` for the host (rebuild policy,
+// next top-level topology).
 #extension GL_EXT_scalar_block_layout : require
 #include "../common/types.glsl"
 

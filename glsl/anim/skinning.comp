@@ -1,9 +1,7 @@
 #version 460
-// Linear blend skinning, one thread per vertex, writing the deformed vertex
-// into the ONE shared vertex buffer that the rasterizer, the acceleration
-// structure builds and the compute tracer all read. Same arithmetic as
-// src/scene/skin.rs (the CPU reference). Also accumulates each skinned
-// instance's bounds (for the BLAS rebuild policy).
+// Linear blend skinning into the ONE shared vertex buffer the rasterizer, AS builds and compute tracer
+// read; same arithmetic as src/scene/skin.rs (the CPU reference). Also accumulates per-instance bounds
+// for the BLAS rebuild policy.
 #extension GL_EXT_scalar_block_layout : require
 #include "../common/types.glsl"
 

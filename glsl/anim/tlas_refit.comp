@@ -1,13 +1,8 @@
 #version 460
-// Refit of the compute backend's top level on the GPU, after the skinned
-// BLAS refit (bvh_refit.comp) in the same command buffer, so no host read
-// of the refit roots sits between refit and tracing. The host built the
-// topology (from the bounds it knew); this pass recomputes every node's
-// bounds, one workgroup walking the levels deepest first. Leaves take the
-// world-space bounds of their instances' BLAS roots (eight corners through
-// the instance's object-to-world matrix, padded outward by a bound on the
-// rounding error, so a leaf always contains the exact transformed box);
-// interior nodes the union of their two children.
+// Top-level refit on the GPU after the skinned BLAS refit (bvh_refit.comp) in the same command buffer,
+// so no host read of the refit roots sits between refit and tracing. The host built the topology;
+// one workgroup refits bounds level by level, deepest first. Leaves transform their BLAS roots'
+// eight corners, padded by a rounding bound so a leaf always contains the exact transformed box.
 #extension GL_EXT_scalar_block_layout : require
 #include "generated/shared.glsl"
 
@@ -34,8 +29,7 @@ layout(set = SET_ANIM, binding = TOP_FIT_NODES, scalar) buffer TlasNodes { BvhNo
 layout(set = SET_ANIM, binding = TOP_FIT_PRIMS, scalar) readonly buffer TlasPrims { uint prims[]; };
 layout(set = SET_ANIM, binding = TOP_FIT_INSTANCES, scalar) readonly buffer Instances { BvhInstance instances[]; };
 layout(set = SET_ANIM, binding = TOP_FIT_BLAS_NODES, scalar) readonly buffer BlasNodes { BvhNode blas_nodes[]; };
-// The top level's nodes deepest level first, then level_count + 1
-// boundaries into that list at level_offset.
+// Node indices deepest level first, then level_count + 1 boundaries at level_offset.
 layout(set = SET_ANIM, binding = TOP_FIT_ORDER, scalar) readonly buffer Order { uint order[]; };
 
 layout(push_constant) uniform Push {
@@ -43,9 +37,8 @@ layout(push_constant) uniform Push {
     uint level_count;
 };
 
-// A bound on the rounding error of one transformed coordinate, relative to
-// the sum of its terms' magnitudes: gamma(4) (four products summed) is
-// 2.4e-7; twice that survives the rounding of the padded value itself.
+// Rounding bound of a transformed coordinate relative to its terms' magnitudes: gamma(4) = 2.4e-7,
+// doubled to survive the rounding of the padded value itself.
 const float PAD = 4.8e-7;
 
 void grow_instance(uint inst, inout vec3 lo, inout vec3 hi) {
@@ -66,8 +59,8 @@ void grow_instance(uint inst, inout vec3 lo, inout vec3 hi) {
     vec3 mag = abs(m[0].xyz) * a.x + abs(m[1].xyz) * a.y + abs(m[2].xyz) * a.z + abs(m[3].xyz);
     wlo -= mag * PAD;
     whi += mag * PAD;
-    // The host leaves instances with non-finite bounds out of the top level;
-    // one that became non-finite since cannot be bounded, so it is skipped.
+    // The host leaves non-finite instances out of the top level; one that became non-finite since cannot
+    // be bounded.
     if (any(isinf(wlo)) || any(isnan(wlo)) || any(isinf(whi)) || any(isnan(whi))) return;
     lo = min(lo, wlo);
     hi = max(hi, whi);

@@ -1,9 +1,6 @@
-// The camera ray through pixel `px`'s centre, traced to its closest hit the
-// way `primary` (pure RT) and `visibility_trace` (hybrid, traced primary
-// visibility) both need it: counted as a camera ray, its alpha test picking
-// the mip from the camera-ray cone (hit.glsl's g_camera_ray), so the two
-// passes put alpha-masked cut-outs where the raster's alpha test does.
-// Needs primary_hit.glsl and integrator.glsl (and a trace backend) first.
+// The camera ray as `primary` and `visibility_trace` both trace it: counted as a camera ray, alpha
+// mip from the camera-ray cone (g_camera_ray), so cut-outs land where the raster's alpha test puts
+// them. Needs primary_hit.glsl, integrator.glsl and a trace backend first.
 #ifndef CAMERA_RAY_GLSL
 #define CAMERA_RAY_GLSL
 

@@ -1,5 +1,4 @@
-// Environment lookup: the background where camera rays miss and the
-// radiance of reflection / refraction rays that miss.
+// Background for missed camera rays and radiance of missed secondary rays.
 #ifndef ENV_GLSL
 #define ENV_GLSL
 #include "scene.glsl"
@@ -20,14 +19,10 @@ vec3 environment(vec3 dir) {
     return frame.env_color * frame.env_intensity;
 }
 
-// The environment's irradiance E(n) = ∫ L(w) max(0, n·w) dw from its SH
-// coefficients (scene/sh, 3 bands). The basis is scene/sh/basis.rs's, in
-// its frame x = -n.z, y = n.x, z = n.y (polar angle from +Y, azimuth
-// atan2(n.x, -n.z), the map's own). The Hann-windowed projection keeps it
-// non-negative on the shipped maps (tests/render/ibl.rs checks the sun maps), but
-// not everywhere: light from one cap on black dips to -0.3% of the peak
-// opposite it, hence the clamp (a negative pixel would poison the
-// log-average exposure).
+// E(n) = ∫ L(w) max(0, n·w) dw from 3-band SH (scene/sh/basis.rs, in its frame x = -n.z, y = n.x,
+// z = n.y: the map's own angles). The Hann window keeps it non-negative on the shipped maps
+// (tests/render/ibl.rs) but not everywhere (one bright cap on black dips to -0.3% opposite), hence
+// the clamp: a negative pixel would poison the log-average exposure.
 vec3 sh_irradiance(vec3 n) {
     float x = -n.z, y = n.x, z = n.y;
     const float c0 = 0.5 / sqrt(PI);
@@ -46,9 +41,8 @@ vec3 sh_irradiance(vec3 n) {
     return max(e, vec3(0.0));
 }
 
-// The radiance a Lambertian surface of albedo 1 with normal n exits under
-// the environment alone (unshadowed): E(n) / pi with FRAME_AMBIENT_SH, else
-// the map's mean radiance (or the constant colour: E = pi L).
+// What a Lambertian surface of albedo 1 exits, unshadowed: E(n) / pi with FRAME_AMBIENT_SH, else the
+// map's mean radiance (or the constant colour: E = pi L).
 vec3 ambient_radiance(vec3 n) {
     if ((frame.flags & FRAME_AMBIENT_SH) != 0u) {
         return sh_irradiance(n) / PI;

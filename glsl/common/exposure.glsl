@@ -1,6 +1,5 @@
-// Auto exposure: the state the luminance pass keeps across frames and the
-// adaptation over time. Pure functions here (the shading probe tests them);
-// the buffer itself is declared by exposure_state.glsl.
+// Auto exposure adaptation, pure functions so the shading probe can test them
+// (the buffer is declared in exposure_state.glsl).
 #ifndef EXPOSURE_GLSL
 #define EXPOSURE_GLSL
 
@@ -16,10 +15,8 @@ struct ExposureState {
     uint pad;
 };
 
-// The PRT document's adaptation: adapted += (target - adapted) *
-// (1 - 0.98^(60 dt)). The factor composes over frames (two steps of dt
-// equal one of 2 dt), so the result after one second is the same at any
-// frame rate. dt <= 0: converged at once (still frames, first frame).
+// The PRT document's adaptation. The factor composes over frames (two steps of dt equal one of 2 dt),
+// so it is frame-rate independent. dt <= 0 (still or first frame): converged at once.
 float adapt_log_average(float adapted, float target, float dt) {
     if (dt <= 0.0) return target;
     return adapted + (target - adapted) * (1.0 - pow(ADAPT_BASE, ADAPT_FPS * dt));

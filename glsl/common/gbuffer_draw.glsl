@@ -1,14 +1,9 @@
-// Per-draw constants of the G-buffer raster, whole draws and cluster draws
-// alike (render/passes/gbuffer.rs, GBufferDraw): the instance's world matrix, so
-// the vertex stage fetches no instance per vertex (the same f32 matrix the
-// instance buffer holds, applied the same way: the same positions as the
-// fetch, to the bit); the instance, which the fragment stage writes into the hit target (no
-// flat varying for it); and the draw's index range, since the draw is not
-// indexed: the vertex stage fetches its index itself, so that the triangle
-// number is gl_VertexIndex's (a flat varying) rather than gl_PrimitiveID,
-// whose use in the fragment stage makes llvmpipe assemble primitives on a
-// slower path. Together they cut ~1/3 of the pass on Sponza
-// (bench/results/lavapipe-2core-vm-raster.md).
+// Per-draw constants of the G-buffer raster (render/passes/gbuffer.rs, GBufferDraw). The world
+// matrix avoids a per-vertex instance fetch (same f32 matrix, same positions to the bit); the
+// instance is written to the hit target without a flat varying; draws are not indexed, so the vertex
+// stage fetches its index and the triangle number comes from gl_VertexIndex rather than
+// gl_PrimitiveID, whose fragment-stage use puts llvmpipe on a slower primitive-assembly path.
+// Together ~1/3 of the pass on Sponza (bench/results/lavapipe-2core-vm-raster.md).
 #ifndef GBUFFER_DRAW_GLSL
 #define GBUFFER_DRAW_GLSL
 layout(push_constant) uniform GBufferDraw {

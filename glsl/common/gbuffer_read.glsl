@@ -1,12 +1,7 @@
-// The primary hit as every pass after `gbuffer` / `primary` sees it: the
-// G-buffer targets (set 1, bindings GB_*), with the exact hit point
-// reconstructed from the stored (instance, primitive) by intersecting the
-// camera ray with that triangle. Both modes write the same targets, so the
-// passes that read them do not know which one ran. Layout (24 bytes a
-// pixel with the depth buffer): albedo rgba8, normal octahedral r32ui
-// (gbuffer_pack.glsl), metallic/roughness/transmission rgba8, hit rg32ui.
-// Emission is not stored: it is looked up from the material at the hit
-// (primary_emissive), by `composite` only.
+// The primary hit as every pass after `gbuffer` / `primary` sees it: both modes write the same
+// G-buffer targets (GB_*), and the exact hit point is rebuilt by intersecting the camera ray with the
+// stored triangle. 24 bytes a pixel with depth: albedo rgba8, octahedral normal r32ui, metallic/
+// roughness/transmission rgba8, hit rg32ui. Emission is not stored: `composite` looks it up.
 #ifndef GBUFFER_READ_GLSL
 #define GBUFFER_READ_GLSL
 #include "scene.glsl"
@@ -32,9 +27,7 @@ struct PrimaryHit {
     vec2 b;          // barycentrics (b1, b2) of the hit on it
 };
 
-// The material's emission at the primary hit (barycentrics `b` on
-// (instance, primitive)), its texture filtered with the uv gradients the
-// rasterizer would use, as the G-buffer pass sampled it.
+// Texture filtered with the rasterizer's uv gradients, as the G-buffer pass sampled it.
 vec3 primary_emissive(ivec2 px, uint instance, uint primitive, vec2 b) {
     Material m = materials[instances[instance].material];
     if (m.emissive == vec3(0.0) || m.tex_emissive < 0) return m.emissive;
@@ -44,9 +37,7 @@ vec3 primary_emissive(ivec2 px, uint instance, uint primitive, vec2 b) {
     return m.emissive * textureGrad(textures[nonuniformEXT(m.tex_emissive)], uv, dx, dy).rgb;
 }
 
-// The primary hit's (instance + 1, primitive) and the material terms the
-// G-buffer stores, without its geometry: enough to decide which rays it
-// spawns. False where the camera ray through `px` hit nothing (hit id 0).
+// Material terms only, enough to decide which rays the hit spawns. False on a miss (hit id 0).
 bool read_primary_material(ivec2 px, out uvec2 hit, out Surface s) {
     hit = texelFetch(gb_hit, px, 0).xy;
     if (hit.x == 0u) return false;
@@ -58,14 +49,12 @@ bool read_primary_material(ivec2 px, out uvec2 hit, out Surface s) {
     s.roughness = mat.g;
     s.transmission = mat.b;
     s.ior = materials[instances[hit.x - 1u].material].ior;
-    // Only `composite` adds the primary hit's emission (primary_emissive):
-    // the passes that trace from it do not pay for its texture lookup.
+    // Only `composite` adds emission, so the tracing passes skip its texture lookup.
     s.emissive = vec3(0.0);
     return true;
 }
 
-// The whole primary hit, emission aside (see read_primary_material); false
-// where the camera ray through `px` hit nothing.
+// False on a miss.
 bool read_primary(ivec2 px, out PrimaryHit p) {
     p.dir = camera_ray_dir(vec2(px) + 0.5);
     uvec2 hit;

@@ -1,14 +1,7 @@
-// The G-buffer's material targets (albedo, octahedral normal,
-// metallic+roughness+transmission) of pixel `px` from its primary hit
-// (instance, primitive), exactly as the old G-buffer fragment stage made
-// them: attributes transformed per vertex and interpolated with the
-// perspective-correct barycentrics of the pixel centre (the camera ray meets
-// the triangle there), textures filtered with the rasterizer's per-quad uv
-// gradients, the normal flipped on back faces (gl_FrontFacing: screen
-// winding, i.e. the world winding seen from the camera, reversed by a
-// mirroring transform). It needs only the pixel's own hit, so the raster's
-// hits are resolved by pass `gbuffer_resolve` and traced ones by
-// `visibility_trace` right after the ray, with the same bytes.
+// The G-buffer's material targets of pixel `px` from its primary hit, as the old G-buffer fragment
+// stage made them (perspective-correct barycentrics at the pixel centre, the rasterizer's per-quad uv
+// gradients, normal flipped on back faces by screen winding). Needs only the pixel's own hit, so
+// `gbuffer_resolve` (raster) and `visibility_trace` (traced) write the same bytes.
 #ifndef GBUFFER_RESOLVE_GLSL
 #define GBUFFER_RESOLVE_GLSL
 #include "scene.glsl"
@@ -33,9 +26,8 @@ void resolve_gbuffer(ivec2 px, uint instance, uint primitive) {
     vec4 tangent = vec4(mat3(inst.world) * t4.xyz, t4.w);
     vec2 uv = hit_uv(hv, b);
 
-    // The rasterizer's implicit derivatives are per 2x2 quad (llvmpipe: the
-    // quad's top-left pixel to its right and lower neighbours, extended over
-    // the triangle's plane), so all four pixels of a quad pick one mip level.
+    // Derivatives are per 2x2 quad (llvmpipe: top-left pixel to its right and lower neighbours, on the
+    // triangle's plane), so a quad picks one mip level.
     ivec2 q = px & ~1;
     vec2 c = vec2(q) + 0.5;
     vec2 uv00 = hit_uv(hv, plane_barycentrics_unclamped(tri, frame.camera_pos, camera_ray_dir(c)));
@@ -45,12 +37,11 @@ void resolve_gbuffer(ivec2 px, uint instance, uint primitive) {
     Surface s;
     float alpha;
     material_eval(m, uv, s, alpha);
-    // Guard against degenerate interpolated vectors (zero-area or bad input).
     n = dot(n, n) > 1e-20 ? normalize(n) : vec3(0.0, 1.0, 0.0);
     bool mirrored = determinant(mat3(inst.world)) < 0.0;
     bool away = dot(cross(tri.p1 - tri.p0, tri.p2 - tri.p0), dir) > 0.0;
-    // The world-space cross product already reflects a mirroring transform,
-    // which the raster undid by swapping the front face.
+    // The world-space cross product already reflects a mirroring transform, which the raster undid by
+    // swapping the front face.
     if (away != mirrored) n = -n;
     n = apply_normal_map(m, uv, n, tangent);
     g_hit_grad = false;

@@ -1,5 +1,4 @@
-// Geometry and material at a ray hit (instance, primitive, barycentrics),
-// read from the one shared vertex/index copy. Used by every traversal.
+// Geometry and material at a ray hit, read from the one shared vertex/index copy.
 #ifndef HIT_GLSL
 #define HIT_GLSL
 #include "scene.glsl"
@@ -40,10 +39,8 @@ vec2 hit_uv(HitVertices hv, vec2 b) {
     return hv.v0.uv * w.x + hv.v1.uv * w.y + hv.v2.uv * w.z;
 }
 
-// The uv gradients the rasterizer would use on (instance, primitive) at
-// pixel `px` (differences to the neighbouring pixels, whose camera rays
-// meet the triangle's plane), so pure-RT camera rays filter textures, alpha
-// cut-outs included, exactly like the G-buffer pass.
+// The rasterizer's uv gradients at pixel `px` (neighbouring camera rays on the triangle's plane), so
+// pure-RT camera rays filter textures and alpha cut-outs exactly like the G-buffer pass.
 void camera_uv_gradients(uint instance, uint primitive, ivec2 px, out vec2 dx, out vec2 dy) {
     TriangleWorld t = triangle_world(instance, primitive);
     HitVertices hv = hit_vertices(instances[instance], primitive);
@@ -56,20 +53,15 @@ void camera_uv_gradients(uint instance, uint primitive, ivec2 px, out vec2 dx, o
     dy = hit_uv(hv, by) - uv0;
 }
 
-// Set while a pure-RT camera ray of pixel g_camera_pixel is traced: its
-// alpha tests read filtered alpha like the raster's.
+// Pure-RT camera rays alpha-test filtered alpha like the raster.
 bool g_camera_ray = false;
 ivec2 g_camera_pixel = ivec2(0);
-// Set while a reflection/refraction ray is traced: its cone (width at the
-// origin, spread per unit distance) and direction, so its alpha tests pick
-// the mip its shading picks (a cut-out seen in a mirror does not sparkle).
-// Zero (shadow rays): the finest level.
+// Reflection/refraction rays alpha-test at the mip their shading picks (a cut-out in a mirror does
+// not sparkle); zero cone (shadow rays): the finest level.
 vec2 g_alpha_cone = vec2(0.0);
 vec3 g_alpha_dir = vec3(0.0, 0.0, 1.0);
 
-// Mip-level base of a hit (see g_hit_lod): half the log2 ratio of the
-// triangle's uv area to its world area, plus log2 of the cone's width over
-// the cosine to the ray. 0 width (no cone): the finest level.
+// Half the log2 uv/world area ratio plus log2 of cone width over the cosine; no cone: finest level.
 float cone_lod(HitVertices hv, vec3 e1, vec3 e2, vec3 gn, vec3 ray_d, float cone_width) {
     vec2 t1 = hv.v1.uv - hv.v0.uv;
     vec2 t2 = hv.v2.uv - hv.v0.uv;
@@ -80,8 +72,6 @@ float cone_lod(HitVertices hv, vec3 e1, vec3 e2, vec3 gn, vec3 ray_d, float cone
     return 0.5 * log2(uv_area / world_area) + log2(cone_width / cosine);
 }
 
-// Base-colour alpha at a candidate hit at distance t (for alpha-masked
-// any-hit decisions).
 float hit_alpha(uint instance, uint primitive, vec2 b, float t) {
     Instance inst = instances[instance];
     Material m = materials[inst.material];
@@ -107,46 +97,37 @@ float hit_alpha(uint instance, uint primitive, vec2 b, float t) {
     return m.base_color.a * sample_tex_lod(m.tex_base_color, uv, lod, vec4(1.0)).a;
 }
 
-// Whether a candidate hit counts for visibility (alpha MASK / BLEND cut-outs).
 bool hit_alpha_passes(uint instance, uint primitive, vec2 b, float t) {
     Material m = materials[instances[instance].material];
     if (m.alpha_mode == ALPHA_OPAQUE) return true;
     return hit_alpha(instance, primitive, b, t) >= m.alpha_cutoff;
 }
 
-// Shadow rays of this invocation see glass as opaque, as the path tracer's
-// do (FRAME_OPAQUE_OCCLUDERS, for the whole frame): the `terms` pass sets
-// it around the rays it compares with the truth; the RT pipeline's any-hit
-// shader takes it from the payload.
+// Shadow rays see glass as opaque, like the path tracer's (FRAME_OPAQUE_OCCLUDERS does so for the
+// whole frame): `terms` sets it around rays compared with the truth; RT any-hit reads the payload.
 bool g_opaque_occluders = false;
 
-// Light transmitted through one occluder crossing: 0 for opaque, the
-// transmission-weighted base colour for transmissive materials (0 with
-// FRAME_OPAQUE_OCCLUDERS or g_opaque_occluders), 1 where an alpha mask
-// cuts the surface away.
+// 0 for opaque (and glass when occluders are opaque), transmission-weighted base colour for glass,
+// 1 where an alpha mask cuts the surface away.
 vec3 occluder_transmittance(uint instance, uint primitive, vec2 b) {
     Instance inst = instances[instance];
     Material m = materials[inst.material];
     vec2 uv = hit_uv(hit_vertices(inst, primitive), b);
     vec4 base = m.base_color * sample_tex_lod(m.tex_base_color, uv, 0.0, vec4(1.0));
     if (m.alpha_mode != ALPHA_OPAQUE && base.a < m.alpha_cutoff) return vec3(1.0);
-    // The path tracer's shadow rays: glass bends light, so a straight ray
-    // through it carries none (its light arrives along refracted paths).
+    // Glass bends light, so a straight ray through it carries none (it arrives along refracted paths).
     if ((frame.flags & FRAME_OPAQUE_OCCLUDERS) != 0u || g_opaque_occluders) return vec3(0.0);
     float tr = clamp(m.transmission * sample_tex_lod(m.tex_transmission, uv, 0.0, vec4(1.0)).r, 0.0, 1.0);
     return base.rgb * tr;
 }
 
-// Beer-Lambert transmittance of the medium a ray travelled through to the
-// back face it hit (h): the hit instance's material's volume, closed
-// meshes assumed (KHR_materials_volume).
+// Beer-Lambert through the medium behind the back face hit; closed meshes assumed (KHR_materials_volume).
 vec3 volume_transmittance(RayHit h) {
     return exp(-materials[instances[h.instance].material].volume_sigma * h.t);
 }
 
-// Full surface at a hit. `geo_normal` is the world-space geometric normal
-// (unit, on the side the ray came from); the shading normal is flipped to
-// the same side. `cone_width`: the ray cone's width at the hit (texture LOD).
+// `geo_normal`: unit world-space geometric normal on the ray's side; the shading normal follows.
+// `cone_width`: the ray cone's width at the hit (texture LOD).
 Surface hit_surface(RayHit h, vec3 ray_o, vec3 ray_d, float cone_width, out vec3 geo_normal, out bool back_face) {
     Instance inst = instances[h.instance];
     Material m = materials[inst.material];
@@ -156,7 +137,7 @@ Surface hit_surface(RayHit h, vec3 ray_o, vec3 ray_d, float cone_width, out vec3
     vec3 p1 = (inst.world * vec4(hv.v1.position, 1.0)).xyz;
     vec3 p2 = (inst.world * vec4(hv.v2.position, 1.0)).xyz;
     Surface s;
-    // From the triangle, not from o + t*d: the point lies on the surface.
+    // From the triangle, not o + t*d, so the point lies on the surface.
     s.position = p0 * w.x + p1 * w.y + p2 * w.z;
     s.extent = triangle_extent(p0, p1, p2);
     vec3 gn = cross(p1 - p0, p2 - p0);

@@ -1,8 +1,5 @@
-// The one shading path. What is computed at a surface (direct light with
-// shadow rays, emission, ambient, mirror reflection, refraction) lives
-// here; how a ray finds its hit is the traversal include chosen by the
-// variant (trace/query.glsl, ...). Without one (TRACE_NONE) no ray is
-// traced. The passes (direct, specular, composite) each use a part of it.
+// The one shading path for direct, specular and composite; ray traversal comes from the variant's
+// trace include (trace/query.glsl, ...), and TRACE_NONE traces nothing.
 #ifndef INTEGRATOR_GLSL
 #define INTEGRATOR_GLSL
 #include "scene.glsl"
@@ -14,7 +11,7 @@
 #include "trace.glsl"
 #include "shadow_map.glsl"
 
-// Specialization constants: effects the scene does not need are compiled out.
+// Effects the scene does not need are compiled out.
 layout(constant_id = SPEC_SHADOWS) const bool SHADOWS = false;
 layout(constant_id = SPEC_REFLECTIONS) const bool REFLECTIONS = false;
 layout(constant_id = SPEC_REFRACTIONS) const bool REFRACTIONS = false;
@@ -22,8 +19,7 @@ layout(constant_id = SPEC_MAX_DEPTH) const uint MAX_DEPTH = 8u;
 layout(constant_id = SPEC_MIN_WEIGHT) const float MIN_WEIGHT = 0.01;
 layout(constant_id = SPEC_COUNT_RAYS) const bool COUNT_RAYS = false;
 
-// The rays this pixel traced per effect (EFFECT_BIT_*), for the budget's
-// cost model: a ray counts for the effect of the chain it belongs to.
+// Rays per effect (EFFECT_BIT_*) for the budget's cost model; a ray counts for its chain's effect.
 uint g_effect_rays[EFFECT_COUNT] = uint[](0u, 0u, 0u);
 uint g_ray_effect = EFFECT_BIT_SHADOWS;
 
@@ -32,8 +28,7 @@ void count_ray(uint kind) {
     g_effect_rays[g_ray_effect]++;
 }
 
-// Adds this pixel's rays per effect to its object's budget statistics
-// (only under a budget: nothing else reads them).
+// Only under a budget: nothing else reads these statistics.
 void budget_count_rays(uint instance) {
     if ((frame.flags & FRAME_BUDGET) == 0u) return;
     uint base = BUDGET_STAT_WORDS * instances[instance].object_id + BUDGET_STAT_RAYS;
@@ -42,8 +37,7 @@ void budget_count_rays(uint instance) {
     }
 }
 
-// MIRROR_ROUGHNESS (generated/shared.glsl): surfaces at most this rough
-// are traced as mirrors (glossy-as-mirror).
+// Surfaces at most MIRROR_ROUGHNESS (generated/shared.glsl) rough are traced as mirrors.
 const float RAY_TMAX = 1e30;
 
 #ifdef TRACE_NONE
@@ -53,31 +47,25 @@ vec3 trace_shadow(vec3 o, vec3 d, float tmax) { return vec3(1.0); }
 
 float max3(vec3 v) { return max(v.x, max(v.y, v.z)); }
 
-// The ray-traced effects (EFFECT_* bits) the primary hit being shaded gets
-// (the budget's selection, budget_effects); an effect left out traces no
-// ray: exactly the raster-only shading of that effect. A chain, once
-// started, is traced whole (specular sets EFFECT_ALL after the primary hit).
+// Ray-traced effects (EFFECT_* bits) the budget selected for this primary hit; an effect left out
+// shades exactly as raster-only. A started chain is traced whole (specular sets EFFECT_ALL).
 uint g_effects = EFFECT_ALL;
 
 bool effect_on(uint bit) {
     return ((g_effects >> bit) & 1u) != 0u;
 }
 
-// `--fallback raster`: an effect the budget leaves out is approximated
-// without rays instead of left out (render/budget's Fallback).
+// `--fallback raster`: approximate left-out effects without rays (render/budget's Fallback).
 bool raster_fallback() {
     return (frame.flags & FRAME_FALLBACK_RASTER) != 0u;
 }
 
-// Whether `bit` is shaded at all: traced, or its raster fallback.
 bool effect_shaded(uint bit) {
     return effect_on(bit) || raster_fallback();
 }
 
-// Direct light from every punctual light; with SHADOWS, each light that
-// casts shadows is tested with a transmittance ray, or, where the budget
-// left the pixel's shadows out under the raster fallback, its shadow map. `gn` is the unit
-// geometric normal on the viewer's side.
+// With SHADOWS, a transmittance ray per shadow-casting light, or its shadow map where the budget left
+// the shadows out under the raster fallback. `gn`: unit geometric normal on the viewer's side.
 vec3 direct_light(Surface s, vec3 v, vec3 gn) {
     vec3 c = vec3(0.0);
     for (uint i = 0u; i < frame.light_count; ++i) {
@@ -87,8 +75,7 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
         if (SHADOWS && effect_on(EFFECT_BIT_SHADOWS) && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && max3(contrib) > 0.0) {
             bool light_side = dot(gn, ls.l) > 0.0;
             if (!light_side && s.transmission <= 0.0) {
-                // A normal map tilted the shading normal towards a light
-                // behind the geometry: the surface itself occludes it.
+                // A normal map tilted the shading normal towards a light behind the geometry.
                 contrib = vec3(0.0);
             } else {
                 vec3 o = offset_ray(s.position, light_side ? gn : -gn, s.extent);
@@ -98,8 +85,7 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
             }
         } else if (SHADOWS && raster_fallback() && light.type != LIGHT_POINT && (light.flags & LIGHT_CASTS_SHADOWS) != 0u
                    && max3(contrib) > 0.0) {
-            // The shadow bit is off: the shadow map instead (point lights
-            // have none and stay unshadowed).
+            // Point lights have no shadow map and stay unshadowed.
             bool light_side = dot(gn, ls.l) > 0.0;
             if (!light_side && s.transmission <= 0.0) {
                 contrib = vec3(0.0);
@@ -112,10 +98,8 @@ vec3 direct_light(Surface s, vec3 v, vec3 gn) {
     return c;
 }
 
-// A ray cone (texture LOD): width at the ray's origin and spread angle.
-// Reflection and refraction keep the spread (the planar approximation:
-// surface curvature is not tracked), so the width grows linearly with the
-// total path length, as for a pixel footprint seen in a flat mirror.
+// Ray cone for texture LOD. Reflection and refraction keep the spread (planar approximation, curvature
+// ignored), so width grows linearly with path length, as in a flat mirror.
 struct Cone {
     float width;
     float spread;
@@ -128,19 +112,17 @@ struct Branch {
     uint depth;
     Cone cone;
     uint effect;  // EFFECT_BIT_* of the chain it belongs to
-    // The budget left its effect out (raster fallback): not traced, the
-    // environment in its direction stands for whatever it would have hit.
+    // Budget left its effect out (raster fallback): the environment stands in for the hit.
     bool env_only;
 };
 
 Branch g_stack[BRANCH_STACK_SIZE];
 int g_sp = 0;
-// The pixel's tree lost a branch (full stack, or the ray budget ran out).
+// Full stack or ray budget ran out.
 bool g_truncated = false;
 
 void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone, uint effect) {
-    // Importance cutoff: branches that can change the pixel by less than
-    // MIN_WEIGHT of their radiance are not traced.
+    // Importance cutoff.
     if (max3(w) >= MIN_WEIGHT && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
         if (g_sp < int(BRANCH_STACK_SIZE)) {
             g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone, effect, !effect_on(effect));
@@ -151,8 +133,7 @@ void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone, uint effect) {
     }
 }
 
-// Keeps the shading normal on the viewer's side (normal maps at grazing
-// angles); returns n.v.
+// Keeps the shading normal on the viewer's side (normal maps at grazing angles).
 float face_viewer(inout Surface s, vec3 v) {
     float nv = dot(s.normal, v);
     if (nv < 1e-4) {
@@ -162,42 +143,34 @@ float face_viewer(inout Surface s, vec3 v) {
     return nv;
 }
 
-// Whether `s` spawns a mirror reflection at `depth` (traced, or its
-// environment-only fallback).
+// Traced, or its environment-only fallback.
 bool is_mirror(Surface s, uint depth) {
     return REFLECTIONS && effect_shaded(EFFECT_BIT_REFLECTIONS) && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
 }
 
-// Whether `s` spawns a refraction branch at `depth` (traced, or its
-// environment-only fallback).
 bool is_refracting(Surface s, uint depth) {
     return REFRACTIONS && effect_shaded(EFFECT_BIT_REFRACTIONS) && depth < MAX_DEPTH
         && s.transmission * (1.0 - s.metallic) > 0.0;
 }
 
-// Whether `s` spawns any branch at `depth`: decided by its material terms
-// alone (push_branches may still drop a branch under MIN_WEIGHT).
+// By material terms alone; push_branches may still drop one under MIN_WEIGHT.
 bool spawns_branches(Surface s, uint depth) {
     return is_mirror(s, depth) || is_refracting(s, depth);
 }
 
-// The ambient term of `s` lit by `radiance`, the radiance a Lambertian
-// surface of albedo 1 exits (E / pi): SH irradiance, or PRT in composite.
+// `radiance`: what a Lambertian surface of albedo 1 exits (E / pi): SH irradiance, or PRT in composite.
 vec3 ambient_light_from(Surface s, bool mirror, vec3 radiance) {
     vec3 f0 = surface_f0(s);
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
     return radiance * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
 }
 
-// Environment light on `s` (the ambient term): the irradiance at its
-// normal (env.glsl's ambient_radiance). A mirror's specular share comes from
-// its reflection branch instead (traced, or the environment in fallback).
+// A mirror's specular share comes from its reflection branch instead.
 vec3 ambient_light(Surface s, bool mirror) {
     return ambient_light_from(s, mirror, ambient_radiance(s.normal));
 }
 
-// Pushes the reflection and refraction branches `s` spawns (weight `w`,
-// at `depth`, the ray cone `cone` at s); `nv` from face_viewer.
+// `nv` from face_viewer; `cone` is the ray cone at s.
 void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w, uint depth, Cone cone) {
     float tm = s.transmission * (1.0 - s.metallic);
     bool mirror = is_mirror(s, depth);
@@ -208,8 +181,8 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
     float eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
     float fr = fresnel_dielectric(nv, eta);
     vec3 kr = f_schlick(f0, nv);
-    // A chain's rays count for the effect that started it at the primary
-    // hit (total internal reflection there is part of the refraction).
+    // A chain's rays count for the effect that started it at the primary hit (total internal
+    // reflection there counts as refraction).
     bool root = depth == 0u;
     uint reflect_effect = root ? (mirror ? EFFECT_BIT_REFLECTIONS : EFFECT_BIT_REFRACTIONS) : g_ray_effect;
     uint refract_effect = root ? EFFECT_BIT_REFRACTIONS : g_ray_effect;
@@ -228,9 +201,7 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
     }
 }
 
-// Radiance leaving a secondary hit `s` towards v, times `w`; pushes the
-// branches it spawns. The primary hit is split over the direct, specular
-// and composite passes instead, which compute the same terms.
+// Secondary hits only: the primary hit is split over the direct, specular and composite passes.
 vec3 shade(Surface s, vec3 v, vec3 gn, bool back_face, vec3 w, uint depth, Cone cone) {
     float nv = face_viewer(s, v);
     vec3 c = s.emissive + direct_light(s, v, gn) + ambient_light(s, is_mirror(s, depth));
@@ -238,8 +209,7 @@ vec3 shade(Surface s, vec3 v, vec3 gn, bool back_face, vec3 w, uint depth, Cone 
     return w * c;
 }
 
-// Traces every pending branch to completion, at most RAY_BUDGET_PER_PIXEL
-// rays; a cut tree is counted (RAY_COUNTER_TRUNCATED) so the host can warn.
+// At most RAY_BUDGET_PER_PIXEL rays; a cut tree is counted (RAY_COUNTER_TRUNCATED) so the host can warn.
 vec3 trace_branches() {
     vec3 radiance = vec3(0.0);
     uint traced = 0u;
@@ -252,8 +222,7 @@ vec3 trace_branches() {
         g_sp--;
         Branch b = g_stack[g_sp];
         if (b.env_only) {
-            // The fallback: the same weight, no ray (the traced image where
-            // the ray would have missed everything).
+            // Fallback: the image the traced ray would give if it missed everything.
             traced--;
             radiance += b.weight * environment(b.dir);
             continue;

@@ -19,17 +19,15 @@ TriangleWorld triangle_world(uint instance, uint primitive) {
     return t;
 }
 
-// World-space direction of the camera ray through pixel `pixel` (centre at +0.5).
-// Built from the view rotation and the projection's focal terms, not from the
-// inverse view-projection, so it stays precise far from the origin.
+// Built from the view rotation and focal terms, not the inverse view-projection, to stay precise far
+// from the origin.
 vec3 camera_ray_dir(vec2 pixel) {
     vec2 ndc = pixel / vec2(frame.resolution) * 2.0 - 1.0;
     vec3 dv = vec3(ndc.x / frame.proj[0][0], ndc.y / frame.proj[1][1], -1.0);
     return normalize(transpose(mat3(frame.view)) * dv);
 }
 
-// Spread angle of one pixel's ray cone (its apex angle): the pixel's
-// height seen from the camera.
+// Apex angle of one pixel's ray cone.
 float pixel_spread_angle() {
     return atan(2.0 / (abs(frame.proj[1][1]) * float(frame.resolution.y)));
 }

@@ -1,9 +1,6 @@
-// Diffuse precomputed radiance transfer at a primary hit (scene/prt; buffer
-// layout: shared_values.rs SCENE_PRT): the three vertices' transfer vectors
-// interpolated with the hit's barycentrics, dotted with the environment's
-// radiance coefficients (Frame.sh_radiance, rotated and scaled on the host).
-// The transfer holds the clamped cosine (and visibility, interreflection),
-// so the result is the irradiance E.
+// Diffuse PRT at a primary hit (scene/prt; layout SCENE_PRT): vertex transfer vectors interpolated by
+// barycentrics, dotted with Frame.sh_radiance (rotated and scaled on the host). The transfer holds
+// the clamped cosine (and visibility, interreflection), so the result is the irradiance E.
 #ifndef PRT_GLSL
 #define PRT_GLSL
 #include "scene.glsl"
@@ -12,8 +9,7 @@ float prt_float(uint word) {
     return uintBitsToFloat(prt_data[word]);
 }
 
-// False (e = 0) without FRAME_AMBIENT_PRT or for an instance without
-// transfer (animated, skinned).
+// False (e = 0) without FRAME_AMBIENT_PRT or without transfer (animated, skinned).
 bool prt_irradiance(uint instance, uint primitive, vec2 b, out vec3 e) {
     e = vec3(0.0);
     if ((frame.flags & FRAME_AMBIENT_PRT) == 0u || instance >= prt_data[2]) return false;

@@ -13,29 +13,21 @@ layout(set = SET_SCENE, binding = SCENE_ENV_MAP) uniform sampler2D env_map;
 // Diffuse PRT transfer (layout: shared_values.rs SCENE_PRT; prt.glsl).
 layout(set = SET_SCENE, binding = SCENE_PRT, scalar) readonly buffer PrtData { uint prt_data[]; };
 layout(set = SET_SCENE, binding = SCENE_TEXTURES) uniform sampler2D textures[];  // bindless: last binding
-// Ray counters for benchmarks (by kind only when COUNT_RAYS is on; the
-// truncated and bad-pixel slots always):
-// by RAY_KIND_*: camera rays (pure RT), shadow rays, reflection/refraction rays.
+// Benchmark counters by RAY_KIND_* (only with COUNT_RAYS); the truncated and bad-pixel slots always.
 layout(set = SET_SCENE, binding = SCENE_RAY_COUNTERS) buffer RayCounters { uint ray_counts[RAY_COUNTER_SLOTS]; };
-// The ray-tracing budget (render/budget): statistics the `heuristic` pass
-// gathers, and the host's selection of the objects whose pixels get
-// ray-traced effects.
+// render/budget: statistics `heuristic` gathers, and the host's per-object selection.
 layout(set = SET_SCENE, binding = SCENE_BUDGET_STATS) buffer BudgetStats { uint budget_stats[]; };
 layout(set = SET_SCENE, binding = SCENE_BUDGET_MASK) readonly buffer BudgetMask { uint budget_mask[]; };
 
-// A 32-bit integer hash (Jarzynski & Olano 2020's PCG hash): uniform bits
-// for the budget's partial effects (from a pixel tile's index) and the
-// reference pass's random numbers.
+// PCG hash (Jarzynski & Olano 2020): budget tile hashing and reference random numbers.
 uint pcg_hash(uint v) {
     uint state = v * 747796405u + 2891336453u;
     uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
     return (word >> 22u) ^ word;
 }
 
-// The ray-traced effects (EFFECT_* bits) pixel `px` of `instance` gets: all
-// without a budget, else those the budget selected for its object, plus
-// its partial effects where px's tile falls within their share. The hash
-// ignores the share, so a larger share keeps every tile a smaller one had.
+// All effects without a budget; else the object's selection plus its partial effects where px's tile
+// falls within their share. The hash ignores the share, so a larger share keeps a smaller one's tiles.
 uint budget_effects(uint instance, ivec2 px) {
     if ((frame.flags & FRAME_BUDGET) == 0u) return EFFECT_ALL;
     uint word = budget_mask[instances[instance].object_id];
@@ -53,16 +45,11 @@ vec4 sample_tex(int index, vec2 uv, vec4 fallback) {
     return index < 0 ? fallback : texture(textures[nonuniformEXT(index)], uv);
 }
 
-// Texture level of detail at ray hits (ray cones, Akenine-Möller et al.,
-// "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray
-// Tracing Gems ch. 20): the mip level is g_hit_lod, set per hit from the
-// cone's footprint and the triangle's texel density, plus log2 of the
-// texture's size. Rays have no screen-space derivatives; without this every
-// secondary hit samples mip 0 and textures seen in mirrors, through glass
-// or by pure-RT camera rays sparkle.
+// Ray cones (Akenine-Möller et al., Ray Tracing Gems ch. 20): rays have no screen derivatives, so
+// g_hit_lod (cone footprint and texel density, per hit) plus log2 texture size picks the mip; without
+// it secondary hits sample mip 0 and textures in mirrors, through glass or by RT camera rays sparkle.
 float g_hit_lod = 0.0;
-// Pure-RT camera rays sample with the same screen-space uv gradients the
-// rasterizer derives (see primary.glsl), so both modes pick the same texels.
+// Pure-RT camera rays use the rasterizer's uv gradients (primary.glsl) so both modes pick the same texels.
 bool g_hit_grad = false;
 vec2 g_uv_dx = vec2(0.0);
 vec2 g_uv_dy = vec2(0.0);

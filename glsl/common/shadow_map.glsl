@@ -1,7 +1,5 @@
-// The budget's raster shadow fallback (gpu/shadow_map.rs): a depth layer
-// per light, rendered by the `shadow_map` pass for directional and spot
-// lights, looked up with PCF where a pixel's shadow bit is off. Point
-// lights have none: unshadowed in the fallback.
+// The budget's raster shadow fallback (gpu/shadow_map.rs): a depth layer per directional or spot
+// light, PCF-filtered where a pixel's shadow bit is off. Point lights have none: unshadowed.
 #ifndef SHADOW_MAP_GLSL
 #define SHADOW_MAP_GLSL
 #include "scene.glsl"
@@ -17,13 +15,10 @@ struct ShadowView {
 layout(set = SET_SCENE, binding = SCENE_SHADOW_MAPS) uniform sampler2DArrayShadow shadow_maps;
 layout(set = SET_SCENE, binding = SCENE_SHADOW_VIEWS, scalar) readonly buffer ShadowViews { ShadowView shadow_views[]; };
 
-// Visibility in [0, 1] of light `light` from `p` (unit geometric normal `n`
-// on the light's side, `dist` the distance to a spot light). Bias: the
-// receiver moves SHADOW_NORMAL_OFFSET texels along its normal (the texel
-// grows with distance under a perspective map), and the pass rasterizes
-// with a slope-scaled depth bias (render/passes/shadow_map.rs): together
-// they keep lit surfaces from shadowing themselves (acne) at any slope,
-// at the price of contact shadows that start a texel or two late.
+// `n`: unit geometric normal on the light's side; `dist`: distance to a spot light. Against acne at
+// any slope the receiver moves SHADOW_NORMAL_OFFSET texels along n (texels grow with distance under a
+// perspective map) and the pass uses slope-scaled depth bias (render/passes/shadow_map.rs); contact
+// shadows start a texel or two late.
 float shadow_map_visibility(uint light, vec3 p, vec3 n, float dist) {
     ShadowView sv = shadow_views[light];
     float texel = sv.texel * (sv.perspective > 0.5 ? dist : 1.0);

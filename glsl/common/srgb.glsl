@@ -1,9 +1,6 @@
-// The sRGB transfer function, both ways (IEC 61966-2-1, exact piecewise
-// form). The G-buffer's albedo target is UNORM holding sRGB-encoded values
-// written by these functions in both the raster (`gbuffer`) and the
-// ray-traced (`primary`) pass, so the two modes store identical bytes: a
-// hardware sRGB attachment and a shader encode round differently (one
-// 8-bit level on half the pixels on lavapipe).
+// sRGB transfer function (IEC 61966-2-1, exact piecewise). Both the raster and `primary` encode albedo
+// with it into a UNORM target, so both modes store identical bytes: a hardware sRGB attachment rounds
+// differently (one 8-bit level on half the pixels on lavapipe).
 #ifndef SRGB_GLSL
 #define SRGB_GLSL
 

@@ -8,9 +8,7 @@ float tone_luminance(vec3 c) {
     return dot(c, vec3(0.2126, 0.7152, 0.0722));
 }
 
-// Scales colour `c` of luminance `l` to luminance `ld`, keeping its chroma.
-// ld is capped far above white (where every channel clamps anyway) so the
-// ratio stays finite and a zero channel stays zero.
+// Keeps chroma. ld is capped far above white so the ratio stays finite and a zero channel stays zero.
 vec3 tone_scale(vec3 c, float l, float ld) {
     return l > 0.0 ? c * (min(ld, 64.0) / l) : vec3(0.0);
 }
@@ -28,10 +26,8 @@ vec3 tonemap_reinhard_white(vec3 c, float white) {
     return tone_scale(c, l, l * (1.0 + l / w2) / (1.0 + l));
 }
 
-// Narkowicz 2015, "ACES Filmic Tone Mapping Curve": a rational fit of the
-// ACES reference rendering + output transforms, per channel. The fit's input
-// is scaled by 0.6 so that key-0.18 exposure lands mid-curve as in the ACES
-// transform it approximates.
+// Narkowicz 2015: rational fit of the ACES RRT + ODT, per channel; input scaled by 0.6 so key-0.18
+// exposure lands mid-curve as in ACES.
 vec3 tonemap_aces(vec3 c) {
     vec3 x = c * 0.6;
     return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);

@@ -84,10 +84,8 @@ struct Frame {
     uint frame_index;
     uint flags;
     float znear;
-    // Tone mapping (render/tone.rs): TONEMAP_*, AUTO_EXPOSURE_*, the key,
-    // the white point (<= 0: the frame's brightest pixel), the adaptation
-    // step in seconds (<= 0: converge at once), histogram percentiles and
-    // adaptation speeds in EV per second.
+    // render/tone.rs: white <= 0 means the frame's brightest pixel, adapt step <= 0 converges at once;
+    // speeds in EV per second.
     uint tonemap;
     uint auto_exposure;
     float key;
@@ -97,11 +95,8 @@ struct Frame {
     float hist_high;
     float speed_brighten;
     float speed_darken;
-    // The accumulating passes (`reference`, `path`, `terms`): frames
-    // accumulated so far (0: start over; also their random seed) and the
-    // longest path (passes/reference.glsl, path/path.glsl), or for `terms`
-    // its TERM_* selection; the path tracer's clamp of a
-    // sample's radiance (<= 0: none, the unbiased estimate).
+    // Accumulating passes (`reference`, `path`, `terms`): accum_frame 0 starts over and seeds the RNG;
+    // accum_bounces is the longest path, or `terms`' TERM_* selection; path_clamp <= 0: unbiased.
     uint accum_frame;
     uint accum_bounces;
     float path_clamp;

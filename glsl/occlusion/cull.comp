@@ -1,13 +1,8 @@
 #version 460
-// Two-phase occlusion culling of the G-buffer's clusters (render/
-// occlusion.rs), one invocation per cluster.
-// Phase 1: draw what was visible last frame and lies in the frustum.
-// Phase 2 (after phase 1's depth became the pyramid): a cluster is visible
-// when it lies in the frustum and its box is not entirely behind the
-// pyramid's farthest depth over the box's screen rectangle; draw the
-// visible ones phase 1 did not, and remember visibility for next frame.
-// Every test is conservative: a cluster is culled only when none of its
-// triangles can cover a pixel's centre in front of what is drawn there.
+// Two-phase occlusion culling of G-buffer clusters (render/occlusion.rs), one invocation per cluster.
+// Phase 1 draws last frame's visible clusters in the frustum; phase 2 tests the rest against the
+// pyramid built from phase 1's depth and records visibility for next frame. Conservative: a cluster
+// is culled only when none of its triangles can cover a pixel centre in front of what is drawn.
 #include "common/scene.glsl"
 #include "common/cluster.glsl"
 layout(local_size_x = 64) in;
@@ -25,24 +20,19 @@ layout(push_constant) uniform Push {
     uint height;
 } pc;
 
-// Texels per side a test reads at most: a finer level than 2x2 texels
-// would allow, so a box is not kept only because a coarse texel also
-// covers the sky beside it.
+// Finer than 2x2 texels, so a box is not kept only because a coarse texel also covers the sky beside it.
 const int TEXELS = 8;
 
-// Whether a box whose nearest depth is `z_near` and whose pixels span
-// p0..p1 (inclusive) lies behind everything drawn over those pixels.
+// `p0..p1` inclusive pixels.
 bool occluded(ivec2 p0, ivec2 p1, float z_near) {
-    // The finest level where the rectangle spans at most TEXELS^2 texels.
     int k = 0;
     while (k < int(pc.levels) && any(greaterThanEqual((p1 >> (k + 1)) - (p0 >> (k + 1)), ivec2(TEXELS)))) k++;
     if (k >= int(pc.levels)) return false;
     ivec2 t0 = p0 >> (k + 1), t1 = p1 >> (k + 1);
-    // A relative margin for the rounding of the raster's transform.
+    // Margin for the rounding of the raster's transform.
     float z = z_near * 1.0001 + 1e-7;
     for (int y = t0.y; y <= t1.y; y++) {
         for (int x = t0.x; x <= t1.x; x++) {
-            // The farthest depth drawn under this texel is not behind the box.
             if (texelFetch(hiz, ivec2(x, y), k).r <= z) return false;
         }
     }
@@ -69,9 +59,8 @@ void main() {
         return;
     }
     mat4 m = frame.view_proj * instances[cl.instance].world;
-    // Outcodes: a plane all eight corners lie outside of culls the box
-    // (the planes are linear in homogeneous clip space, so this holds for
-    // corners behind the camera too). Far plane at infinity.
+    // Outcodes: clip planes are linear in homogeneous space, so this holds for corners behind the camera
+    // too. Far plane at infinity.
     uint all_out = 31u;
     bool behind = false;
     vec3 lo = vec3(1e30), hi = vec3(-1e30);
@@ -100,7 +89,7 @@ void main() {
     // A box reaching behind the camera covers unbounded screen space: kept.
     if (vis && !behind) {
         vec2 size = vec2(pc.width, pc.height);
-        // Pixels whose area the projected box touches, one more each side.
+        // One pixel margin each side.
         ivec2 last = ivec2(pc.width, pc.height) - 1;
         ivec2 p0 = clamp(ivec2(floor((lo.xy * 0.5 + 0.5) * size)) - 1, ivec2(0), last);
         ivec2 p1 = clamp(ivec2(floor((hi.xy * 0.5 + 0.5) * size)) + 1, ivec2(0), last);

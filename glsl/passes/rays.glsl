@@ -1,9 +1,6 @@
-// Ray microbenchmark (`bench --rays`, render/rays/mod.rs): trace one ray of
-// a fixed ray set with the variant's traversal and report what it hit.
-// Closest-hit rays report the hit and the next ray's origin and normal (the
-// host builds the shadow and diffuse sets from the primary hits); shadow
-// rays report whether they are blocked and the transmittance. rays.comp
-// (ray query, compute BVH) and rays.rgen (RT pipeline) run it per ray.
+// Ray microbenchmark (`bench --rays`, render/rays/mod.rs): one ray of a fixed set per invocation.
+// Closest-hit rays report the hit and the next ray's origin and normal (the host builds the shadow
+// and diffuse sets from the primary hits); shadow rays report blocking and transmittance.
 #ifndef PASS_RAYS_GLSL
 #define PASS_RAYS_GLSL
 #include "../common/scene.glsl"
@@ -39,7 +36,6 @@ layout(push_constant) uniform Push {
 };
 
 #ifndef TRACE_NONE
-// Traces ray i of the set and writes its result (and statistics).
 void trace_bench_ray(uint i) {
     if (i >= count) return;
     BenchRay r = rays[i];

@@ -1,14 +1,8 @@
-// Pass `reference`: the ray-traced reference for the diffuse environment
-// light at the primary hit. Per pixel REFERENCE_SAMPLES_PER_FRAME
-// cosine-weighted directions about the shading normal; a ray that misses
-// brings the environment's radiance (the full-resolution map, env.glsl's
-// `environment`), one that hits is occluded, or with Frame.accum_bounces
-// K > 1 continues as a diffuse path of up to K rays: each surface it bounces
-// off adds its emission and reflects with its diffuse albedo (the scene's
-// punctual lights stay in `direct`). With pdf cos/pi the mean of the
-// samples is E/pi, what env.glsl's ambient_radiance(n) approximates: the
-// accumulation holds the sum (rgb) and the sample count (a), and
-// `composite` divides. Seeded by pixel and Frame.accum_frame (PCG), so
+// Pass `reference`: ray-traced diffuse environment light at the primary hit, REFERENCE_SAMPLES_PER_FRAME
+// cosine directions per pixel. A miss brings the full-resolution environment, a hit occludes, or with
+// Frame.accum_bounces K > 1 continues as a diffuse path of up to K rays (emission plus diffuse albedo;
+// punctual lights stay in `direct`). With pdf cos/pi the mean is E/pi, what ambient_radiance(n)
+// approximates; `composite` divides the sum by the count. PCG-seeded by pixel and Frame.accum_frame so
 // every backend traces the same rays.
 #include "../common/gbuffer_read.glsl"
 #include "../common/integrator.glsl"
@@ -16,15 +10,13 @@
 
 layout(set = SET_PASS, binding = REFERENCE_OUT, rgba32f) uniform image2D reference_accum;
 
-// One path's radiance towards the surface s (geometric normal gn on the
-// side its hemisphere samples).
+// `gn` on the side the hemisphere samples.
 vec3 reference_path(Surface s, vec3 gn, inout uint rng) {
     vec3 throughput = vec3(1.0), radiance = vec3(0.0);
     uint bounces = max(frame.accum_bounces, 1u);
     for (uint b = 0u; b < bounces; ++b) {
         vec3 d = cosine_direction(s.normal, rng);
-        // Below the geometry (a normal map tilted the lobe): the surface
-        // itself occludes it, as direct_light does.
+        // Below the geometry (a normal map tilted the lobe): self-occluded, as in direct_light.
         if (dot(d, gn) <= 0.0) break;
         vec3 o = offset_ray(s.position, gn, s.extent);
         RayHit h;

@@ -1,35 +1,26 @@
-// Pass `specular`: the reflection / refraction chain that starts at the
-// primary hit (Fresnel-weighted branches on an explicit stack, recursion up
-// to MAX_DEPTH, importance cutoff MIN_WEIGHT, environment on miss). The
-// secondary hits are shaded in full here, direct light and shadow rays
-// included. Two kernels (render/passes/compacted.rs): `specular_select`
-// finds the pixels whose primary hit spawns a branch and lists them
-// (common/work_list.glsl); the chain kernel traces the listed pixels.
+// Pass `specular`: the reflection / refraction chain from the primary hit, secondary hits shaded in
+// full. Two kernels (render/passes/compacted.rs): `specular_select` lists the pixels whose hit
+// spawns a branch (common/work_list.glsl); the chain kernel traces them.
 #include "../common/gbuffer_read.glsl"
 #include "../common/integrator.glsl"
 #include "../common/work_list.glsl"
 
 layout(set = SET_PASS, binding = SPECULAR_OUT, rgba32f) uniform writeonly image2D specular_out;
 
-// Pushes the branches of the primary hit at `px` (with the budget's effects
-// for its object); false where the pixel has no primary hit.
+// False where the pixel has no primary hit.
 bool specular_root(ivec2 px, out PrimaryHit p) {
     if (!read_primary(px, p)) return false;
     vec3 v = -p.dir;
     float nv = face_viewer(p.s, v);
     g_effects = budget_effects(p.instance, px);
-    // The pixel's cone at the primary hit.
     float spread = pixel_spread_angle();
     Cone cone = Cone(spread * distance(frame.camera_pos, p.s.position), spread);
     push_branches(p.s, v, nv, p.gn, p.back_face, vec3(1.0), 0u, cone);
     return true;
 }
 
-// Select kernel, one invocation per pixel: a hit whose material spawns no
-// branch gets no specular radiance now, the others are listed. Decided from
-// the G-buffer's material terms alone, without reconstructing the hit: the
-// chain kernel reads the whole hit of a listed pixel anyway (and writes
-// zero where its branches fall under MIN_WEIGHT).
+// Decided from the G-buffer's material terms alone: the chain kernel reads the whole hit anyway (and
+// writes zero where its branches fall under MIN_WEIGHT).
 void specular_select(ivec2 px) {
     uvec2 hit;
     Surface s;
@@ -42,8 +33,6 @@ void specular_select(ivec2 px) {
     }
 }
 
-// Listed kernel, entry `i`: the pixel's branches pushed from its primary
-// hit, traced to completion.
 void specular_listed(uint i) {
     ivec2 px;
     PrimaryHit p;

@@ -1,32 +1,17 @@
-// Pass `terms` (the report's attribution, report/attribution.rs): for the
-// terms selected in Frame.accum_bounces (TERM_*), the path-traced estimate
-// of the light the term carries to the primary hit minus what the hybrid
-// frame shades for it there, so that `composite` (variant TERMS) shows the
-// hybrid frame with those terms supplied by the path tracer. Per sample one
-// direction from the diffuse lobe (cosine) and one from the specular lobe
-// (GGX visible normals, Heitz 2018) of the path tracer's BSDF
-// (path/bsdf.glsl); what the ray meets decides the term:
-// - nothing: the environment. Through the specular lobe of a surface the
-//   hybrid does not trace as a mirror: TERM_ENV_SPECULAR, which replaces
-//   the hybrid's f0 x unshadowed SH ambient; through the diffuse lobe:
-//   TERM_VISIBILITY, which replaces its diffuse SH (or PRT) ambient.
-// - a rough opaque surface: TERM_INDIRECT, one bounce: the surface lit by
-//   the punctual lights (direct light with the truth's shadow rays, glass
-//   opaque); its emission: TERM_EMITTERS (the hybrid lights nothing with
-//   emissive surfaces).
-// - glass or a perfectly smooth surface: TERM_CAUSTICS, the light it
-//   passes on along a path of at most TERMS_CHAIN BSDF samples (ending at
-//   the environment, or at a rough opaque surface lit as above); it
-//   replaces the hybrid's direct light through glass (shadow rays that
-//   pass transmissive occluders where the truth's are blocked).
-// Each term is a set of the truth's own paths, so supplying one never adds
-// light the truth has not; what no term holds (the environment's light
-// after a bounce, two or more rough bounces) is the residual.
-// Sums accumulate with their count like `reference`'s; seeded by pixel and
-// Frame.accum_frame, so every backend traces the same rays. Each sample
-// follows one lobe, chosen by its albedo; the pixel's program traces and
-// shades at one call site each (a software device compiles every inlined
-// traversal: lavapipe took 12 minutes for a version with six).
+// Pass `terms` (report/attribution.rs): for each term in Frame.accum_bounces (TERM_*), the path-traced
+// light it carries to the primary hit minus what the hybrid shades for it, so `composite` (variant
+// TERMS) shows the hybrid with those terms from the path tracer. Each sample takes one lobe of
+// path/bsdf.glsl, chosen by albedo (diffuse cosine, or GGX visible normals, Heitz 2018); the hit decides:
+// - miss: TERM_ENV_SPECULAR via the specular lobe of a non-mirror (replaces the f0 x SH ambient),
+//   TERM_VISIBILITY via the diffuse lobe (replaces the diffuse SH/PRT ambient).
+// - rough opaque surface: TERM_INDIRECT (one bounce, lit by punctual lights with glass opaque);
+//   its emission TERM_EMITTERS (the hybrid lights nothing with emissive surfaces).
+// - glass or a perfectly smooth surface: TERM_CAUSTICS, a chain of at most TERMS_CHAIN BSDF samples;
+//   replaces the hybrid's direct light through glass (its shadow rays pass transmissive occluders).
+// Each term is a set of the truth's own paths, so supplying one never adds light the truth lacks;
+// what no term holds is the residual. Seeded by pixel and Frame.accum_frame so every backend traces the
+// same rays. One trace and one shade call site each: a software device compiles every inlined
+// traversal (lavapipe took 12 minutes for a version with six).
 #include "../common/gbuffer_read.glsl"
 #include "../common/integrator.glsl"
 #include "../common/prt.glsl"
@@ -44,8 +29,7 @@ bool passes_light_on(Surface s) {
     return s.transmission * (1.0 - s.metallic) > 0.0 || s.roughness * s.roughness < DELTA_ALPHA;
 }
 
-// A surface to light by the punctual lights (integrator.glsl's
-// direct_light), times weight.
+// A surface to light by the punctual lights, times weight.
 struct Shading {
     Surface s;
     vec3 v, gn;
@@ -53,12 +37,10 @@ struct Shading {
     bool opaque;   // shadow rays blocked by glass (g_opaque_occluders)
 };
 
-// One sample at the primary hit p: the light it brings (emission and
-// environment) and the surface it ends at, to shade (`end.weight` 0: none).
+// Returns emission and environment light; `end` is the surface to shade (`end.weight` 0: none).
 vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out Shading end) {
     end.weight = vec3(0.0);
-    // The lobe: diffuse (cosine) or, where the hybrid does not trace a
-    // mirror, specular (visible normals), in proportion to their albedo.
+    // No specular lobe where the hybrid traces a mirror itself.
     uint beyond = TERM_VISIBILITY | TERM_INDIRECT | TERM_EMITTERS | TERM_CAUSTICS;
     float pd = term_on(beyond) ? m.p_diff : 0.0;
     float ps = !mirror && term_on(beyond | TERM_ENV_SPECULAR) ? m.p_spec : 0.0;
@@ -88,8 +70,7 @@ vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out S
     uint miss_term = diffuse ? TERM_VISIBILITY : TERM_ENV_SPECULAR;
     vec3 o = offset_ray(p.s.position, p.gn, p.s.extent);
     vec3 radiance = vec3(0.0);
-    // First the ray from the primary hit, then (caustics) a path through
-    // glass and smooth surfaces of at most TERMS_CHAIN more rays.
+    // The primary hit's ray, then (caustics) up to TERMS_CHAIN more through glass and smooth surfaces.
     for (uint k = 0u; k <= TERMS_CHAIN; ++k) {
         bool first = k == 0u;
         RayHit h;
@@ -122,8 +103,7 @@ vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out S
     return radiance;
 }
 
-// What the hybrid frame's ambient shades for the selected terms at p
-// (composite's ambient split by lobe).
+// Composite's ambient, split by lobe.
 vec3 hybrid_ambient_share(PrimaryHit p, bool mirror) {
     Surface s = p.s;
     vec3 prt_e;
@@ -148,9 +128,8 @@ void terms_pixel(ivec2 px) {
     uint rng = pcg_hash(uint(px.x) + pcg_hash(uint(px.y) + pcg_hash(frame.accum_frame ^ 0x7f4a7c15u)));
     float n = float(TERMS_SAMPLES_PER_FRAME);
     vec3 sum = -n * hybrid_ambient_share(p, mirror);
-    // Iteration 0 shades the primary hit's direct light with glass opaque:
-    // with `direct`'s (glass transmits) subtracted, the hybrid's light
-    // through glass, which the caustics replace.
+    // Iteration 0 shades direct light with glass opaque: minus `direct`'s (glass transmits), that is the
+    // hybrid's light through glass, which the caustics replace.
     for (uint i = 0u; i <= TERMS_SAMPLES_PER_FRAME; ++i) {
         Shading end;
         vec3 c = vec3(0.0);

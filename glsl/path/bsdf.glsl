@@ -1,23 +1,16 @@
-// The path tracer's BSDF at a surface: the raster path's opaque
-// metallic-roughness model (brdf.glsl: GGX, height-correlated Smith,
-// Schlick Fresnel with f90 from f0, Lambert diffuse weighted by 1 - F and
-// by 1 - transmission), plus the transmissive share as a dielectric
-// interface with the exact Fresnel term (fresnel.glsl), rough by GGX
-// microfacets (Walter et al. 2007) or, below DELTA_ALPHA, a perfect
-// reflection / refraction as in integrator.glsl's branches. Lobes are
-// sampled from the GGX distribution of visible normals (Heitz 2018) and
-// the cosine; every non-delta lobe's pdf enters the mixture pdf the
-// multiple importance sampling weights use. Local frame: the shading
-// normal is +z, the viewer v is above it (face_viewer).
+// The path tracer's BSDF: the raster's opaque metallic-roughness model (brdf.glsl) plus the
+// transmissive share as a dielectric interface with exact Fresnel (fresnel.glsl), rough by GGX
+// (Walter et al. 2007) or, below DELTA_ALPHA, perfectly specular as in integrator.glsl's branches.
+// Sampled by visible normals (Heitz 2018) and cosine; every non-delta lobe enters the MIS mixture pdf.
+// Local frame: shading normal +z, viewer above it (face_viewer).
 #ifndef PATH_BSDF_GLSL
 #define PATH_BSDF_GLSL
 #include "../common/brdf.glsl"
 #include "../common/fresnel.glsl"
 #include "../common/sampling.glsl"
 
-// Below this GGX alpha (roughness ~0.03) the specular lobes are deltas: a
-// light sample can never meet them, so they are only sampled. Equals the
-// raster's alpha floor (brdf.glsl), above which both evaluate the same lobe.
+// Below this alpha (roughness ~0.03) specular lobes are deltas, never met by a light sample. Equals
+// the raster's alpha floor (brdf.glsl), above which both evaluate the same lobe.
 const float DELTA_ALPHA = 1e-3;
 
 struct Bsdf {
@@ -53,7 +46,7 @@ Bsdf bsdf_at(Surface s, vec3 v, bool back_face) {
     m.diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
     m.eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
     m.tint = s.base_color;
-    // Lobe choice in proportion to each lobe's albedo estimate at n.v.
+    // In proportion to each lobe's albedo estimate at n.v.
     vec3 fv = f_schlick(m.f0, max(dot(m.n, v), 1e-4));
     float ws = m.spec_w * max3(fv), wd = max3(m.diffuse * (1.0 - fv)), wg = m.tm;
     float sum = ws + wd + wg;
@@ -79,9 +72,7 @@ bool ior_one(Bsdf m) {
     return abs(m.eta - 1.0) < 1e-6;
 }
 
-// GGX normal distribution of the local unit half vector h (h.z > 0),
-// written with sin^2 from x, y so it stays exact for h near the normal at
-// tiny alpha (1 - cos^2 loses it).
+// Written with sin^2 from x, y: 1 - cos^2 loses precision near the normal at tiny alpha.
 float ggx_d(vec3 h, float a2) {
     float d = h.z * h.z * a2 + (h.x * h.x + h.y * h.y);
     return a2 / max(PI * d * d, 1e-30);
@@ -156,8 +147,7 @@ vec3 bsdf_eval(Bsdf m, vec3 v, vec3 l, out float pdf) {
     return f;
 }
 
-// Samples l for the local viewer v; false when the path ends (the sampled
-// direction fell below the surface, or the material reflects nothing).
+// False when the path ends (sample below the surface, or nothing reflected).
 bool bsdf_sample(Bsdf m, vec3 v, inout uint rng, out BsdfSample bs) {
     float u = next_random(rng), u1 = next_random(rng), u2 = next_random(rng);
     float p_glass = bsdf_p_glass(m);

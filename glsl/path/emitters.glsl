@@ -1,8 +1,5 @@
-// The path tracer's emissive triangles as lights (table: gpu/emitters.rs,
-// layout: shared_values.rs SCENE_EMITTERS): a triangle chosen by power,
-// a point uniform on it; the pdf in solid angle at the shaded point, and
-// the same pdf for an emitter a BSDF sample hit (for the MIS weights).
-// Emission is two-sided, as where a path hits it (hit_surface).
+// Emissive triangles as lights (table: gpu/emitters.rs, layout SCENE_EMITTERS): a triangle by power,
+// a uniform point on it, solid-angle pdf for the MIS weights. Two-sided, as hit_surface shades it.
 #ifndef EMITTERS_GLSL
 #define EMITTERS_GLSL
 #include "../common/hit.glsl"
@@ -37,7 +34,6 @@ float emitter_pdf(float choice, float area, float dist, float cos_l) {
     return choice * dist * dist / max(area * cos_l, 1e-30);
 }
 
-// Area and unit normal of a world-space triangle.
 float triangle_area(TriangleWorld t, out vec3 n) {
     vec3 c = cross(t.p1 - t.p0, t.p2 - t.p0);
     float len = length(c);

@@ -1,9 +1,6 @@
-// Importance sampling of the environment for the path tracer: a map by
-// the piecewise-constant table gpu/env_sampling.rs builds (luminance x
-// sin(theta) per texel; layout: shared_values.rs SCENE_ENV_CDF), rows by
-// the marginal CDF then a texel by the row's CDF; a constant sky
-// uniformly over the sphere. Directions invert env.glsl's env_uv, rotation
-// included, so env_pdf(env_sample(..)) is the pdf that was sampled.
+// Environment importance sampling for the path tracer: a map by the piecewise-constant table of
+// gpu/env_sampling.rs (luminance x sin(theta); layout SCENE_ENV_CDF), marginal row then texel; a
+// constant sky uniformly. Inverts env_uv, rotation included, so env_pdf(env_sample(..)) is exact.
 #ifndef ENV_SAMPLING_GLSL
 #define ENV_SAMPLING_GLSL
 #include "../common/env.glsl"
@@ -15,7 +12,7 @@ bool env_has_table() {
     return frame.has_env_map != 0u && env_cdf[2] > 0.5;
 }
 
-// Whether the environment emits at all (else no light sample is spent on it).
+// Else no light sample is spent on it.
 bool env_emits() {
     return frame.env_intensity > 0.0 && (env_has_table() || max3(frame.env_color) > 0.0);
 }

@@ -1,16 +1,9 @@
-// Pass `path` (`--mode path`): the ground truth. A unidirectional path
-// tracer over the scene, materials, lights and environment the other
-// passes shade, on the same traversal: camera rays jittered uniformly
-// within the pixel (a box filter), next-event estimation at every
-// non-delta vertex towards each punctual light, one environment sample and
-// one emissive triangle (by power), each combined with the BSDF sample by
-// multiple importance sampling (power heuristic), Russian roulette from PATH_RR_START bounces on, at most
-// Frame.accum_bounces bounces. Shadow rays see glass as opaque
-// (FRAME_OPAQUE_OCCLUDERS): its light comes along refracted paths.
-// PATH_SAMPLES_PER_FRAME paths per pixel a frame, summed in f32 with
-// their count in the kept accumulation; the frame's radiance is the mean.
-// Seeded by pixel and Frame.accum_frame (PCG): every backend traces the
-// same paths.
+// Pass `path` (`--mode path`): the ground truth, a unidirectional path tracer on the same scene and
+// traversal. Box-filtered jittered camera rays; NEE at every non-delta vertex to each punctual light,
+// one environment sample and one emissive triangle (by power), MIS with the BSDF sample (power
+// heuristic); Russian roulette from PATH_RR_START; at most Frame.accum_bounces bounces. Shadow rays
+// see glass as opaque (FRAME_OPAQUE_OCCLUDERS): its light comes along refracted paths. Sums kept in f32
+// with their count; PCG seeded by pixel and Frame.accum_frame so every backend traces the same paths.
 #include "../common/integrator.glsl"
 #include "../common/sampling.glsl"
 #include "env_sampling.glsl"
@@ -20,24 +13,19 @@
 layout(set = SET_PASS, binding = PATH_ACCUM, rgba32f) uniform image2D path_accum;
 layout(set = SET_PASS, binding = PATH_OUT, rgba32f) uniform writeonly image2D hdr_out;
 
-// Whether l (world) leaves the surface on the side its local direction
-// says: above the geometry for a reflection, below for a transmission. A
-// normal map can tilt the shading frame past the geometric normal; such a
-// direction would leak light through the surface.
+// A normal map can tilt the shading frame past the geometric normal; a direction on the wrong side
+// of the geometry would leak light through the surface.
 bool consistent_side(vec3 l_world, float l_local_z, vec3 gn) {
     return (dot(l_world, gn) > 0.0) == (l_local_z > 0.0);
 }
 
-// Light arriving along l_world from a light sample, unoccluded up to tmax.
 float visible(Surface s, vec3 gn, vec3 l_world, float tmax) {
     vec3 o = offset_ray(s.position, dot(l_world, gn) > 0.0 ? gn : -gn, s.extent);
     count_ray(RAY_KIND_SHADOW);
     return trace_shadow(o, l_world, tmax).x;
 }
 
-// Next-event estimation at a surface: every punctual light, and the
-// environment and one emissive triangle once each (weighted against the
-// BSDF's sampling).
+// NEE: every punctual light, plus the environment and one emissive triangle (MIS-weighted).
 vec3 light_samples(Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng) {
     vec3 lit = vec3(0.0);
     float unused;
@@ -72,7 +60,7 @@ vec3 light_samples(Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng) {
             bool eback;
             vec3 le = hit_surface(e, s.position, d, 0.0, egn, eback).emissive;
             vec3 c = bsdf_eval(m, v, l, pdf_bsdf) * le * (power_heuristic(pdf_light, pdf_bsdf) / pdf_light);
-            // The shadow ray stops short of the emitter itself.
+            // Stops short of the emitter itself.
             if (max3(c) > 0.0) lit += c * visible(s, gn, d, e.t * (1.0 - 1e-3));
         }
     }
@@ -89,14 +77,12 @@ vec3 light_samples(Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng) {
     return lit;
 }
 
-// One camera path's radiance through pixel px.
 vec3 path_radiance(ivec2 px, inout uint rng) {
     vec2 jitter = vec2(next_random(rng), next_random(rng));
     vec3 dir = camera_ray_dir(vec2(px) + jitter);
     vec3 o = frame.camera_pos;
     vec3 throughput = vec3(1.0), radiance = vec3(0.0);
-    // The previous vertex's sampling: a delta lobe (or the camera) sees
-    // the environment whole, a BSDF sample shares it with the light sample.
+    // A delta lobe (or the camera) sees the environment whole; a BSDF sample shares it via MIS.
     float prev_pdf = 0.0;
     bool prev_delta = true;
     for (uint bounce = 0u;; ++bounce) {
@@ -113,7 +99,7 @@ vec3 path_radiance(ivec2 px, inout uint rng) {
         // Leaving a mesh from inside: the path crossed its medium.
         if (back_face) throughput *= volume_transmittance(h);
         if (max3(s.emissive) > 0.0) {
-            // An emitter the light samples could have picked shares it.
+            // MIS only for emitters the light samples could have picked.
             float choice = prev_delta ? 0.0 : emitter_choice(h.instance, h.primitive);
             float w = 1.0;
             if (choice > 0.0) {
@@ -140,8 +126,7 @@ vec3 path_radiance(ivec2 px, inout uint rng) {
         prev_pdf = bs.pdf;
         prev_delta = bs.delta;
         if (bounce + 1u >= PATH_RR_START) {
-            // Survival in proportion to the throughput, at most 0.95 so
-            // that paths in a closed, white scene still end.
+            // Capped at 0.95 so paths in a closed white scene still end.
             float q = min(max3(throughput), 0.95);
             if (next_random(rng) >= q) break;
             throughput /= q;
@@ -156,8 +141,7 @@ void path_pixel(ivec2 px) {
     vec3 sum = vec3(0.0);
     for (uint i = 0u; i < PATH_SAMPLES_PER_FRAME; ++i) {
         vec3 c = path_radiance(px, rng);
-        // A sample that is not finite adds nothing (it would poison the
-        // whole accumulation); with --clamp, the explicit, reported bias.
+        // A non-finite sample would poison the accumulation; --clamp is the explicit, reported bias.
         if (any(isnan(c)) || any(isinf(c))) c = vec3(0.0);
         if (frame.path_clamp > 0.0 && max3(c) > frame.path_clamp) c *= frame.path_clamp / max3(c);
         sum += c;

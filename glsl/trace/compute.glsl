@@ -1,15 +1,8 @@
-// Traversal with our own two-level BVH in a compute shader: no ray-tracing
-// extension needed. Same interface as trace/query.glsl:
-//   bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit)
-//   vec3 trace_shadow(vec3 o, vec3 d, float tmax)   -> transmittance
-// Layout (src/accel/bvh/mod.rs, src/accel/compute_bvh.rs, src/accel/flat.rs):
-// static instances are flattened into ONE world-space 4-wide tree (header at
-// blas_nodes[BVH_FLAT_ROOT]) whose leaves hold their triangles (flat_tris);
-// it is traced first, then the two-level BVH over the other instances. There
-// nodes are 32 bytes; rigid BLASes are 4-wide (compute_wide.glsl), skinned
-// BLASes and the top level binary; count == 0 marks an interior node whose
-// children are left and left + 1; count > 0 a leaf over prims[first .. first
-// + count], whose triangles are read from the one shared vertex/index copy.
+// Our own two-level BVH in compute: no ray-tracing extension needed; same interface as trace/query.glsl.
+// Layout (src/accel/bvh/mod.rs, compute_bvh.rs, flat.rs): static instances form ONE world-space 4-wide
+// tree (header at blas_nodes[BVH_FLAT_ROOT], triangles in flat_tris), traced before the two-level BVH
+// of the rest. 32-byte nodes; rigid BLASes 4-wide (compute_wide.glsl), skinned BLASes and the TLAS
+// binary: count == 0 is interior (children left, left + 1), count > 0 a leaf over prims[first..+count].
 #ifndef TRACE_COMPUTE_GLSL
 #define TRACE_COMPUTE_GLSL
 #include "../common/hit.glsl"
@@ -36,8 +29,7 @@ layout(set = SET_TRACE, binding = BVH_TLAS_NODES, scalar) readonly buffer TlasNo
 layout(set = SET_TRACE, binding = BVH_TLAS_PRIMS, scalar) readonly buffer TlasPrims { uint tlas_prims[]; };
 layout(set = SET_TRACE, binding = BVH_INSTANCES, scalar) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 
-// A triangle of the flat static tree (world space, relative to the render
-// origin), with the hit record it reports and the ray mask bits it answers to.
+// World space relative to the render origin.
 struct FlatTri {
     vec3 p0;
     uint instance;
@@ -50,13 +42,9 @@ layout(set = SET_TRACE, binding = BVH_FLAT_TRIS, scalar) readonly buffer FlatTri
 
 #define BVH_STACK 32
 
-// Traversal statistics (TRACE_STATS variants only, e.g. rays_compute_stats
-// of `bench --rays`): nodes visited and triangles tested by the current ray,
-// top and bottom level together. In packet traversal (compute_packet.glsl)
-// `nodes` counts the nodes the ray's subgroup visited while the ray took
-// part, `lane_nodes` those the ray itself entered (its useful tests); per
-// lane both are the same. Without TRACE_STATS the macros are empty, so the
-// normal tracing passes pay nothing.
+// TRACE_STATS variants only (e.g. `bench --rays`), empty macros otherwise so normal passes pay nothing.
+// In packet traversal `nodes` counts the subgroup's node visits while the ray took part, `lane_nodes`
+// those the ray itself entered.
 #ifdef TRACE_STATS
 uint g_stat_nodes = 0u;
 uint g_stat_lane_nodes = 0u;
@@ -70,17 +58,13 @@ uint g_stat_tris = 0u;
 #define STAT_TRI()
 #endif
 
-// Which rays take the subgroup-cooperative traversal (compute_packet.glsl):
-// TRACE_PACKET_SHADOW and/or TRACE_PACKET_CLOSEST bits; the others trace
-// lane by lane. A specialization constant, so no extra shader variant.
+// TRACE_PACKET_SHADOW / _CLOSEST bits select subgroup-cooperative traversal (compute_packet.glsl);
+// a specialization constant, so no extra shader variant.
 layout(constant_id = SPEC_TRACE_PACKET) const uint TRACE_PACKET = TRACE_PACKET_DEFAULT;
 
-// Slab test; inv_d may hold +-inf for zero direction components. A NaN
-// (0 * inf: origin on a slab plane, ray parallel to it) puts no constraint
-// on that axis; GLSL's min/max make no promise about NaN, so it is replaced
-// explicitly. The exit distance is widened by 2*gamma(3) (PBRT's bound) so a
-// ray entering exactly through a box corner or edge is not lost to
-// rounding. Inverted boxes (an empty level) are never entered.
+// inv_d may hold +-inf. A NaN (0 * inf: origin on a slab plane, ray parallel) must not constrain the
+// axis, and GLSL min/max promise nothing about NaN, so it is replaced explicitly. The exit is widened
+// by 2*gamma(3) (PBRT) so a ray through a box corner or edge is not lost. Inverted (empty) boxes miss.
 float ray_box(vec3 o, vec3 inv_d, float tmax, vec3 bmin, vec3 bmax) {
     if (any(greaterThan(bmin, bmax))) return 1e38;
     vec3 t0 = (bmin - o) * inv_d;
@@ -123,24 +107,20 @@ float watertight_hit(WatertightRay r, vec3 p0, vec3 p1, vec3 p2, float tmax, out
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
     float w = bx * ay - by * ax;
-    // Edge functions of mixed sign: outside. Exactly zero counts as on the
-    // edge for both neighbours, so a ray through a shared edge is never lost.
+    // Exactly zero counts as inside for both neighbours, so a ray through a shared edge is never lost.
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return -1.0;
     float det = u + v + w;
     if (det == 0.0) return -1.0;  // degenerate or edge-on
     float t = (u * r.s.z * a[r.k.z] + v * r.s.z * b[r.k.z] + w * r.s.z * c[r.k.z]) / det;
     if (!(t > 0.0 && t < tmax)) return -1.0;
-    // A zero-area triangle can still pass the sign test through rounding;
-    // its normal would be zero, so it is never a hit.
+    // A zero-area triangle can pass the sign test through rounding; its normal would be zero.
     vec3 cr = cross(p1 - p0, p2 - p0);
     if (dot(cr, cr) == 0.0) return -1.0;
     bary = vec2(v, w) / det;
     return t;
 }
 
-// Ordered traversal step for the children l and l + 1 with entry distances
-// tl and tr (>= 1e37: missed). Returns how many are hit; `near` is the one
-// to visit next, `far` the one to push when both are hit.
+// tl, tr >= 1e37: missed. Returns how many are hit; `far` is pushed when both are.
 uint order_children(uint l, float tl, float tr, inout uint near, out uint far) {
     bool hl = tl < 1e37, hr = tr < 1e37;
     far = tl <= tr ? l + 1u : l;
@@ -155,7 +135,6 @@ uint order_children(uint l, float tl, float tr, inout uint near, out uint far) {
     return 0u;
 }
 
-// Triangle `prim` of instance `inst` in object space.
 void object_triangle(Instance inst, uint prim, out vec3 p0, out vec3 p1, out vec3 p2) {
     uint base = inst.first_index + 3u * prim;
     p0 = vertices[inst.vertex_offset + indices[base]].position;
@@ -163,8 +142,7 @@ void object_triangle(Instance inst, uint prim, out vec3 p0, out vec3 p1, out vec
     p2 = vertices[inst.vertex_offset + indices[base + 2u]].position;
 }
 
-// Any-hit decision shared by both queries: 0 = ignore this candidate,
-// 1 = accept it as a hit. Shadow rays also fold transmittance into `tr`.
+// 0 = ignore, 1 = accept. Shadow rays also fold transmittance into `tr`.
 uint candidate(bool shadow, uint inst, uint prim, vec2 b, float hit_t, inout vec3 tr) {
     if (bvh_instances[inst].opaque != 0u) return 1u;
     if (!shadow) return hit_alpha_passes(inst, prim, b, hit_t) ? 1u : 0u;
@@ -174,10 +152,8 @@ uint candidate(bool shadow, uint inst, uint prim, vec2 b, float hit_t, inout vec
     return 0u;
 }
 
-// Leaf entry `entry`: from the flat tree (`in_flat`: a world-space triangle
-// with its own instance, primitive and mask) or from the BLAS of instance
-// `inst_index` (its triangle order, positions in object space; the top level
-// already checked its mask).
+// Flat-tree entries are world-space triangles with their own instance and mask; BLAS entries are in
+// object space (the top level already checked the mask).
 void leaf_triangle(bool in_flat, Instance inst, uint inst_index, uint entry, out uint ti, out uint prim, out vec3 p0,
                    out vec3 p1, out vec3 p2, out uint tmask) {
     if (in_flat) {
@@ -196,9 +172,7 @@ void leaf_triangle(bool in_flat, Instance inst, uint inst_index, uint entry, out
     }
 }
 
-// One triangle against the ray (every traversal's per-triangle step): the
-// nearest accepted hit shortens tmax and lands in `hit`. True when a shadow
-// ray is blocked (it stops there).
+// The nearest accepted hit shortens tmax. True when a shadow ray is blocked.
 bool test_triangle(uint inst_index, uint prim, vec3 p0, vec3 p1, vec3 p2, WatertightRay wr, bool shadow,
                    inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
     STAT_TRI();
@@ -213,9 +187,7 @@ bool test_triangle(uint inst_index, uint prim, vec3 p0, vec3 p1, vec3 p2, Watert
     return false;
 }
 
-// The triangles of a leaf, entries [first .. first + count) (see
-// leaf_triangle), for a ray with mask `mask`. True when a shadow ray is
-// blocked (it stops there).
+// True when a shadow ray is blocked.
 bool trace_leaf(bool in_flat, uint mask, Instance inst, uint inst_index, uint first, uint count, WatertightRay wr,
                 bool shadow, inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
     for (uint i = 0u; i < count; ++i) {
@@ -230,9 +202,7 @@ bool trace_leaf(bool in_flat, uint mask, Instance inst, uint inst_index, uint fi
 
 #include "compute_wide.glsl"
 
-// Closest hit within one instance's BLAS (ray in object space). For shadow
-// rays it returns at the first blocking hit. Static BLASes are 4-wide
-// (header node's count == BVH_WIDE_HEADER), skinned ones binary.
+// Ray in object space. Static BLASes are 4-wide (header count == BVH_WIDE_HEADER), skinned ones binary.
 bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
     BvhInstance bi = bvh_instances[inst_index];
     Instance inst = instances[inst_index];
@@ -257,7 +227,6 @@ bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, 
                 return true;
             }
         } else {
-            // Ordered traversal: visit the nearer child first.
             uint l = n.left_or_first;
             BvhNode cl = blas_nodes[bi.node_offset + l];
             BvhNode cr = blas_nodes[bi.node_offset + l + 1u];
@@ -273,8 +242,7 @@ bool trace_blas(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, 
     return found;
 }
 
-// The flat static tree (world space, no instance transform). True when it
-// holds a hit (for shadow rays: a blocking one).
+// World space, no instance transform.
 bool trace_flat(vec3 o, vec3 d, vec3 inv_d, uint mask, bool shadow, inout float tmax, inout RayHit hit,
                 inout vec3 tr) {
     BvhNode root = blas_nodes[BVH_FLAT_ROOT];
@@ -303,8 +271,7 @@ bool trace_bvh(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit hi
                 uint inst = tlas_prims[n.left_or_first + i];
                 BvhInstance bi = bvh_instances[inst];
                 if ((bi.mask & mask) == 0u) continue;
-                // Object-space ray; the direction is not renormalized, so t
-                // is the same in both spaces.
+                // Not renormalized, so t is the same in both spaces.
                 vec3 oo = (bi.world_to_object * vec4(o, 1.0)).xyz;
                 vec3 od = mat3(bi.world_to_object) * d;
                 if (trace_blas(inst, oo, od, shadow, tmax, hit, tr)) {

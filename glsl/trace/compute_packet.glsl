@@ -1,26 +1,12 @@
-// Subgroup-cooperative ("packet") traversal for the compute tracer
-// (included by compute.glsl, which defines the node types, ray_box,
-// leaf_triangle, test_triangle and the per-lane trace_blas).
-//
-// Why: llvmpipe runs a subgroup's invocations as the lanes of one SIMD
-// vector, so in the per-lane traversal every node fetch is an 8-lane gather
-// and every lane waits for the slowest one. Here the active lanes walk ONE
-// node sequence together: the node index and the stack are the same in
-// every lane (they only ever change through subgroup votes and values
-// broadcast from the first active lane),
-// so node and triangle fetches have one address, and the loop never
-// diverges. Each lane still tests its own ray with its own tmax; a child is
-// visited if any lane that entered its parent hits it, so each lane sees a
-// superset of the nodes its own traversal would, and closest and any hit
-// per lane are exact. Each stack entry keeps this lane's entry distance
-// (MISS where the lane did not hit it): a lane takes part in a node only if
-// it entered it and no nearer hit has been found since; the entry is dropped
-// when that holds for no lane. Children are ordered along the first active
-// lane's direction. Shadow lanes drop out when blocked, and the walk ends
-// when every lane is.
-//
-// Assumes the lanes that call trace_packet execute it together (as one
-// SIMD vector on llvmpipe; structured control flow, uniform loop exits).
+// Subgroup-cooperative ("packet") traversal, included by compute.glsl.
+// Why: llvmpipe runs a subgroup as the lanes of one SIMD vector, so per-lane traversal makes every
+// node fetch an 8-lane gather and every lane waits for the slowest. Here the active lanes walk ONE
+// node sequence (index and stack change only through votes and broadcasts), so fetches have one
+// address and the loop never diverges. Each lane tests its own ray with its own tmax; a child is
+// visited if any lane that entered its parent hits it, so per-lane closest and any hit are exact.
+// Stack entries keep this lane's entry distance (MISS if not hit): a lane takes part in a node only
+// if it entered it and found no nearer hit since. Children are ordered along the first active lane's
+// direction. Assumes the calling lanes execute together (structured control flow, uniform exits).
 #ifndef TRACE_COMPUTE_PACKET_GLSL
 #define TRACE_COMPUTE_PACKET_GLSL
 #extension GL_KHR_shader_subgroup_basic : require
@@ -30,14 +16,12 @@
 #define MISS 1e38
 #define MISS_BOUND 1e37
 
-// The subgroup's shared node index as a value the compiler can see is
-// uniform (it is already equal in every active lane), so the fetch is one
-// load rather than a gather.
+// Already equal in every active lane; broadcasting lets the compiler see it is uniform, so a fetch
+// is one load rather than a gather.
 #define SHARED(x) subgroupBroadcastFirst(x)
 
-// Votes over the active lanes through a ballot: llvmpipe builds vote_any /
-// vote_all as a loop with a branch per lane, a ballot as a branch-free loop
-// of shifts and ors (gallivm lp_bld_nir_soa.c).
+// Ballot-based votes: llvmpipe builds vote_any / vote_all as a loop with a branch per lane, a ballot
+// as a branch-free loop of shifts and ors (gallivm lp_bld_nir_soa.c).
 bool packet_any(bool c) {
     uvec4 b = subgroupBallot(c);
     return (b.x | b.y | b.z | b.w) != 0u;
@@ -46,16 +30,14 @@ bool packet_all(bool c) {
     return !packet_any(!c);
 }
 
-// Children are visited in the order of their box centres along the first
-// active lane's direction: a shared order with no cross-lane reduction per
-// child (for coherent rays it is nearly every lane's own order).
+// A shared order without a cross-lane reduction per child; for coherent rays it is nearly every
+// lane's own order.
 float packet_key(vec3 bmin, vec3 bmax, vec3 dir) {
     return dot(bmin + bmax, dir);
 }
 
-// The triangles of a leaf (entries as in leaf_triangle), walked by the
-// whole subgroup (one fetch per triangle for all lanes), tested by the lanes
-// that entered it. True for a lane whose shadow ray is now blocked.
+// One fetch per triangle for all lanes, tested by the lanes that entered the leaf.
+// True for a lane whose shadow ray is now blocked.
 bool packet_leaf(bool in_flat, uint mask, Instance inst, uint inst_index, uint first, uint count, bool in_leaf,
                  WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit, inout bool found, inout vec3 tr) {
     bool blocked = false;
@@ -70,8 +52,7 @@ bool packet_leaf(bool in_flat, uint mask, Instance inst, uint inst_index, uint f
     return blocked;
 }
 
-// The wide tree at blas_wide[base...] (`in_flat` and `mask` as in
-// trace_blas_wide) for the lanes with `lane` set.
+// `in_flat` and `mask` as in trace_blas_wide; for the lanes with `lane` set.
 bool packet_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint prim_offset, bool lane, vec3 o,
                       vec3 inv_d, vec3 dir0, WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit,
                       inout vec3 tr) {
@@ -143,8 +124,7 @@ bool packet_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint 
     return found;
 }
 
-// One instance's BLAS (the instance is the same in every lane; the ray is
-// each lane's, in object space) for the lanes with `lane` set.
+// The instance is the same in every lane; the ray is each lane's, in object space.
 bool packet_blas(uint inst_index, bool lane, vec3 o, vec3 d, bool shadow, inout float tmax, inout RayHit hit,
                  inout vec3 tr) {
     BvhInstance bi = bvh_instances[inst_index];
@@ -168,7 +148,6 @@ bool trace_packet(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit
     int sp = 0;
     uint node = 0u;
     hit = RayHit(0u, 0u, vec2(0.0), tmax);
-    // The flat static tree first, walked together like a BLAS.
     BvhNode froot = blas_nodes[BVH_FLAT_ROOT];
     bool flat_lane = ray_box(o, inv_d, tmax, froot.bmin, froot.bmax) < MISS_BOUND;
     bool found = packet_any(flat_lane) &&
@@ -189,8 +168,7 @@ bool trace_packet(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit
                 BvhInstance bi = bvh_instances[inst];
                 bool lane = in_node && !done && (bi.mask & mask) != 0u;
                 if (!packet_any(lane)) continue;
-                // Object-space ray; the direction is not renormalized, so t
-                // is the same in both spaces.
+                // Not renormalized, so t is the same in both spaces.
                 vec3 oo = (bi.world_to_object * vec4(o, 1.0)).xyz;
                 vec3 od = mat3(bi.world_to_object) * d;
                 if (packet_blas(inst, lane, oo, od, shadow, tmax, hit, tr)) {

@@ -1,10 +1,6 @@
-// 4-wide BLAS traversal for the compute tracer (included by compute.glsl,
-// which defines ray_box, trace_leaf and the types).
-// Layout: src/accel/bvh/wide.rs. A static BLAS's binary node at its node
-// offset is a header (root bounds, count == BVH_WIDE_HEADER); the 64-byte
-// wide nodes follow at the next (even) 32-byte slot, so wide node j is
-// blas_wide[(node_offset + 1) / 2 + j]: the same buffer, read as 64-byte
-// records.
+// 4-wide BLAS traversal, included by compute.glsl. Layout: src/accel/bvh/wide.rs. A static BLAS's
+// binary node at its offset is a header (root bounds, count == BVH_WIDE_HEADER); the 64-byte wide
+// nodes follow at the next even 32-byte slot: wide node j is blas_wide[(node_offset + 1) / 2 + j].
 #ifndef TRACE_COMPUTE_WIDE_GLSL
 #define TRACE_COMPUTE_WIDE_GLSL
 
@@ -20,12 +16,11 @@ struct WideNode {
 
 layout(set = SET_TRACE, binding = BVH_BLAS_NODES, scalar) readonly buffer BlasWideNodes { WideNode blas_wide[]; };
 
-// Pending children: at most 3 per wide level, and a wide tree is no deeper
-// than its binary source (MAX_DEPTH = 32 levels): 3 * 31 < 96, so no push is
-// ever dropped.
+// At most 3 pushes per wide level, no deeper than the binary source (MAX_DEPTH 32): 3 * 31 < 96,
+// so no push is ever dropped.
 #define WIDE_STACK 96
 
-// Compare-exchange of slots a < b (constants) by sort key (entry distance).
+// Compare-exchange of constant slots a < b by entry distance.
 #define WIDE_SORT2(a, b)                                 \
     if (ts[b] < ts[a]) {                                 \
         float t_ = ts[a];                                \
@@ -36,7 +31,6 @@ layout(set = SET_TRACE, binding = BVH_BLAS_NODES, scalar) readonly buffer BlasWi
         cs[b] = c_;                                      \
     }
 
-// Per-ray constants of the wide node test (wide_entries).
 struct WideRay {
     vec3 o;
     vec3 inv;   // 1 / d; 0 on an axis the ray is parallel to
@@ -60,8 +54,7 @@ WideRay wide_setup(vec3 o, vec3 inv_d) {
     return r;
 }
 
-// One axis of wide_entries: `k` the axis index, `c` its swizzle (a macro,
-// not a loop over k: every index stays a constant for the compiler).
+// A macro, not a loop over k: every index stays a compile-time constant.
 #define WIDE_AXIS(k, c)                                                                      \
     {                                                                                        \
         float s = uintBitsToFloat(((n.meta >> (8 * k)) & 0xFFu) << 23); /* 2^(byte-127) */   \
@@ -76,16 +69,11 @@ WideRay wide_setup(vec3 o, vec3 inv_d) {
         tf = min(tf, qf * b + af);                                                           \
     }
 
-// Entry distance of each of node n's 4 child boxes (1e38: missed, or no such
-// child): one slab test over the 4 children per axis, in the quantized
-// frame. A child plane's distance is (origin + q * s - o) * inv = a + q * b
-// with a = (origin - o) * inv and b = s * inv computed once per node, so a
-// plane costs one multiply-add; the sign of inv picks which byte is the near
-// plane, so no min/max per plane. Rounding: a is off by 2u|origin - o||inv|,
-// the host's decode (the box it proved conservative) by u|origin + q s||inv|,
-// q * b + a by u(|q b| + |t|) (u = 2^-24); w (WIDE_AXIS) bounds the first
-// three, the exit's relative widening (as in ray_box) the last. A (nearly)
-// parallel axis constrains nothing: conservative, and no 0 * inf.
+// Entry distance of node n's 4 child boxes (1e38: missed or absent), one slab test per axis in the
+// quantized frame: a plane is at a + q * b with a, b once per node, and the sign of inv picks the near
+// byte, so no min/max per plane. Rounding (u = 2^-24): a is off by 2u|origin - o||inv|, the host's
+// conservative decode by u|origin + q s||inv|, q * b + a by u(|q b| + |t|); w bounds the first three,
+// the exit's relative widening (as in ray_box) the last. A (nearly) parallel axis constrains nothing.
 vec4 wide_entries(WideNode n, WideRay r, float tmax) {
     const uvec4 sh = uvec4(0u, 8u, 16u, 24u);
     vec4 tn = vec4(0.0);
@@ -99,20 +87,15 @@ vec4 wide_entries(WideNode n, WideRay r, float tmax) {
     return mix(vec4(1e38), tn, bvec4(uvec4(hit) & uvec4(present)));
 }
 
-// Push slot j (a constant) of the sorted children if it was hit.
 #define WIDE_PUSH(j)                            \
     if (ts[j] < 1e37 && sp < WIDE_STACK) {      \
         stack[sp] = cs[j];                      \
         stack_t[sp++] = ts[j];                  \
     }
 
-// Closest hit (any opaque hit for shadow rays) in the wide tree at
-// blas_wide[base...]: hit children sorted by entry distance, the nearest
-// (shadow rays: the farthest) visited next, the others pushed in reverse
-// order with their sort key, and dropped when popped if a hit found since is
-// nearer. `in_flat`: the flat static
-// tree (leaves index flat_tris; `mask` filters its triangles); otherwise
-// instance `inst_index`'s BLAS.
+// Hit children sorted by entry distance; the nearest (shadow rays: farthest) is visited next, the
+// rest pushed with their key and dropped when popped if a hit since is nearer. `in_flat`: the flat
+// static tree (leaves index flat_tris, `mask` filters); otherwise instance `inst_index`'s BLAS.
 bool trace_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint prim_offset, vec3 o, vec3 inv_d,
                      WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit, inout vec3 tr) {
     Instance inst = instances[inst_index];
@@ -132,20 +115,14 @@ bool trace_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint p
         } else {
             STAT_NODE();
             WideNode n = blas_wide[base + cur];
-            // Constant indices throughout (the 4 slots at once, then a
-            // 5-exchange sorting network): no dynamically indexed local
-            // array, which llvmpipe would keep in memory per lane.
+            // Constant indices only (4 slots at once, a 5-exchange sorting network): llvmpipe keeps a
+            // dynamically indexed local array in memory per lane.
             vec4 ts = wide_entries(n, wr4, tmax);
             uint cs[4] = uint[4](n.child[0], n.child[1], n.child[2], n.child[3]);
-            // Shadow rays: farthest child first. Any blocking hit ends the
-            // ray, so the order only decides how soon one is found; the
-            // nearest boxes of a ray leaving a surface hold mostly that
-            // surface's surroundings, which it grazes without hitting
-            // (measured on Sponza: 18.9 -> 12.3 nodes and 4.6 -> 3.1
-            // triangles per shadow ray; the armadillo view: 4.0 -> 4.3
-            // nodes). Sorting the negated entry distances does it; a shadow
-            // ray's tmax never shrinks before it stops, so the negated
-            // distances it pushes never drop a pending child.
+            // Shadow rays go farthest child first: the nearest boxes mostly hold the surface the ray leaves,
+            // grazed without a hit (Sponza: 18.9 -> 12.3 nodes, 4.6 -> 3.1 triangles per shadow ray;
+            // armadillo 4.0 -> 4.3 nodes). A shadow ray's tmax never shrinks before it stops, so the
+            // negated keys it pushes never drop a pending child.
             if (shadow) ts = mix(vec4(1e38), -ts, lessThan(ts, vec4(1e37)));
             WIDE_SORT2(0, 1);
             WIDE_SORT2(2, 3);

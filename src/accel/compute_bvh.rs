@@ -1,22 +1,14 @@
-//! The compute backend's acceleration structure: our own BVHs, laid out
-//! flat for glsl/trace/compute.glsl. Static instances (never skinned or
-//! animated) are flattened into one world-space tree with its triangles
-//! stored in leaf order ([`FlatStatic`], traced first); the others keep a
-//! two-level BVH: one tree per mesh primitive (4-wide SBVH for rigid ones,
-//! binned SAH for skinned ones, whose triangles the shader reads from the
-//! one shared vertex/index buffer) and a top level over those instances.
+//! The compute backend's acceleration structure: our own BVHs laid out for glsl/trace/compute.glsl.
+//! Static instances (never skinned or animated) form one world-space tree with triangles in leaf order
+//! ([`FlatStatic`], traced first); the rest keep a two-level BVH: per primitive a 4-wide SBVH (rigid)
+//! or binned SAH (skinned, triangles read from the shared vertex/index buffer), and a top level.
 //!
-//! A frame's update needs no host round-trip: before recording,
-//! [`ComputeBvh::prepare_update`] rebuilds the trees the policy marks (on the
-//! CPU; their upload is staged in the frame's ring slot) and the top level's
-//! topology from the bounds the host knows (the last refit roots read
-//! back: with frames in flight, from two frames ago);
-//! [`ComputeBvh::record_update`] records the skinned refit and the GPU fit
-//! of the top level's bounds to this frame's roots
-//! ([`TopLevelRefit`]); [`ComputeBvh::finish_update`], after the frame's
-//! fence, takes the roots (a ring download) for the rebuild policy and the next
-//! topology. The topology only decides speed; the bounds tracing uses are
-//! always this frame's.
+//! An update needs no host round-trip: [`ComputeBvh::prepare_update`] rebuilds policy-marked trees on
+//! the CPU (staged in the ring slot) and the top-level topology from bounds the host knows (refit
+//! roots read back, two frames old with frames in flight); [`ComputeBvh::record_update`] records the
+//! skinned refit and the GPU fit of the top level to this frame's roots ([`TopLevelRefit`]);
+//! [`ComputeBvh::finish_update`] takes the roots after the fence. Topology only decides speed; the
+//! bounds traced are always this frame's.
 
 use anyhow::{Context as _, Result};
 use ash::vk;
@@ -113,10 +105,9 @@ fn append(nodes: &mut Vec<BvhNode>, prims: &mut Vec<u32>, bvh: Bvh, capacity: us
     r
 }
 
-/// A static BLAS as a 4-wide tree: a binary header node at the node offset
-/// (the root bounds, for the first box test and the GPU top-level fit;
-/// `count` = BVH_WIDE_HEADER), then the wide nodes, 64 bytes = two node
-/// slots each, from an even slot so the shader indexes them as an array.
+/// A static BLAS as a 4-wide tree: a binary header node (root bounds for the first box test and the
+/// GPU top-level fit; `count` = BVH_WIDE_HEADER), then the 64-byte wide nodes from an even slot so
+/// the shader indexes them as an array.
 fn append_wide(nodes: &mut Vec<BvhNode>, prims: &mut Vec<u32>, bvh: Bvh) -> BlasRef {
     let wide = WideBvh::from_binary(&bvh);
     let r =
@@ -187,10 +178,8 @@ impl ComputeBvh {
         // Biggest first: Sponza's largest primitives take most of the time.
         let mut order: Vec<usize> = (0..wanted.len()).collect();
         order.sort_by_key(|&k| std::cmp::Reverse(size(&wanted[k])));
-        // Static geometry is built once: the split BVH's better trees (fewer
-        // node and triangle tests per ray) are worth its slower build, on
-        // every core. It cannot be refit (leaf boxes hold clipped triangle
-        // parts).
+        // Built once, so the split BVH's better trees are worth its slower build, on every core. Not
+        // refittable (leaf boxes hold clipped parts).
         let trees = crate::par::map(wanted.len(), &order, |k| {
             let (m, i) = wanted[k];
             let p = &scene.meshes[m].primitives[i];
@@ -204,10 +193,8 @@ impl ComputeBvh {
             blas[m][i] = Some(append_wide(&mut nodes, &mut prims, bvh));
         }
         let static_ms = t0.elapsed().as_secs_f64() * 1e3 - flat_ms;
-        // Skinned instances: their own trees over the current (CPU) pose,
-        // which is exactly what the GPU vertex range holds at upload. Binned
-        // SAH: fast to rebuild, and refittable (every leaf box holds its
-        // whole triangles).
+        // Skinned: trees over the CPU pose (what the GPU vertex range holds at upload); binned SAH, fast to
+        // rebuild and refittable (leaf boxes hold whole triangles).
         let world = scene.world_matrices();
         let mut skinned = Vec::new();
         for inst in &scene.instances {
@@ -257,9 +244,8 @@ impl ComputeBvh {
         let data = TreeData { nodes: &nodes, prims: &prims, flat_tris: &flat.triangles };
         let mut bvh = built(ctx, bvh, |bvh| {
             bvh.create_buffers(ctx, scene, gpu, data)?;
-            // Fit the skinned trees (and the top level) to the GPU's vertices:
-            // the CPU pose they were built from may differ in the last bit. A
-            // load-time submission, not part of any frame.
+            // Fit the skinned trees and top level to the GPU's vertices (the CPU pose may differ in the
+            // last bit). A load-time submission, not part of any frame.
             let updates = vec![Update::Refit; bvh.skinned.len()];
             let mut ring = FrameRing::new(1, "compute BVH load")?;
             let fitted = (|| {
@@ -305,12 +291,9 @@ impl ComputeBvh {
         Ok(bvh)
     }
 
-    /// Builds the top level's topology over the bounds the host knows (for
-    /// skinned trees: the last roots read back, or a CPU rebuild's) and
-    /// writes it with the per-instance records. With skinned trees the GPU
-    /// fit recorded by `record_top_level` then sets this frame's bounds;
-    /// without, the host's bounds are exact. Staged in the frame's ring
-    /// slot: a frame in flight keeps reading its own top level.
+    /// Builds the top-level topology over the bounds the host knows (skinned: last roots read back, or a
+    /// CPU rebuild's) and writes it with the instance records; with skinned trees the GPU fit then sets
+    /// this frame's bounds. Staged in the ring slot: a frame in flight keeps reading its own.
     fn write_top_level(&mut self, up: &mut Uploads, scene: &Scene) -> Result<()> {
         // Only animation moves instances after loading, and the flat tree
         // holds none that it moves; a moved one would be traced where it was.
@@ -338,13 +321,10 @@ impl ComputeBvh {
         self.skinned.len()
     }
 
-    /// Host work before a frame's update is recorded (a frame may still be
-    /// in flight): rebuilds on the CPU, from the scene's CPU pose, the
-    /// skinned trees the policy marks, staging them in the frame's ring slot
-    /// (copied at the frame's start; the GPU refit then fits them to the
-    /// GPU's skinned vertices); then stages the top level for `scene`'s
-    /// instance transforms. No submission, no wait. Returns what each
-    /// skinned slot gets this frame, for `finish_update`.
+    /// Host work before recording (a frame may be in flight): rebuilds policy-marked skinned trees from
+    /// the CPU pose, staged in the ring slot (the GPU refit then fits them to the skinned vertices), and
+    /// stages the top level. No submission, no wait. Returns each skinned slot's update for
+    /// `finish_update`.
     pub fn prepare_update(
         &mut self,
         up: &mut Uploads,
@@ -383,10 +363,8 @@ impl ComputeBvh {
         Ok(())
     }
 
-    /// Records the frame's scene update: the skinned trees' refit (their
-    /// rebuilds were copied at the frame's start), then the top level's GPU fit, each followed by its
-    /// barrier (the last one to the tracer's storage reads). Needs
-    /// `prepare_update` first, and skinning recorded before it.
+    /// Records the skinned refit, then the top level's GPU fit, each with its barrier (the last to the
+    /// tracer's reads). Needs `prepare_update` first and skinning recorded before it.
     pub fn record_update(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         self.record_refit(ctx, cmd);
         self.record_top_level(ctx, cmd);
@@ -419,12 +397,9 @@ impl ComputeBvh {
         self.refit.as_ref().map(|r| r.roots_source())
     }
 
-    /// After the update's frame completed (its slot's fence, never inside a
-    /// frame): judges the refit roots (`roots`: the bytes of
-    /// `roots_source`'s download) for the rebuild policy; they also shape
-    /// the next top-level topology. With frames in flight a later frame may
-    /// already have rebuilt a slot: its root then comes from the old tree
-    /// for one frame (topology only decides speed, the GPU fit the bounds).
+    /// After the frame's fence: judges the refit roots (`roots`: `roots_source`'s download) for the
+    /// rebuild policy and the next topology. A later in-flight frame may already have rebuilt a slot;
+    /// its root then comes from the old tree for one frame (topology only decides speed).
     pub fn finish_update(
         &mut self,
         updates: &[Update],
@@ -456,10 +431,8 @@ impl ComputeBvh {
         &self.tlas
     }
 
-    /// What the host computes from the refit roots `finish_update` read
-    /// back (for tests): the topology of the last update refit on the CPU
-    /// over them (the GPU fit's reference, node for node), and a fresh
-    /// top-level build over them (what the old host path traced).
+    /// For tests: the topology of the last update refit on the CPU over the read-back roots (the GPU fit's
+    /// reference, node for node), and a fresh top-level build over them (the old host path).
     pub fn host_top_level(&self, scene: &Scene) -> (Bvh, Bvh) {
         let blas_of = |inst: &Instance| self.blas_of(inst);
         let bounds: Vec<Aabb> = scene

@@ -1,8 +1,6 @@
-//! GPU refit of the compute backend's skinned BVHs (glsl/anim/bvh_refit.comp):
-//! one workgroup per BVH, levels deepest first. The top level is fit to the
-//! refit roots on the GPU (compute_top_level.rs); the roots also come back
-//! to the host after the frame, for the rebuild policy and the next
-//! top-level topology.
+//! GPU refit of the compute backend's skinned BVHs (glsl/anim/bvh_refit.comp), one workgroup per BVH,
+//! levels deepest first. The roots feed the GPU top-level fit and come back to the host for the
+//! rebuild policy and next topology.
 
 use anyhow::Result;
 use ash::vk;

@@ -1,8 +1,6 @@
-//! GPU refit of the compute backend's top level (glsl/anim/tlas_refit.comp),
-//! recorded right after the skinned BLAS refit: the host builds the top
-//! level's topology before the frame from the bounds it knows, the GPU
-//! then puts the bounds of this frame's refit roots into it. So tracing
-//! never waits for the host to read the refit roots back.
+//! GPU refit of the compute backend's top level (glsl/anim/tlas_refit.comp), right after the skinned
+//! BLAS refit: the host builds topology before the frame, the GPU fills in this frame's refit roots,
+//! so tracing never waits for a readback.
 
 use anyhow::Result;
 use ash::vk;
@@ -17,10 +15,8 @@ use crate::vk::frame_ring::Uploads;
 use crate::vk::pipeline::{bind_compute, compute_pipeline, pipeline_layout, DescriptorSet, Specialization};
 use crate::vk::{built, memory_barrier, Buffer, Context};
 
-/// Top-level buffers are rewritten every frame something moves, through
-/// the frame's ring slot (never in place: a frame in flight reads them);
-/// sized for the worst case once. Host-visible only for the tests' reads
-/// of the GPU's fit (`gpu_top_level`).
+/// Rewritten through the ring slot every frame something moves (never in place: a frame in flight
+/// reads them), sized once for the worst case. Host-visible only for tests (`gpu_top_level`).
 pub(super) fn host_buffer(ctx: &Context, name: &str, bytes: usize) -> Result<Buffer> {
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
     Buffer::new(ctx, name, bytes as u64, usage, MemoryLocation::CpuToGpu)

@@ -1,8 +1,6 @@
-//! Updatable BLASes for skinned instances: built once with ALLOW_UPDATE +
-//! PREFER_FAST_BUILD over the instance's deformed vertex range, then refit
-//! (UPDATE mode, in place) every frame after skinning, and rebuilt when the
-//! rebuild policy says refits have degraded them. Each BLAS has its own
-//! scratch region so all of a frame's builds go in one command.
+//! Updatable BLASes for skinned instances: built once (ALLOW_UPDATE + PREFER_FAST_BUILD), refit in
+//! place after skinning every frame, rebuilt when the policy says refits degraded them. Each has its
+//! own scratch region so a frame's builds go in one command.
 
 use anyhow::Result;
 use ash::vk;
@@ -13,10 +11,9 @@ use crate::gpu::scene::{GpuScene, PrimitiveRange};
 use crate::scene::Aabb;
 use crate::vk::{built, Buffer, Context};
 
-/// When a refit BLAS is rebuilt instead: after `max_refits` refits in a row
-/// (None = no limit; Some(0) rebuilds every frame), or when the deformed bounds' surface area has grown past
-/// `area_growth` times the area at its last build (refit boxes of a tree
-/// built for another pose overlap more as the mesh spreads out).
+/// When a refit BLAS is rebuilt: after `max_refits` refits in a row (None: no limit; Some(0): every
+/// frame), or when the deformed bounds' area exceeds `area_growth` times its last build's (a tree
+/// built for another pose overlaps more as the mesh spreads out).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RebuildPolicy {
     pub max_refits: Option<u32>,

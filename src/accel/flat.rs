@@ -1,16 +1,11 @@
-//! The compute tracer's flattened static geometry: ONE spatial-split BVH,
-//! collapsed 4-wide, over the world-space triangles of every instance that
-//! never moves (not skinned, no animated node above it), with the triangles
-//! stored in leaf order (glsl/trace/compute.glsl `FlatTri`).
+//! The compute tracer's flattened static geometry: ONE split BVH, collapsed 4-wide, over the
+//! world-space triangles of every instance that never moves, triangles in leaf order
+//! (glsl/trace/compute.glsl `FlatTri`).
 //!
-//! Why: Sponza has ~160 static instances whose boxes overlap, so a ray
-//! through the two-level tree enters many instance BLASes, each costing an
-//! instance fetch, a ray transform, a watertight setup and a root test. One
-//! world-space tree has none of that, and a leaf's triangles are one
-//! contiguous read instead of index -> vertex gathers. Each triangle keeps
-//! the (instance, primitive) it came from, so the hit record and shading
-//! are those of the two-level path, and the ray mask bits its instance
-//! answers to (shadow-only and invisible-to-shadow instances).
+//! Why: Sponza's ~160 static instances overlap, so a two-level ray enters many BLASes, each costing
+//! an instance fetch, ray transform, watertight setup and root test; here a leaf is one contiguous
+//! read. Each triangle keeps its (instance, primitive), so hits shade as on the two-level path, and
+//! its instance's ray mask bits (shadow-only and invisible-to-shadow instances).
 
 use glam::{DVec3, Vec3};
 
@@ -86,9 +81,7 @@ pub fn static_instances(scene: &Scene) -> Vec<bool> {
 }
 
 impl FlatStatic {
-    /// Builds the flat tree over the static instances' triangles, in world
-    /// space relative to `origin`. Instances no ray can hit (mask 0) are
-    /// flattened away with no triangles.
+    /// In world space relative to `origin`; instances no ray can hit (mask 0) contribute no triangles.
     pub fn build(scene: &Scene, origin: RenderOrigin) -> FlatStatic {
         let flattened = static_instances(scene);
         let mut tris: Vec<[Vec3; 3]> = Vec::new();

@@ -1,16 +1,11 @@
-//! The G-buffer's clusters for occlusion culling (render/occlusion.rs):
-//! each rigid draw's index range split into runs of at most
-//! CLUSTER_TRIANGLES triangles, with the object-space box of each run. On
-//! the GPU: the clusters, one indirect draw
-//! per cluster and phase (the cull pass sets its instance count to 0 or 1;
-//! its first instance is the cluster's index, through which the vertex
-//! stage finds the instance and the primitive offset), each cluster's
-//! visibility in the previous frame, and the counters. Built when a frame
-//! first culls (GpuScene::ensure_clusters), not at scene upload.
+//! The G-buffer's clusters for occlusion culling (render/occlusion.rs): each rigid draw split into runs
+//! of at most CLUSTER_TRIANGLES triangles with an object-space box. On the GPU: the clusters, one
+//! indirect draw per cluster and phase (the cull pass sets instance count 0 or 1; first instance is
+//! the cluster index), last frame's visibility, and the counters. Built on the first culled frame
+//! (GpuScene::ensure_clusters), not at upload.
 //!
-//! A skinned instance is one cluster with an empty box: its vertices move
-//! every frame, so bind-pose boxes would be wrong; the cull pass draws it
-//! whole in phase 1 (where it occludes like everything drawn there).
+//! A skinned instance is one cluster with an empty box (bind-pose boxes would be wrong), drawn whole
+//! in phase 1, where it occludes like everything drawn there.
 
 use anyhow::Result;
 use ash::vk;
@@ -33,9 +28,8 @@ pub struct GpuCluster {
 }
 const _: () = assert!(std::mem::size_of::<GpuCluster>() == CLUSTER_STRIDE as usize);
 
-/// VkDrawIndirectCommand: a cluster is drawn like a whole draw, not
-/// indexed, its vertex stage fetching index and vertex (glsl/common/
-/// gbuffer_draw.glsl), from its first index in the scene's index buffer.
+/// VkDrawIndirectCommand: clusters are drawn non-indexed, the vertex stage fetching index and vertex
+/// itself (glsl/common/gbuffer_draw.glsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct DrawCommand {
@@ -58,12 +52,10 @@ pub struct ClusterList {
     pub ranges: Vec<(u32, u32)>,
 }
 
-/// Splits every rigid draw into runs of at most `per_cluster` triangles,
-/// ending a run early where the next triangle would stretch its box past
-/// 1/32 of the scene's diagonal (in world units, under the instance's
-/// largest scale): a mesh's index order is not always spatially coherent
-/// (Sponza's are not: 128-triangle runs had a median box of 2 m in a 51 m
-/// scene), and a long box is almost never hidden.
+/// Splits rigid draws into runs of at most `per_cluster` triangles, ending a run early where the next
+/// triangle would stretch its box past 1/32 of the scene diagonal: index order is not always spatially
+/// coherent (Sponza's 128-triangle runs had a median box of 2 m in a 51 m scene), and a long box is
+/// almost never hidden.
 pub fn build(scene: &Scene, draws: &[Draw], per_cluster: u32) -> ClusterList {
     let mut out = ClusterList::default();
     let world_limit = (scene.bounds.max - scene.bounds.min).length() / 32.0;
@@ -165,9 +157,8 @@ impl Clusters {
         self.counters.write(0, &[0u8; 4 * OCC_COUNTER_SLOTS as usize])
     }
 
-    /// The counters of the last finished frame that culled: clusters drawn
-    /// in phase 1, drawn in phase 2, occluded, outside the frustum (of all
-    /// clusters, also those of draws the host left out); triangles drawn.
+    /// The last culled frame's counters: clusters drawn in phase 1, in phase 2, occluded, outside the
+    /// frustum (of all clusters, also of draws the host left out); triangles drawn.
     pub fn counts(&self) -> Result<[u32; OCC_COUNTER_SLOTS as usize]> {
         let words: &[u32] = bytemuck::cast_slice(&self.counters.read()?[..4 * OCC_COUNTER_SLOTS as usize]);
         Ok(words.try_into()?)

@@ -1,14 +1,9 @@
-//! The path tracer's emissive triangles as lights (glsl/path/emitters.glsl):
-//! every triangle of an instance whose material emits, chosen in proportion
-//! to its power (emissive luminance x world area at upload), then a point
-//! uniform on it. Layout (u32 words; shared_values.rs SCENE_EMITTERS):
-//! EMITTER_HEADER_WORDS (emitter count, instance count), per scene instance
-//! the index of its first emitter (NO_EMITTER: it emits nothing; an emitting
-//! instance's triangles are consecutive emitters in primitive order), per
-//! emitter (instance, primitive), then the emitters' CDF (count + 1 floats,
-//! as bits). The weights only steer the choice: the shader's pdf uses the
-//! table's own values and the triangle's current area, so animated
-//! emitters stay unbiased.
+//! The path tracer's emissive triangles as lights (glsl/path/emitters.glsl), chosen by power (emissive
+//! luminance x world area at upload). Layout (u32 words; SCENE_EMITTERS): EMITTER_HEADER_WORDS
+//! (emitter count, instance count); per instance its first emitter (NO_EMITTER: none; an instance's
+//! triangles are consecutive); per emitter (instance, primitive); the CDF (count + 1 f32 bits).
+//! The weights only steer the choice: the shader's pdf uses the table's values and the triangle's
+//! current area, so animated emitters stay unbiased.
 
 use glam::{DVec3, Vec3};
 

@@ -1,13 +1,8 @@
-//! Importance sampling of the environment map for the path tracer
-//! (glsl/path/env_sampling.glsl): a piecewise-constant distribution over
-//! the equirectangular map's texels in proportion to luminance x sin(theta)
-//! (the texel's solid angle), as a marginal CDF over rows and a CDF over
-//! each row's texels (Pharr, Jakob & Humphreys, PBRT 3rd ed., 13.6.7).
-//! Layout: shared_values.rs SCENE_ENV_CDF. The table only steers samples:
-//! the shader's pdf is computed from the same f32 values it samples with,
-//! so any table gives an unbiased estimate; a small floor keeps every
-//! texel reachable (bilinear filtering spreads a bright texel's light into
-//! its dark neighbours' cells).
+//! Environment importance sampling for the path tracer (glsl/path/env_sampling.glsl): piecewise
+//! constant in luminance x sin(theta) over the equirectangular texels, as a marginal row CDF and
+//! per-row CDFs (PBRT 3rd ed., 13.6.7). Layout: SCENE_ENV_CDF. The shader's pdf uses the same f32
+//! values it samples with, so any table is unbiased; a small floor keeps every texel reachable
+//! (bilinear filtering spreads a bright texel's light into dark neighbours' cells).
 
 use crate::gpu::shared::ENV_CDF_HEADER;
 use crate::scene::HdrImage;

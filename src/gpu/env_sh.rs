@@ -1,10 +1,6 @@
-//! The environment's diffuse light as SH irradiance (image-based lighting):
-//! the map is projected once on the CPU when the scene is uploaded
-//! (scene/sh, per-texel quadrature, 3 bands, Hann window), and every frame
-//! turns those radiance coefficients into the irradiance the shaders
-//! evaluate at a normal (glsl/common/env.glsl `sh_irradiance`): rotated by
-//! the environment's rotation (exact, no re-projection), scaled by its
-//! intensity, convolved with the clamped cosine.
+//! The environment's diffuse light as SH irradiance: projected once on the CPU at upload (scene/sh,
+//! 3 bands, Hann window); each frame the coefficients are rotated (exact, no re-projection), scaled by
+//! intensity and convolved with the clamped cosine for glsl/common/env.glsl `sh_irradiance`.
 
 use anyhow::Result;
 

@@ -11,14 +11,10 @@ use crate::scene::sh::ShCoeffs;
 use crate::scene::{HdrImage, Scene};
 use crate::vk::{Context, Image};
 
-/// Uploads the equirectangular map and returns its mean radiance. RGBA16F
-/// holds ordinary maps; a map with texels beyond half's range (a sun of
-/// 1e5, RGBE values up to ~1.7e38) goes up as RGBA32F where the device
-/// filters it, so misses and the mean see the same radiance; else it is
-/// clamped to 65504 with a warning and the mean is taken over the clamped
-/// values. Without a map a 1x1 black texture keeps the descriptor valid.
-/// Also returns the SH projection of the stored texels (None without a
-/// map: no SH work).
+/// Uploads the equirectangular map; returns its mean radiance and SH projection (None without a map).
+/// Texels beyond half's range (a 1e5 sun, RGBE up to ~1.7e38) go up as RGBA32F where the device
+/// filters it, so misses and the mean agree; else they are clamped to 65504 with a warning, the mean
+/// taken after clamping. Without a map a 1x1 black texture keeps the descriptor valid.
 pub(super) fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3, Option<ShCoeffs>)> {
     let env = &scene.environment;
     let Some(map) = &env.map else {
@@ -84,10 +80,8 @@ fn filters_linearly(ctx: &Context, format: vk::Format) -> bool {
     props.optimal_tiling_features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
 }
 
-/// Solid-angle weighted mean of an equirectangular map's texels (row
-/// weight sin θ), summed in f64: texels near the RGBE maximum (~1.7e38)
-/// overflow an f32 sum to Inf, which made the ambient term NaN and the
-/// whole frame black. The result is clamped to the largest finite f32.
+/// Solid-angle weighted mean (row weight sin θ), summed in f64: near the RGBE maximum an f32 sum hit
+/// Inf, which made the ambient NaN and the frame black. Clamped to the largest finite f32.
 pub fn equirect_mean(texels: impl Iterator<Item = Vec3>, width: u32, height: u32) -> Vec3 {
     let mut sum = glam::DVec3::ZERO;
     let mut weight = 0.0f64;

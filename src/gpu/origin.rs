@@ -1,12 +1,7 @@
-//! The render origin: far from the world origin an f32 world cannot place
-//! its geometry (the float spacing at 1e6 is 0.0625), and the GPU's
-//! world-space products (instance x vertex, view x world) cancel
-//! catastrophically. The scene keeps its placements in f64 (node
-//! translations, world matrices, cameras, light positions), and everything
-//! the GPU sees — instance transforms, lights, the camera, the acceleration
-//! structures' instance transforms — is narrowed to f32 only after this
-//! origin near the scene is subtracted, in f64 on the host. Object-space
-//! vertices are untouched; near the world origin nothing is subtracted.
+//! The render origin: far from the world origin f32 cannot place geometry (spacing 0.0625 at 1e6) and
+//! the GPU's world-space products cancel catastrophically. The scene keeps placements in f64; all the
+//! GPU sees (instance transforms, lights, camera, AS instance transforms) is narrowed to f32 only after
+//! subtracting this origin, in f64 on the host. Object-space vertices are untouched.
 
 use glam::{DMat4, DVec3, Mat4, Vec3};
 

@@ -46,10 +46,8 @@ pub struct GpuScene {
     /// Auto-exposure state kept across frames, then the luminance
     /// reduction's scratch (render/tone.rs), read back through the ring.
     pub exposure: Buffer,
-    /// The ray-tracing budget's per-object statistics (written by the
-    /// `heuristic` pass, read back through the ring) and selection (written
-    /// by the host through the ring),
-    /// BUDGET_STAT_WORDS + 1 words per object (render/budget).
+    /// The budget's per-object statistics (written by `heuristic`, read back through the ring) and
+    /// selection (written by the host through the ring): BUDGET_STAT_WORDS + 1 words per object.
     pub budget_stats: Buffer,
     pub budget_mask: Buffer,
     /// Diffuse PRT transfer (prt/pack.rs), or its 4-word placeholder.
@@ -89,9 +87,7 @@ pub struct GpuScene {
 impl GpuScene {
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<GpuScene> {
         let t0 = std::time::Instant::now();
-        // Every object created lands in `gs` at once, so a failure half-way
-        // (out of memory, a driver error) destroys what exists: an error
-        // exit leaks nothing.
+        // Everything created lands in `gs` at once, so a failure half-way destroys what exists: no leak.
         let gs = built(ctx, GpuScene::empty(), |gs| gs.fill(ctx, scene))?;
         log::info!(
             "uploaded scene: {} triangles, {} instances, {} materials, {} textures, {:.1} MiB GPU memory, {:.0} ms",
@@ -398,9 +394,8 @@ fn instance_range(
 
 type Geometry = (Buffer, Buffer, Vec<Vec<PrimitiveRange>>, Vec<PrimitiveRange>, Vec<Aabb>);
 
-/// Concatenates every primitive into one vertex and one index buffer, then
-/// appends one deformed copy per skinned instance (posed on the CPU for the
-/// first frame; the skinning pass rewrites it on the GPU from then on).
+/// One vertex and one index buffer for all primitives, plus one deformed copy per skinned instance
+/// (posed on the CPU for the first frame; the skinning pass rewrites it from then on).
 fn upload_geometry(ctx: &Context, scene: &Scene) -> Result<Geometry> {
     let mut vertex_data = Vec::new();
     let mut index_data: Vec<u32> = Vec::new();
@@ -467,9 +462,8 @@ fn build_draws(scene: &Scene, ranges: &[Vec<PrimitiveRange>], skinned: &[Primiti
         .collect()
 }
 
-/// A texture's texels at a size the device can hold: larger than
-/// maxImageDimension2D, it is downscaled (aspect kept, triangle filter)
-/// with a warning rather than handed to the driver.
+/// Textures above maxImageDimension2D are downscaled (aspect kept, triangle filter) with a warning
+/// rather than handed to the driver.
 fn fit_texture(t: &crate::scene::Texture, max_dim: u32) -> (vk::Extent2D, std::borrow::Cow<'_, [u8]>) {
     let extent = vk::Extent2D { width: t.width, height: t.height };
     let largest = t.width.max(t.height);
@@ -495,10 +489,8 @@ fn tex_index(t: &Option<TextureRef>) -> i32 {
     t.map(|t| t.texture as i32).unwrap_or(-1)
 }
 
-/// Emitted radiance is limited to half's range (where the primary hit's
-/// emission was once stored; kept so scenes keep their look): primary and
-/// secondary hits both read this buffer, so clamping here, where every
-/// material passes, makes both modes and every bounce shade the same value.
+/// Emission is limited to half's range (where primary emission was once stored; kept so scenes keep
+/// their look). Clamped here, where every material passes, so every mode and bounce shades the same.
 pub const MAX_EMISSIVE: f32 = HALF_MAX;
 
 fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {

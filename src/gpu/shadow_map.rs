@@ -1,15 +1,11 @@
-//! The shadow maps of the ray-tracing budget's raster fallback
-//! (render/budget's `Fallback::Raster`): one depth layer per light of the
-//! scene (layer i is light i, so the shaders index both alike), rendered by
-//! the `shadow_map` pass for the directional and spot lights that cast
-//! shadows and sampled with PCF (glsl/common/shadow_map.glsl) where a
-//! pixel's shadow bit is off. Point lights get no layer content: they stay
-//! unshadowed in the fallback (a cube map each would be six more passes).
+//! Shadow maps of the budget's raster fallback (`Fallback::Raster`): one depth layer per light (layer
+//! i is light i, so shaders index both alike), rendered for shadow-casting directional and spot lights
+//! and PCF-sampled (glsl/common/shadow_map.glsl) where a pixel's shadow bit is off. Point lights stay
+//! unshadowed: a cube map each would be six more passes.
 //!
-//! Per light, `SCENE_SHADOW_VIEWS` holds a `ShadowView` (scalar layout):
-//! the view-projection (depth 0 near .. 1 far), then the world size of a
-//! texel at unit distance (perspective) or anywhere (orthographic), then 1
-//! for a perspective view, then two pad floats.
+//! Per light, `SCENE_SHADOW_VIEWS` holds a `ShadowView` (scalar layout): view-projection (depth 0
+//! near .. 1 far), world size of a texel at unit distance (perspective) or anywhere (orthographic),
+//! 1 for perspective, two pad floats.
 
 use anyhow::Result;
 use ash::vk;
@@ -56,9 +52,8 @@ impl ShadowMaps {
         }
     }
 
-    /// Sized for `scene`: SHADOW_MAP_SIZE squared per light when some
-    /// directional or spot light casts shadows, else one texel (the
-    /// descriptor stays valid, nothing renders into it).
+    /// SHADOW_MAP_SIZE² per light when some directional or spot light casts shadows, else one texel (the
+    /// descriptor stays valid).
     pub fn create(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         self.mapped = (0..scene.lights.len() as u32).filter(|&i| mapped(&scene.lights[i as usize])).collect();
         let any = !self.mapped.is_empty();
@@ -123,9 +118,8 @@ impl ShadowMaps {
         })
     }
 
-    /// Fits every mapped light's view to the scene's bounds (relative to
-    /// `origin`, like every GPU position) and writes the views (through the
-    /// frame's ring slot).
+    /// Fits each mapped light's view to the scene bounds (relative to `origin`) and writes the views
+    /// through the frame's ring slot.
     pub fn write_views(&self, up: &mut Uploads, scene: &Scene, origin: RenderOrigin) -> Result<()> {
         let bounds = scene_bounds(scene);
         if bounds.is_empty() || self.size <= 1 {
@@ -149,9 +143,8 @@ impl ShadowMaps {
                     (proj * Mat4::look_at_rh(eye, eye + dir, up), texel, 1.0)
                 }
                 _ => {
-                    // A bounding sphere: the fit does not change as the
-                    // light turns. (The view's visible bounds would give
-                    // sharper maps in large scenes.)
+                    // A bounding sphere, so the fit does not change as the light
+                    // turns (visible bounds would be sharper in large scenes).
                     let eye = centre - dir * 2.0 * radius;
                     let proj = Mat4::orthographic_rh(-radius, radius, -radius, radius, radius, 3.0 * radius);
                     (proj * Mat4::look_at_rh(eye, centre, up), 2.0 * radius / self.size as f32, 0.0)

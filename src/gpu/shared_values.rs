@@ -1,9 +1,6 @@
-// Values shared by the Rust host code and the GLSL shaders, defined here
-// once. build.rs includes this file to write `generated/shared.glsl`
-// (`#define`s every shader includes through common/types.glsl);
-// src/gpu/shared.rs includes it to define the same names as Rust
-// constants. Kinds: `id` (set, binding and specialization-constant numbers:
-// plain GLSL integers, usable in layout qualifiers), `uint`, `float`.
+// Values shared by host and shaders, defined once: build.rs writes them to `generated/shared.glsl`,
+// src/gpu/shared.rs to Rust constants. Kinds: `id` (set/binding/spec-constant numbers, plain GLSL
+// integers usable in layout qualifiers), `uint`, `float`.
 shared! {
     // Descriptor sets: 0 the scene (every pass), 1 the pass's own images,
     // 2 the tracer's acceleration data.
@@ -22,89 +19,67 @@ shared! {
     id SCENE_RAY_COUNTERS = 7;
     // Auto-exposure state, kept across frames (render/passes/luminance.rs).
     id SCENE_EXPOSURE = 8;
-    // The per-object ray-tracing budget (render/budget): per object the
-    // `heuristic` pass's statistics of the primary hits (BUDGET_STAT_WORDS
-    // words: covered pixels, then min x, min y, max x, max y of the covered
-    // pixels, then the rays the object's pixels traced per effect:
-    // BUDGET_STAT_RAYS + EFFECT_BIT_*), and the selection the host made
-    // (one word: the EFFECT_* bits its pixels trace), honoured where
-    // Frame.flags has FRAME_BUDGET.
+    // Budget (render/budget): per object BUDGET_STAT_WORDS of `heuristic` statistics (covered pixels,
+    // min x, min y, max x, max y, then rays per effect at BUDGET_STAT_RAYS + EFFECT_BIT_*) and one
+    // selection word (EFFECT_* bits), honoured where Frame.flags has FRAME_BUDGET.
     id SCENE_BUDGET_STATS = 9;
     id SCENE_BUDGET_MASK = 10;
-    // The budget's raster shadow fallback (gpu/shadow_map.rs): a depth
-    // array with a layer per light (rendered for directional and spot
-    // lights by the `shadow_map` pass), and each light's view-projection.
+    // The budget's raster shadow fallback (gpu/shadow_map.rs): a depth layer per light and its
+    // view-projection.
     id SCENE_SHADOW_MAPS = 11;
     id SCENE_SHADOW_VIEWS = 12;
-    // Diffuse PRT (prt/pack.rs, glsl/common/prt.glsl): a header of
-    // PRT_HEADER_WORDS words (coefficients, channels, instance count, 0),
-    // per instance its first transfer vertex (PRT_NO_VERTEX: animated or
-    // skinned, SH irradiance instead), then the per-vertex transfer floats.
-    // A 4-word placeholder (instance count 0) without a prt ambient mode.
+    // Diffuse PRT (prt/pack.rs, glsl/common/prt.glsl): PRT_HEADER_WORDS (coefficients, channels,
+    // instance count, 0), per instance its first transfer vertex (PRT_NO_VERTEX: SH irradiance instead),
+    // then per-vertex transfer floats. A 4-word placeholder without a prt ambient mode.
     id SCENE_PRT = 13;
-    // The environment map's importance-sampling table (gpu/env_sampling.rs,
-    // glsl/path/env_sampling.glsl): ENV_CDF_HEADER floats (width, height,
-    // 1 with a table), the marginal CDF over rows (height + 1 floats), then
-    // each row's CDF over its texels (width + 1 floats a row). Header only
+    // Environment importance-sampling table (gpu/env_sampling.rs): ENV_CDF_HEADER floats (width, height,
+    // 1 with a table), the row marginal CDF (height + 1), each row's CDF (width + 1). Header only
     // without a map (constant environments are sampled uniformly).
     id SCENE_ENV_CDF = 14;
     uint ENV_CDF_HEADER = 4;
-    // The path tracer's emissive triangles as lights (gpu/emitters.rs,
-    // glsl/path/emitters.glsl): EMITTER_HEADER_WORDS words (emitter count,
-    // instance count), per instance its first emitter (NO_EMITTER: none),
-    // per emitter (instance, primitive), then the emitters' CDF.
+    // Emissive triangles as lights (gpu/emitters.rs): EMITTER_HEADER_WORDS (emitter count, instance
+    // count), per instance its first emitter (NO_EMITTER: none), per emitter (instance, primitive), CDF.
     id SCENE_EMITTERS = 15;
     uint EMITTER_HEADER_WORDS = 2;
     uint NO_EMITTER = 2147483647;
     // Bindless textures: variable-count, so the last binding.
     id SCENE_TEXTURES = 16;
-    // Texels per side of a light's shadow map: at 1024 a directional light
-    // fitted to a 40 m scene puts a texel at 4 cm, under a Sponza column's
-    // detail, for 4 MiB a light (2048 quadruples memory and raster time).
+    // At 1024 a directional light fitted to a 40 m scene has 4 cm texels, under a Sponza column's detail,
+    // for 4 MiB a light (2048 quadruples memory and raster time).
     uint SHADOW_MAP_SIZE = 1024;
     // The receiver moves this many shadow-map texels along its normal
     // before the lookup (normal-offset bias against acne at grazing light).
     float SHADOW_NORMAL_OFFSET = 1.5;
-    // Ray-origin offset (glsl/common/offset.glsl, and the PRT precompute's
-    // visibility rays in src/prt): ULPs of the extent the origin moves,
-    // covering the interpolation (3 terms), the instance transform (4 terms)
-    // and the traversal's own triangle test.
+    // Ray-origin offset (glsl/common/offset.glsl, PRT visibility rays): covers interpolation (3 terms),
+    // the instance transform (4 terms) and the traversal's own triangle test.
     float OFFSET_ULPS = 16.0;
     uint BUDGET_STAT_WORDS = 8;
     uint BUDGET_STAT_RAYS = 5;
-    // Ray-traced effects, as bits of the budget's selection: shadow rays at
-    // the primary hit; the reflection chain; the refraction chain (a chain
-    // includes everything traced beyond its first ray, its shadow rays too).
+    // Bits of the budget's selection: shadow rays at the primary hit; the reflection chain; the refraction
+    // chain (a chain includes everything traced beyond its first ray, shadow rays too).
     uint EFFECT_BIT_SHADOWS = 0;
     uint EFFECT_BIT_REFLECTIONS = 1;
     uint EFFECT_BIT_REFRACTIONS = 2;
     uint EFFECT_COUNT = 3;
     uint EFFECT_ALL = 7;
-    // The selection word's partial effects (effects mode meets its budget
-    // continuously): bits EFFECT_PARTIAL_SHIFT + EFFECT_BIT_* are effects
-    // traced on a fraction of the object's pixels, whole tiles of
-    // BUDGET_TILE² pixels whose hash (16 bits) is below the fraction in the
-    // word's top 16 bits (EFFECT_FRACTION_SHIFT). Tiles rather than single
-    // pixels keep neighbouring invocations coherent, and a fixed hash makes
-    // a growing fraction add tiles without dropping traced ones.
+    // Partial effects (effects mode meets its budget continuously): bits EFFECT_PARTIAL_SHIFT +
+    // EFFECT_BIT_* trace on whole BUDGET_TILE² tiles whose 16-bit hash is below the fraction in the top
+    // 16 bits (EFFECT_FRACTION_SHIFT). Tiles keep neighbouring invocations coherent; a fixed hash makes a
+    // growing fraction add tiles without dropping traced ones.
     uint EFFECT_PARTIAL_SHIFT = 4;
     uint EFFECT_FRACTION_SHIFT = 16;
     uint BUDGET_TILE = 8;
-    // Frame.flags bits. FRAME_FALLBACK_RASTER (with FRAME_BUDGET): an
-    // effect the budget leaves out falls back to a raster approximation
-    // (`--fallback raster`) instead of being left out (`--fallback none`).
+    // Frame.flags. FRAME_FALLBACK_RASTER (with FRAME_BUDGET): `--fallback raster` instead of `none`.
     uint FRAME_BUDGET = 1;
     // The ambient term is the environment's SH irradiance
     // (Frame.sh_irradiance) instead of the constant Frame.env_ambient.
     uint FRAME_AMBIENT_SH = 2;
-    // Irradiance coefficients in Frame.sh_irradiance: 3 bands (l <= 2),
-    // which hold all but ~1% of a clamped-cosine convolution (Ramamoorthi &
-    // Hanrahan 2001; Â_3 = 0, |Â_4| = pi/24).
+    // 3 bands (l <= 2) hold all but ~1% of a clamped-cosine convolution (Ramamoorthi & Hanrahan 2001;
+    // Â_3 = 0, |Â_4| = pi/24).
     uint SH_IRRADIANCE_COEFFS = 9;
     uint FRAME_FALLBACK_RASTER = 4;
-    // The primary hit's ambient term on a static instance is its PRT
-    // transfer dotted with Frame.sh_radiance (with FRAME_AMBIENT_SH too,
-    // for everything else).
+    // Static instances' primary-hit ambient is PRT transfer · Frame.sh_radiance (with FRAME_AMBIENT_SH
+    // too, for everything else).
     uint FRAME_AMBIENT_PRT = 8;
     // Radiance coefficients in Frame.sh_radiance: up to 8 bands.
     uint SH_PRT_MAX_COEFFS = 64;
@@ -148,12 +123,9 @@ shared! {
     id PATH_OUT = 1;
     uint PATH_SAMPLES_PER_FRAME = 4;
     uint PATH_RR_START = 3;
-    // The report's attribution (render/passes/terms.rs,
-    // glsl/passes/terms.glsl): per pixel the sum of the selected terms'
-    // path-traced estimate minus what the hybrid frame shades for them (rgb)
-    // and the sample count (a), written by `terms`, added by `composite`;
-    // the terms (Frame.accum_bounces holds the selection); samples per
-    // pixel per frame; the longest chain through glass and mirrors.
+    // The report's attribution (render/passes/terms.rs): per pixel the selected terms' path-traced
+    // estimate minus the hybrid's shading of them (rgb) and the sample count (a), added by `composite`;
+    // the terms (selected via Frame.accum_bounces); samples per pixel per frame; longest glass/mirror chain.
     id TERMS_OUT = 6;
     id TERMS_IN = 9;
     uint TERM_ENV_SPECULAR = 1;
@@ -176,9 +148,7 @@ shared! {
     uint AUTO_EXPOSURE_OFF = 0;
     uint AUTO_EXPOSURE_LOG_AVERAGE = 1;
     uint AUTO_EXPOSURE_HISTOGRAM = 2;
-    // Workgroups of the luminance reduction's first kernel (a fixed grid
-    // striding over the image, so the partial sums have a fixed size) and
-    // its threads per group.
+    // A fixed grid striding over the image, so the partial sums have a fixed size.
     uint LUMINANCE_GROUPS = 64;
     uint LUMINANCE_THREADS = 256;
     // Log-luminance histogram: bins over [HIST_MIN_LOG2, HIST_MAX_LOG2]
@@ -229,9 +199,8 @@ shared! {
     id TOP_FIT_BLAS_NODES = 3;
     id TOP_FIT_ORDER = 4;
 
-    // Set 1 of the ray microbenchmark (glsl/rays.comp, render/rays.rs): the
-    // rays, what each hit, and (stats variant) nodes visited and triangles
-    // tested per ray.
+    // Set 1 of the ray microbenchmark (glsl/rays.comp, render/rays/): the rays, what each hit, and
+    // (stats variant) nodes visited and triangles tested per ray.
     id RAYS_IN = 0;
     id RAYS_OUT = 1;
     id RAYS_STATS = 2;
@@ -342,10 +311,8 @@ shared! {
     uint BVH_INSTANCE_STRIDE = 144;
     uint CLUSTER_STRIDE = 28;
 
-    // Two-phase occlusion culling of the G-buffer's clusters (gpu/clusters.rs,
-    // render/occlusion.rs). Set 1 of the cull pipeline: the clusters, each cluster's visibility in the
-    // previous frame, the indirect draws (phase 1's, then phase 2's), the
-    // counters, the depth pyramid (HiZ).
+    // Two-phase occlusion culling (gpu/clusters.rs, render/occlusion.rs), set 1 of the cull pipeline:
+    // clusters, last frame's visibility, indirect draws (phase 1's, then phase 2's), counters, HiZ.
     id OCC_CLUSTERS = 0;
     id OCC_VISIBLE = 1;
     id OCC_COMMANDS = 2;

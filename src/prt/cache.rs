@@ -1,10 +1,7 @@
-//! The transfer's disk cache: one file per (mesh content, settings) key,
-//! `<dir>/<key>.prt`. The key hashes (FNV-1a 64) the format version, the
-//! settings, and per static instance its world matrix, vertex positions and
-//! normals and indices, plus the materials' albedo for interreflected
-//! transfer (the only mode that reads it). A file is written to a temporary
-//! name and renamed (atomic on one file system); one that is short, corrupt
-//! or for another key is recomputed with a warning, never trusted.
+//! The transfer's disk cache, `<dir>/<key>.prt`. The key hashes (FNV-1a 64) the format version, the
+//! settings, each static instance's world matrix, positions, normals and indices, and (interreflected
+//! transfer only) the materials' albedo. Written to a temporary name and renamed (atomic on one file
+//! system); a short, corrupt or foreign file is recomputed with a warning, never trusted.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

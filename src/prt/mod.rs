@@ -1,23 +1,16 @@
-//! Diffuse precomputed radiance transfer (Sloan, Kautz & Snyder 2002) for
-//! the static geometry, on the CPU. A layer above `scene` and `accel`: it
-//! traces visibility through the CPU BVH.
+//! Diffuse precomputed radiance transfer (Sloan, Kautz & Snyder 2002) for static geometry, on the CPU;
+//! a layer above `scene` and `accel` (visibility through the CPU BVH).
 //!
-//! Per vertex of every static instance (not skinned, not under an animated
-//! node) a transfer vector T over the SH basis such that the irradiance is
-//! E = sum_k T_k L_k, with L_k the environment's radiance coefficients
-//! (so T contains the clamped cosine; a Lambertian surface of albedo a then
-//! exits a E / pi):
+//! Per vertex of every static instance a transfer vector T with irradiance E = sum_k T_k L_k, L_k the
+//! environment's radiance coefficients (T holds the clamped cosine; albedo a exits a E / pi):
 //! - unshadowed: T_k = ∫ max(0, n·w) y_k(w) dw (monochrome);
-//! - shadowed: the same times the visibility V(w), traced through a BVH
-//!   over the static triangles (`transfer`);
-//! - interreflected: shadowed plus k bounces, each adding for the occluded
-//!   directions the hit point's albedo / pi times its (previous bounce's)
-//!   interpolated transfer (`interreflect`): RGB, since albedo is coloured.
+//! - shadowed: times the visibility V(w) (`transfer`);
+//! - interreflected: plus k bounces, each adding for occluded directions the hit point's albedo / pi
+//!   times its previous-bounce transfer (`interreflect`): RGB, since albedo is coloured.
 //!
-//! Integration: one set of N×N stratified jittered directions over the
-//! whole sphere (`--prt-samples N` gives N² directions, half of which face
-//! away from a given normal), shared by every vertex so the basis is
-//! evaluated once per direction. Results are cached on disk (`cache`).
+//! Integration: one set of N×N stratified jittered directions over the sphere (`--prt-samples N`;
+//! half face away from any normal), shared by every vertex so the basis is evaluated once per
+//! direction. Results are cached on disk (`cache`).
 
 mod cache;
 mod interreflect;

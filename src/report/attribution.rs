@@ -1,14 +1,9 @@
-//! The default hybrid frame against the path-traced truth, per object, and
-//! an attribution of its error: how much of it goes away when one term of
-//! light transport the hybrid frame approximates or leaves out is supplied
-//! by the path tracer instead (pass `terms`, glsl/passes/terms.glsl):
-//! environment light reflected by rough surfaces, the environment's
-//! diffuse light with visibility, one bounce of indirect light, light from
-//! emissive surfaces, light passed on by glass and mirrors (caustics). Each
-//! term is the hybrid frame with that term replaced, accumulated like the
-//! truth (its two halves give its noise); "every term" replaces them all,
-//! and what is left is what none of them models (further bounces, glossy
-//! reflections seen as mirrors, pixel filtering at edges, ...).
+//! The default hybrid frame against the path-traced truth, per object, and an attribution of its
+//! error: how much goes away when one term the hybrid approximates or leaves out comes from the path
+//! tracer instead (pass `terms`): rough environment reflection, diffuse environment with visibility,
+//! one indirect bounce, emissive surfaces, caustics. Each term is accumulated like the truth (its two
+//! halves give its noise); "every term" replaces all, leaving what none models (further bounces,
+//! glossy reflections seen as mirrors, edge filtering, ...).
 
 use anyhow::{bail, Context as _, Result};
 

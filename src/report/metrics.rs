@@ -1,11 +1,9 @@
 //! Image error: ꟻLIP (NVIDIA's reference implementation through `nv-flip`)
 //! on LDR images, PSNR and relative MSE on linear HDR images.
 //!
-//! HDR frames are compared the way the ꟻLIP authors recommend for a
-//! renderer with its own tone mapper: both images go through this renderer's
-//! tone mapper (glsl/tonemap.comp: exposure, Reinhard on luminance, sRGB)
-//! with the *reference's* exposure, frozen, and LDR-ꟻLIP compares the
-//! results. The linear radiance is compared directly by PSNR and relMSE.
+//! As the ꟻLIP authors recommend for a renderer with its own tone mapper, HDR frames both go through
+//! glsl/tonemap.comp at the *reference's* frozen exposure and LDR-ꟻLIP compares the results; the
+//! linear radiance is compared directly by PSNR and relMSE.
 
 use anyhow::{ensure, Result};
 

@@ -1,17 +1,11 @@
-//! `report`: image error against run time for every quality knob. One
-//! process renders the reference (the renderer at its most accurate
-//! affordable settings), then every value of every selected knob, each
-//! warmed up and timed, and compares each image with the reference.
-//! Writes `report.md`, `report.csv`, `error_vs_time.png` and an error map
-//! per knob (its worst setting). See README "Report".
+//! `report`: image error against run time for every quality knob. One process renders the reference,
+//! then every value of every selected knob (warmed up, timed) and compares each with it. Writes
+//! `report.md`, `report.csv`, `error_vs_time.png` and an error map per knob (its worst setting).
+//! See README "Report".
 //!
-//! One technique per file: `metrics` (ꟻLIP, PSNR, relMSE), `knobs` (the
-//! knob table), `measure` (warm-up and GPU timing), `write` (tables),
-//! `plot` (the chart and the Pareto front), `compare` (two image files),
-//! `stability` (`report stability`: stiff and extreme variants of a scene),
-//! `tone_sheet` (`report tone-sheet`: tone operators side by side),
-//! `prt` and `prt_write` (`report prt`: the environment light's ambient
-//! against a ray-traced reference).
+//! Modules: `metrics` (ꟻLIP, PSNR, relMSE), `knobs`, `measure` (warm-up, GPU timing), `write`
+//! (tables), `plot` (chart, Pareto front), `compare` (two image files), `stability` (`report
+//! stability`), `tone_sheet` (`report tone-sheet`), `prt` and `prt_write` (`report prt`).
 
 pub mod args;
 pub mod attribution;
@@ -43,11 +37,9 @@ use knobs::{KnobSelection, Variant};
 use measure::Measured;
 use metrics::{Errors, FlipMap, LdrImage};
 
-/// The reference's settings. By default the path-traced ground truth
-/// (`mode` Path, report/truth.rs) with at least `samples` paths per pixel,
-/// doubled up to `max_samples` until its own noise is under half the
-/// smallest error measured. `--ref self`: the renderer itself in pure-RT
-/// (or hybrid) mode with every effect, `max_depth` and `min_weight`.
+/// The reference's settings: by default the path-traced truth (report/truth.rs), at least `samples`
+/// paths per pixel, doubled up to `max_samples` until its noise is under half the smallest error.
+/// `--ref self`: the renderer in pure-RT (or hybrid) mode with every effect, `max_depth`, `min_weight`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReferenceSettings {
     pub max_depth: u32,
@@ -208,12 +200,9 @@ pub struct Report {
     pub attribution: Option<attribution::Attribution>,
 }
 
-/// The `aa` knob's reference: anti-aliasing changes only the final 8-bit
-/// image (it runs after tone mapping), so its rows are compared with the
-/// base settings rendered K×K supersampled and filtered down, at the base
-/// exposure (frozen: the reference is not re-exposed), on those 8-bit
-/// images — not with the report's reference, whose radiance differences
-/// would drown the edges.
+/// The `aa` knob's reference: AA changes only the final 8-bit image, so its rows are compared on
+/// 8-bit images with the base settings K×K supersampled at the frozen base exposure, not with the
+/// report's reference, whose radiance differences would drown the edges.
 pub struct AaReference {
     pub supersample: Supersample,
     pub ldr: LdrImage,

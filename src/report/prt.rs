@@ -1,18 +1,12 @@
-//! `report prt`: the environment light's ambient (SH irradiance and
-//! diffuse PRT) against a converged ray-traced reference of the same view
-//! (`--reference-samples N --reference-bounces K`, render/reference.rs),
-//! every other setting equal, so ꟻLIP measures the ambient's error only.
+//! `report prt`: the ambient (SH irradiance and diffuse PRT) against a converged ray-traced reference
+//! of the same view (`--reference-samples N --reference-bounces K`), all else equal, so ꟻLIP measures
+//! the ambient's error only.
 //!
-//! Knobs (their own table, like `knobs::KNOBS`): `bands` (SH bands of the
-//! PRT transfer and environment), `sh-samples` (the environment's
-//! projection: N×N stratified Monte-Carlo or `exact` per-texel
-//! quadrature), `transfer` (sh, prt-unshadowed, prt-shadowed,
-//! prt-interreflected-1/-2). By default their product runs (`--prt-sweep`:
-//! one knob at a time around the base settings). Per variant: the
-//! precompute's time (transfer, read back from a note beside its cache
-//! file when the cache had it), the SH projection's time, GPU ms (frame,
-//! composite) and ꟻLIP/PSNR against the reference. `prt_write` writes the
-//! tables, plots and pictures.
+//! Knobs (own table, like `knobs::KNOBS`): `bands`, `sh-samples` (N×N stratified MC or `exact`
+//! quadrature), `transfer` (sh, prt-unshadowed, prt-shadowed, prt-interreflected-1/-2); their product
+//! by default, one at a time with `--prt-sweep`. Per variant: precompute time (from a note beside the
+//! cache file on a hit), SH projection time, GPU ms (frame, composite), ꟻLIP/PSNR. `prt_write`
+//! writes tables, plots and pictures.
 
 use std::path::PathBuf;
 use std::time::Instant;

@@ -1,13 +1,8 @@
-//! The report's default reference: the path-traced ground truth of the
-//! view (`--mode path`, render/path.rs), so that every knob's error is its
-//! distance from the true image, not from the renderer's own deepest
-//! setting. Its own noise is measured (two independent halves of the
-//! samples compared with ꟻLIP) and reported beside the errors; `run`
-//! doubles the samples until that noise is under half the smallest error
-//! (up to a cap). A converged image is cached on disk by content (scene,
-//! view, size, path settings and the path shaders' SPIR-V), so a re-run
-//! pays nothing; a short, corrupt or foreign file is re-rendered with a
-//! warning, never trusted.
+//! The report's default reference: the path-traced truth of the view (render/path.rs), so each knob's
+//! error is its distance from the true image, not from the renderer's deepest setting. Its own noise
+//! (two halves compared with ꟻLIP) is reported; `run` doubles samples until it is under half the
+//! smallest error (up to a cap). Converged images are cached by content (scene, view, size, path
+//! settings, path shaders' SPIR-V); a short, corrupt or foreign file is re-rendered with a warning.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

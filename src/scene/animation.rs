@@ -210,12 +210,9 @@ where
 }
 
 impl Scene {
-    /// Poses the scene at `time` seconds of animation `animation` (looping
-    /// over its duration; a zero-length animation shows time 0): writes every
-    /// channel's node transform, then [`Scene::update_world`] rebuilds the
-    /// instances, bounds and node-attached lights. Channels on nodes that do
-    /// not exist, or malformed ones, are ignored; an unknown animation index
-    /// leaves the scene as it is.
+    /// Poses the scene at `time` seconds of `animation` (looping; zero length shows time 0) and calls
+    /// [`Scene::update_world`]. Channels on missing nodes and malformed ones are ignored; an unknown
+    /// animation index leaves the scene as it is.
     pub fn animate(&mut self, animation: usize, time: f32) {
         let Some(anim) = self.animations.get(animation) else {
             log::warn!("animate: no animation {animation} (the scene has {})", self.animations.len());

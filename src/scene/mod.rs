@@ -228,11 +228,9 @@ pub struct Light {
     pub node: Option<usize>,
 }
 
-/// Local TRS of a node. The translation is f64, and so is every world
-/// placement derived from it (node and instance world matrices, cameras,
-/// light positions): an f32 world puts a scene 1e6 from the origin on a
-/// 0.0625 grid before the render origin (gpu/origin.rs) can subtract
-/// anything. Rotation and scale need no more than f32.
+/// Local TRS of a node. Translation is f64, as is every world placement derived from it: in f32 a
+/// scene 1e6 from the origin sits on a 0.0625 grid before the render origin (gpu/origin.rs) can
+/// subtract anything. Rotation and scale need no more than f32.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transform {
     pub translation: DVec3,
@@ -484,10 +482,8 @@ impl Scene {
         world.into_iter().map(|m| m.unwrap_or(DMat4::IDENTITY)).collect()
     }
 
-    /// Rebuilds `instances` and `bounds` from the node hierarchy, and places
-    /// the lights attached to nodes (`Light::node`): position = world *
-    /// origin, direction = world * -Z, normalized (the KHR_lights_punctual
-    /// convention). Cameras attached to nodes are not updated.
+    /// Rebuilds `instances` and `bounds` and places node-attached lights (position = world * origin,
+    /// direction = normalized world * -Z, per KHR_lights_punctual). Node-attached cameras are not updated.
     pub fn update_world(&mut self) {
         let world = self.world_matrices();
         for light in &mut self.lights {

@@ -1,7 +1,6 @@
-//! Skinning data (glTF skins, JOINTS_0 / WEIGHTS_0) and the CPU reference of
-//! linear blend skinning. The renderer skins on the GPU (glsl/skinning.comp);
-//! the CPU version poses the first frame before any GPU work exists, and
-//! bakes a pose as static geometry so tests can compare the two.
+//! Skinning data (glTF skins, JOINTS_0 / WEIGHTS_0) and the CPU reference of linear blend skinning.
+//! The GPU skins (glsl/anim/skinning.comp); the CPU poses the first frame before any GPU work exists
+//! and bakes poses as static geometry so tests can compare the two.
 
 use anyhow::{ensure, Result};
 use glam::{DMat4, Mat3, Mat4, Vec3, Vec4};
@@ -27,10 +26,8 @@ pub struct SkinWeights {
 }
 
 impl SkinWeights {
-    /// Checks and renormalizes raw JOINTS_0 / WEIGHTS_0: weights must be
-    /// finite and non-negative with a positive sum; joints whose weight is 0
-    /// are ignored (and set to 0) so an unused slot can never index out of
-    /// range.
+    /// Weights must be finite and non-negative with a positive sum; zero-weight joints are set to 0 so an
+    /// unused slot can never index out of range.
     pub fn new(joints: Vec<[u32; 4]>, mut weights: Vec<[f32; 4]>) -> Result<SkinWeights> {
         ensure!(
             joints.len() == weights.len(),
@@ -70,13 +67,10 @@ impl SkinWeights {
 }
 
 impl Scene {
-    /// Joint matrices of `skin` for a mesh on node `mesh_node`, in that
-    /// node's space: `inverse(world(mesh_node)) * world(joint) * inverse_bind`.
-    /// Skinned vertices therefore stay in mesh space and the instance keeps
-    /// its world matrix (like a rigid one), which keeps positions near the
-    /// origin where floats are precise. `world` is [`Scene::world_matrices`];
-    /// the product is taken in f64 (far from the origin the two world
-    /// matrices cancel) and narrowed to f32.
+    /// Joint matrices in `mesh_node`'s space: `inverse(world(mesh_node)) * world(joint) * inverse_bind`,
+    /// so skinned vertices stay in mesh space near the origin and the instance keeps its world matrix.
+    /// `world` is [`Scene::world_matrices`]; the product is taken in f64 (far from the origin the two
+    /// world matrices cancel), then narrowed to f32.
     pub fn joint_matrices(&self, skin: usize, mesh_node: usize, world: &[DMat4]) -> Vec<Mat4> {
         let skin = &self.skins[skin];
         let to_mesh = safe_inverse(&world[mesh_node]);
@@ -142,7 +136,7 @@ pub fn safe_inverse(m: &DMat4) -> DMat4 {
 }
 
 /// Linear blend skinning of one vertex set, the same arithmetic as
-/// glsl/skinning.comp: position by the blended matrix, normal by its inverse
+/// glsl/anim/skinning.comp: position by the blended matrix, normal by its inverse
 /// transpose, tangent by the matrix; both renormalized.
 pub fn skin_vertices(vertices: &[Vertex], skin: &SkinWeights, joints: &[Mat4]) -> Vec<Vertex> {
     vertices

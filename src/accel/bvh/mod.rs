@@ -12,37 +12,26 @@
 //! };
 //! ```
 //!
-//! * `count == 0`: interior node; its children are nodes `left_or_first` and
-//!   `left_or_first + 1` (siblings are always adjacent). Node indices are
-//!   local to one BVH; the root is node 0.
-//! * `count > 0`: leaf over `prim_indices[left_or_first .. left_or_first +
-//!   count]`, which hold indices into the primitive list given to
-//!   [`Bvh::build`] (triangle `i` = indices `3i, 3i+1, 3i+2` for a BLAS,
-//!   an instance index for a top level). `1 <= count <= MAX_LEAF`.
-//! * Children always have larger indices than their parent, so one reverse
-//!   sweep over `nodes` refits bottom-up ([`Bvh::refit`]).
-//! * The tree is at most [`MAX_DEPTH`] levels deep (root = level 1), so an
-//!   ordered stack traversal never holds more than `MAX_DEPTH - 1` entries.
-//! * An empty primitive list gives an empty BVH (no nodes at all); callers
-//!   skip such primitives (the renderer builds no BLAS for them).
+//! * `count == 0`: interior; children are `left_or_first` and `left_or_first + 1` (siblings adjacent).
+//!   Indices are local to one BVH; the root is node 0.
+//! * `count > 0`: leaf over `prim_indices[left_or_first .. left_or_first + count]`, indices into the
+//!   primitive list given to [`Bvh::build`] (triangle `i` = indices `3i..3i+2` for a BLAS, an instance
+//!   for a top level). `1 <= count <= MAX_LEAF`.
+//! * Children have larger indices than their parent, so one reverse sweep refits ([`Bvh::refit`]).
+//! * At most [`MAX_DEPTH`] levels (root = level 1), so an ordered stack traversal never holds more
+//!   than `MAX_DEPTH - 1` entries.
+//! * An empty primitive list gives no nodes at all; the renderer builds no BLAS for such primitives.
 //!
-//! Build: top-down binned SAH ([`BINS`] bins, fewer for nodes of under 8
-//! primitives, on each axis with a non-zero centroid extent, all three
-//! binned in one pass; the best plane over all axes wins: about 4% lower
-//! SAH cost than binning only the largest axis, for twice the binning
-//! work), iterative with an explicit work stack, primitives partitioned in
-//! place by the same bin function that binned them (so a chosen plane never
-//! leaves a side empty). Nodes of more than [`MAX_LEAF`] primitives are
-//! always split; smaller ones become leaves when the SAH says a leaf is no
-//! more expensive. Coincident centroids (no binning plane separates them)
-//! and subtrees that would exceed [`MAX_DEPTH`] fall back to an object
-//! median split along the largest centroid axis.
+//! Build: top-down binned SAH ([`BINS`] bins, fewer under 8 primitives) on all axes with centroid
+//! extent in one pass, best plane over all axes (about 4% lower SAH cost than the largest axis only,
+//! for twice the binning); iterative, partitioned in place by the same bin function (so a chosen
+//! plane never leaves a side empty). Nodes over [`MAX_LEAF`] always split; smaller ones become leaves
+//! when SAH says a leaf is no dearer. Coincident centroids and subtrees that would exceed
+//! [`MAX_DEPTH`] fall back to an object median split on the largest centroid axis.
 //!
-//! Modules: `build` (the binned-SAH builder), `sbvh` (split BVH for static
-//! triangles, and the full-sweep SAH builder it contains; its trees may
-//! reference a triangle from several leaves), `refit` (refit and the
-//! bottom-up level order), `quality` (SAH cost, depth, validation), `wide`
-//! (4-wide quantized collapse of a binary tree).
+//! Modules: `build` (binned SAH), `sbvh` (split BVH for static triangles, and the full-sweep SAH
+//! builder; leaves may share a triangle), `refit` (refit, bottom-up level order), `quality` (SAH cost,
+//! depth, validation), `wide` (4-wide quantized collapse).
 
 mod build;
 mod quality;
@@ -107,10 +96,8 @@ pub fn triangle_aabbs(vertices: &[Vertex], indices: &[u32]) -> Vec<Aabb> {
         .collect()
 }
 
-/// World-space boxes of `scene.instances` (one per instance, in order): the
-/// primitive's object-space bounds through the instance's world matrix. A
-/// top level is `Bvh::build(&instance_aabbs(scene))`; its leaves then hold
-/// instance indices. Instances of empty primitives get `Aabb::EMPTY`.
+/// World-space boxes of `scene.instances`, in order (`Aabb::EMPTY` for empty primitives). A top level
+/// is `Bvh::build(&instance_aabbs(scene))`; its leaves then hold instance indices.
 pub fn instance_aabbs(scene: &Scene) -> Vec<Aabb> {
     scene
         .instances

@@ -115,13 +115,9 @@ impl Bvh {
         }
     }
 
-    /// Checks a tree whose leaves may reference a triangle several times
-    /// and hold only clipped parts of it (an SBVH): the same structure
-    /// checks as [`Bvh::validate`] (ranges, child order, reachability, leaf
-    /// sizes, depth, parents containing children), every triangle
-    /// referenced, and every triangle covered: each of a grid of points on
-    /// it (vertices, edges, interior) lies in the box of some leaf that
-    /// references it.
+    /// Checks an SBVH (leaves may share a triangle and hold clipped parts): [`Bvh::validate`]'s structure
+    /// checks, every triangle referenced, and every triangle covered: a grid of points on it (vertices,
+    /// edges, interior) each lies in the box of some leaf that references it.
     pub fn validate_split(&self, tris: &[[Vec3; 3]]) -> Result<(), String> {
         if self.nodes.is_empty() {
             return match (tris.len(), self.prim_indices.len()) {

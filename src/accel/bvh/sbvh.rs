@@ -1,32 +1,24 @@
-//! Split BVH (Stich, Friedrich, Dietrich 2009, "Spatial Splits in Bounding
-//! Volume Hierarchies") over triangles, into the same flat binary layout as
-//! the binned builder (parent module docs), for static geometry.
+//! Split BVH (Stich, Friedrich, Dietrich 2009) over triangles for static geometry, in the binned
+//! builder's flat binary layout.
 //!
-//! Per node: a full-sweep object split (references sorted by centroid on
-//! each axis, every position evaluated) and, when the two object children
-//! overlap by more than `alpha` of the root's surface area, a binned spatial
-//! split ([`SPATIAL_BINS`] slabs per axis, each triangle clipped to every
-//! slab it crosses, so bin bounds hug the triangle's part inside the slab).
-//! The cheaper of leaf / object / spatial wins; straddling references of a
-//! spatial split are "unsplit" (kept whole on one side) when that is cheaper.
-//! With `alpha = None` no spatial split is tried: that is the full-sweep SAH
-//! binary BVH, the reference quality for the binned builder.
+//! Per node: a full-sweep object split and, when its children overlap by more than `alpha` of the root
+//! area, a binned spatial split ([`SPATIAL_BINS`] slabs, triangles clipped to each slab they cross so
+//! bin bounds hug them). Cheapest of leaf / object / spatial wins; straddlers are "unsplit" (kept
+//! whole on one side) when cheaper. `alpha = None` gives the full-sweep SAH BVH, the binned builder's
+//! quality reference.
 //!
-//! Differences from [`Bvh::build`]'s output: a triangle may be referenced
-//! by several leaves (`prim_indices` repeats it), and a leaf's box holds
-//! only the clipped part of its triangles, so the tree cannot be refit when
-//! vertices move (skinned meshes keep the binned builder). Duplication is
-//! capped at [`MAX_DUPLICATION`] times the triangle count.
+//! Unlike [`Bvh::build`]'s output, a triangle may be in several leaves and a leaf's box holds only
+//! clipped parts, so the tree cannot be refit (skinned meshes keep the binned builder). Duplication
+//! is capped at [`MAX_DUPLICATION`] times the triangle count.
 
 use glam::Vec3;
 
 use super::build::{levels_needed, Bounds};
 use super::{Bvh, BvhNode, INTERSECTION_COST, MAX_DEPTH, MAX_LEAF, TRAVERSAL_COST};
 
-/// Spatial-split slabs per axis, at most; small nodes use fewer (one per
-/// reference, at least 8): their references span most of the node, so
-/// clipping them into every slab dominated the build (about 2x faster on
-/// Sponza than 32 everywhere, SAH cost within 0.1%).
+/// Most slabs per axis; small nodes use fewer (one per reference, at least 8): their references span
+/// most of the node, so clipping into every slab dominated the build (~2x faster on Sponza, SAH within
+/// 0.1%).
 pub const SPATIAL_BINS: usize = 32;
 /// Stich et al.'s overlap threshold: spatial splits are tried where the
 /// object split's children overlap by more than this share of the root
@@ -116,9 +108,8 @@ impl Bvh {
 /// Inputs of at least this many triangles build on every core (a flattened
 /// Sponza, ~330k references, took 5 s on one).
 const PAR_MIN_REFS: usize = 1 << 16;
-/// The parallel build splits serially until this many subtrees are left,
-/// then builds them on the cores. A fixed count, not the core count, so the
-/// tree does not depend on the machine.
+/// Serial splits until this many subtrees remain, then built on the cores. Fixed, not the core count,
+/// so the tree does not depend on the machine.
 const PAR_SUBTREES: usize = 16;
 
 /// One build's output so far.
@@ -172,10 +163,8 @@ impl Build<'_> {
         }
     }
 
-    /// Splits the largest task until [`PAR_SUBTREES`] are left, builds each
-    /// as its own tree on every core (each with its share of the budget, by
-    /// size) and links them in. Same SAH choices per node as `grow`; only
-    /// the budget is shared differently, and the node order differs.
+    /// Splits the largest task until [`PAR_SUBTREES`] remain and builds them in parallel, each with a
+    /// size share of the budget. Same SAH choices as `grow`; only budget sharing and node order differ.
     fn grow_parallel(&mut self, root: Task, mut budget: usize) {
         let mut frontier = vec![root];
         while frontier.len() < PAR_SUBTREES {
@@ -312,10 +301,8 @@ fn best_object_split(refs: &mut [Ref]) -> ObjectSplit {
     best
 }
 
-/// Splits the part of `tri` inside `r` at the plane `axis = pos`: boxes of
-/// the triangle's parts below and above it, each within `r`. Intersection
-/// points are padded by a few ulps off the split axis so float rounding never
-/// leaves a sliver of the triangle outside both boxes.
+/// Boxes of the parts of `tri` inside `r` below and above the plane `axis = pos`. Intersection points
+/// are padded a few ulps off the split axis so rounding never leaves a sliver outside both boxes.
 fn split_reference(tri: &[Vec3; 3], r: &Bounds, axis: usize, pos: f32) -> (Bounds, Bounds) {
     let (mut l, mut rt) = (Bounds::EMPTY, Bounds::EMPTY);
     for i in 0..3 {

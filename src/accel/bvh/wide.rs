@@ -14,24 +14,18 @@
 //! };
 //! ```
 //!
-//! * Child `i < children` has the box `origin + q * 2^(exp - 127)` per axis,
-//!   `q` = its `qmin` byte for the low corner and its `qmax` byte for the
-//!   high corner. The product `q * 2^e` is exact (8-bit integer times a power
-//!   of two), so decoding rounds once, with or without a fused multiply-add,
-//!   and the builder checks that rounding: every decoded box contains the
-//!   exact child box.
-//! * `child[i]` with bit 30 clear: interior child, index of a wide node.
-//!   With bit 30 set: a leaf over `prim_indices[first .. first + count]`,
-//!   `first = child & 0x07FF_FFFF`, `count = ((child >> 27) & 7)` (1..=4).
+//! * Child `i < children` has box `origin + q * 2^(exp - 127)` per axis, `q` its `qmin` / `qmax` byte.
+//!   `q * 2^e` is exact, so decoding rounds once with or without FMA, and the builder checks every
+//!   decoded box contains the exact child box.
+//! * `child[i]` with bit 30 clear: a wide node index. Set: a leaf over
+//!   `prim_indices[first .. first + count]`, `first = child & 0x07FF_FFFF`,
+//!   `count = (child >> 27) & 7` (1..=4).
 //! * Node 0 is the root; children come after their parents.
 //!
-//! Why this layout for a CPU device (llvmpipe runs each shader invocation
-//! as one SIMD lane): a node is one 64-byte fetch instead of two 32-byte
-//! nodes per binary level, half the levels and so half the stack pushes and
-//! pops, and sorting at most 4 hit children is a short insertion sort. 8-bit
-//! quantization keeps 4 children plus origin in one cache line; 16-bit would
-//! need 80+ bytes. 8-wide (CWBVH) halves the levels again but needs 8 box
-//! tests per node and a longer sort per lane.
+//! Why, for a CPU device (llvmpipe runs each invocation as a SIMD lane): one 64-byte fetch instead of
+//! two 32-byte nodes per binary level, half the levels and stack traffic, and at most 4 hit children to
+//! sort. 8-bit quantization fits 4 children plus origin in one cache line (16-bit needs 80+ bytes);
+//! 8-wide (CWBVH) halves levels again but costs 8 box tests and a longer sort per lane.
 
 use super::{Bvh, MAX_LEAF};
 use crate::scene::Aabb;
@@ -150,9 +144,8 @@ fn quantize(boxes: &[Aabb]) -> WideNode {
 }
 
 impl WideBvh {
-    /// Collapses a binary tree: each wide node takes up to [`WIDTH`]
-    /// children by repeatedly opening its interior child of largest surface
-    /// area (what SAH says is visited most often).
+    /// Each wide node takes up to [`WIDTH`] children by opening its largest-area interior child (SAH's
+    /// most visited).
     pub fn from_binary(bvh: &Bvh) -> WideBvh {
         let mut w = WideBvh { prim_indices: bvh.prim_indices.clone(), ..Default::default() };
         if bvh.nodes.is_empty() {

@@ -1,8 +1,6 @@
-//! The CPU tracer: a reference of the compute tracer's ray tests and
-//! traversal (glsl/trace/compute.glsl), also what PRT traces with. The
-//! watertight ray/triangle test (triangle.rs), a NaN-safe ray/box slab
-//! test, and ordered closest-hit traversal of one [`Bvh`] and of a
-//! two-level structure (top level over instances).
+//! The CPU tracer: a reference for glsl/trace/compute.glsl's tests and traversal, also used by PRT.
+//! Watertight triangle test (triangle.rs), NaN-safe slab test, ordered closest-hit traversal of one
+//! [`Bvh`] and of a two-level structure.
 //!
 //! Conventions shared with the shader:
 //! * hits are reported for both windings (no culling), for `0 < t < tmax`;
@@ -26,18 +24,12 @@ pub use triangle::{intersect_triangle, WatertightRay};
 /// lying on its faces, edges or corners.
 pub const BOX_EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * 0.5 * f32::EPSILON) / (1.0 - 3.0 * 0.5 * f32::EPSILON);
 
-/// Slab test: the entry distance (>= `tmin`) when the ray meets `aabb`
-/// within `[tmin, tmax]`, boxes closed (touching a face counts).
+/// Slab test: entry distance (>= `tmin`) when the ray meets `aabb` within `[tmin, tmax]`, boxes closed.
 ///
-/// `inv_dir = 1 / dir` may hold `+-inf` for zero components. Per axis
-/// `t0 = (min - o) * inv`, `t1 = (max - o) * inv`; with `inv = +-inf` these
-/// are `+-inf` (origin outside the slab on that side: the interval is empty
-/// or unbounded as it should be) except for `0 * inf = NaN`, which happens
-/// exactly when the origin lies on that face's plane and the ray runs inside
-/// it. The closed slab then contains the whole ray, so an axis with a NaN
-/// bound is skipped (no constraint) instead of being fed to min/max.
-/// Inverted (empty) boxes never hit; the exit is widened by
-/// [`BOX_EXIT_SCALE`].
+/// `inv_dir` may hold `+-inf`; then `(bound - o) * inv` is `+-inf` as it should be, except
+/// `0 * inf = NaN` exactly when the origin lies on that face's plane and the ray runs inside it. The
+/// closed slab then contains the whole ray, so a NaN axis is skipped rather than fed to min/max.
+/// Inverted (empty) boxes never hit; the exit is widened by [`BOX_EXIT_SCALE`].
 pub fn ray_aabb(origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32, aabb: &Aabb) -> Option<f32> {
     let (mut enter, mut exit) = (tmin, tmax);
     for k in 0..3 {
@@ -163,10 +155,8 @@ pub struct BlasInstance<'a> {
     pub world_to_object: Mat4,
 }
 
-/// Closest hit in a two-level structure: `tlas` is built over the
-/// instances' world-space boxes (its leaves hold indices into `instances`);
-/// each instance's BLAS is traversed with the ray moved into object space
-/// (direction not renormalised, so `t` stays the world-space `t`).
+/// Closest hit in a two-level structure (`tlas` leaves index `instances`); each BLAS is traversed with
+/// the ray in object space, direction not renormalised so `t` stays world-space.
 /// Returns `(instance, prim, t, u, v)`.
 pub fn traverse_two_level(
     tlas: &Bvh,

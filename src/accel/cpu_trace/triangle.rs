@@ -92,11 +92,8 @@ impl WatertightRay {
         if !(t > 0.0 && t < tmax) {
             return None;
         }
-        // Degeneracy guard (not in the paper; only evaluated for hits): a
-        // zero-area triangle can still pass the tests above when the ray
-        // runs exactly through one of its points, since the shear rounds
-        // its projection off the line. Its normal would be zero (NaN when
-        // normalised), so such hits are dropped.
+        // Not in the paper: a zero-area triangle can pass when the ray runs exactly through one of its
+        // points (the shear rounds its projection off the line); its normal would be zero (NaN normalised).
         let n = (p1 - p0).cross(p2 - p0);
         let nn = n.dot(n);
         if nn == 0.0 || nn.is_nan() {

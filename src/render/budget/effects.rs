@@ -1,35 +1,22 @@
-//! Effects mode (`--budget-mode effects`, `--budget-ms T`): the paper's
-//! relevance, but selection per (object, effect) — an object may get
-//! reflections and no shadows — and costs in milliseconds of the ray
-//! stages, so `T` is a real time budget for `direct` + `specular`.
+//! Effects mode (`--budget-mode effects`, `--budget-ms T`): the paper's relevance, but selection per
+//! (object, effect) — reflections without shadows, say — and costs in ms, so `T` is a real time budget
+//! for `direct` + `specular`.
 //!
-//! The cost model, per ray stage (shadows are traced in `direct`,
-//! reflection and refraction chains in `specular`):
-//! `stage ms = base + k · rays`, where `base` is the stage's time with
-//! nothing traced (it shades every pixel anyway) and `k` its time per
-//! ray. Both are measured, not assumed: `base` in a calibration frame with
-//! the selection empty, `k` from every frame that traced something, as a
-//! ratio of exponential moving averages (`EMA(ms − base) / EMA(rays)`,
-//! so frames with few rays, whose ratio is mostly noise, weigh little).
-//! The rays an (object, effect) needs per covered pixel come from the
-//! frames that traced it (the passes count them per object and effect,
-//! `BUDGET_STAT_RAYS`); an object not yet traced is estimated with the
-//! paper's `Q` terms for that effect.
+//! Per ray stage (shadows in `direct`, reflection/refraction chains in `specular`):
+//! `stage ms = base + k · rays`. Both are measured: `base` in a calibration frame with nothing
+//! selected (the stage shades every pixel anyway), `k` from frames that traced rays. Rays per covered
+//! pixel of an (object, effect) come from frames that traced it (`BUDGET_STAT_RAYS`), else the
+//! paper's `Q` terms.
 //!
-//! The selection is the paper's greedy rule on (object, effect) pairs:
-//! cost `A · rays per pixel · k`, relevance `(S·I + V)·K` with `S` for
-//! that pair, within `T − base(direct) − base(specular)`. The model
-//! corrects itself: if `k` is off, the next frame's rays show it, and the
-//! iteration `rays → T/(ms per ray)` has the budget as its fixed point as
-//! long as the stages' base fits in it. `E` (the designer's cost factor)
-//! is not used: the cost is measured.
+//! Selection is the paper's greedy rule on (object, effect) pairs: cost `A · rays per pixel · k`,
+//! relevance `(S·I + V)·K` with `S` per pair, within `T − base(direct) − base(specular)`. It corrects
+//! itself: if `k` is off, the next frame's rays show it, and `rays → T/(ms per ray)` has the budget as
+//! fixed point while the bases fit. `E` is unused: the cost is measured.
 //!
-//! What the greedy rule leaves of the budget goes to a partial pair: the
-//! most relevant pair that did not fit is traced on the fraction
-//! `left / cost` of its object's pixels (whole tiles picked by a hash, see
-//! EFFECT_PARTIAL_SHIFT). Without it the budget is met only in steps of
-//! whole objects, and a scene whose cost sits in one large object (Sponza's
-//! building) can only take all of it or none.
+//! The leftover budget goes to a partial pair: the most relevant pair that did not fit, traced on
+//! `left / cost` of its pixels (hashed whole tiles, EFFECT_PARTIAL_SHIFT). Otherwise the budget is met
+//! only in whole-object steps, and a scene whose cost sits in one object (Sponza's building) gets
+//! all or nothing.
 
 use super::paper::{self, ObjectStats, Scored, Screen};
 use crate::gpu::shared::{
@@ -42,7 +29,7 @@ pub const EFFECTS: usize = EFFECT_COUNT as usize;
 /// The effects' names, by `EFFECT_BIT_*`.
 pub const EFFECT_NAMES: [&str; EFFECTS] = ["shadows", "reflections", "refractions"];
 
-/// The ray stages, the pass that traces each, and each effect's stage.
+/// The ray stages, by the pass that traces them.
 pub const STAGES: [&str; 2] = ["direct", "specular"];
 pub const fn stage_of(effect: usize) -> usize {
     if effect == EFFECT_BIT_SHADOWS as usize {
@@ -54,8 +41,8 @@ pub const fn stage_of(effect: usize) -> usize {
 
 /// Weight of a new frame in the moving average of a stage's base.
 const SMOOTHING: f64 = 0.3;
-/// Frames the time per ray is the median of: a spike in up to 3 of 7
-/// frames leaves it alone, a real change shows after 4.
+/// Median window for the time per ray: a spike in up to 3 of 7 frames leaves it alone, a real change
+/// shows after 4.
 const WINDOW: usize = 7;
 
 /// One ray stage's `ms = base + k · rays`.
@@ -71,12 +58,9 @@ pub struct StageFit {
 }
 
 impl StageFit {
-    /// ms per ray: the lower median of the last WINDOW frames' time per
-    /// ray (0 before any frame traced a ray in this stage). A median, not a
-    /// mean: on lavapipe one frame in ten or so takes 1.5-2x as long for
-    /// the same rays (another process on the CPU mid-pass), and a mean
-    /// that follows such a spike cuts the next selections, which then
-    /// undershoot for several frames (a limit cycle around T).
+    /// Lower median of the last WINDOW frames' time per ray (0 before any ray). Not a mean: on lavapipe
+    /// about one frame in ten takes 1.5-2x as long for the same rays (another process mid-pass), and a
+    /// mean following the spike undershoots the next selections for frames (a limit cycle around T).
     pub fn ms_per_ray(&self) -> f64 {
         if self.len == 0 {
             return 0.0;
@@ -108,12 +92,11 @@ impl StageFit {
     }
 }
 
-/// Pixels a partial pair must have traced for its rays per pixel to be
-/// measured from it (fewer tiles make the hashed share of pixels noisy).
+/// Pixels a partial pair must cover for its rays per pixel to be measured (fewer tiles make the
+/// hashed share noisy).
 const MIN_PARTIAL_PIXELS: f64 = 4.0 * (BUDGET_TILE * BUDGET_TILE) as f64;
 
-/// A selection word (the budget mask's per-object word): `full` effects
-/// on every pixel, `partial` ones on `fraction` of them.
+/// The budget mask's per-object word: `full` effects on every pixel, `partial` ones on `fraction`.
 pub fn selection_word(full: u32, partial: u32, fraction: f64) -> u32 {
     let q = ((fraction.clamp(0.0, 1.0) * 65536.0).floor() as u32).min(0xFFFF);
     if partial == 0 || q == 0 {
@@ -122,8 +105,8 @@ pub fn selection_word(full: u32, partial: u32, fraction: f64) -> u32 {
     (full & EFFECT_ALL) | ((partial & EFFECT_ALL) << EFFECT_PARTIAL_SHIFT) | (q << EFFECT_FRACTION_SHIFT)
 }
 
-/// The share of its pixels on which `word` traces `effect` (the tiles'
-/// hash is uniform, so the expected share): 1, the word's fraction, or 0.
+/// Share of its pixels on which `word` traces `effect`: 1, the word's fraction (the tile hash is
+/// uniform), or 0.
 pub fn traced_fraction(word: u32, effect: usize) -> f64 {
     if (word >> effect) & 1 == 1 {
         1.0
@@ -139,11 +122,9 @@ pub struct Observation<'a> {
     /// Per object: the statistics words' pixels and rays per effect.
     pub pixels: &'a [u32],
     pub rays: &'a [[u32; EFFECTS]],
-    /// The selection words each object traced in that frame (full and
-    /// partial effect bits, see [`selection_word`]).
+    /// Selection words each object traced ([`selection_word`]).
     pub traced: &'a [u32],
-    /// GPU ms of the `direct` and `specular` passes (0 when left out;
-    /// None when the frame's times are not representative, e.g. a shader
+    /// GPU ms of `direct` and `specular` (0 when left out; None when not representative, e.g. a shader
     /// compiled on first use inside them).
     pub stage_ms: Option<[f64; 2]>,
 }
@@ -159,14 +140,12 @@ pub struct CostModel {
 }
 
 impl CostModel {
-    /// Both calibration frames seen: the empty one (bases) and the full
-    /// one (rays per pixel of everything visible, and `k`).
+    /// Both calibration frames seen: the empty one (bases) and the full one (rays per pixel, `k`).
     pub fn calibrated(&self) -> bool {
         self.seen_full && self.stages.iter().all(|s| s.base_ms.is_some())
     }
 
-    /// The selection the next calibration frame needs: nothing traced for
-    /// the stages' bases, then everything.
+    /// Nothing traced (for the bases), then everything.
     pub fn calibration_mask(&self) -> u32 {
         if self.stages.iter().any(|s| s.base_ms.is_none()) {
             0
@@ -204,16 +183,14 @@ impl CostModel {
         self.seen_full |= all_traced && o.pixels.iter().any(|&p| p > 0);
     }
 
-    /// Rays per covered pixel of `object`'s `effect`: measured, else the
-    /// paper's estimate for that effect.
+    /// Measured, else the paper's estimate for that effect.
     pub fn rays_per_pixel(&self, object: usize, effect: usize, estimate: f64) -> f64 {
         self.rays_per_pixel.get(object).and_then(|r| r[effect]).unwrap_or(estimate)
     }
 }
 
-/// The paper's `Q`, split by effect: shadow-casting lights for shadows,
-/// `lights + 1` for a reflective object's reflections, `lights + 4` for a
-/// refractive one's refractions; 0 for an effect the object cannot have.
+/// The paper's `Q` split by effect: shadow-casting lights for shadows, `lights + 1` for reflections,
+/// `lights + 4` for refractions; 0 for an effect the object cannot have.
 pub fn estimated_rays(o: &ObjectStats, shadow_lights: u32, lights: u32) -> [f64; EFFECTS] {
     let mut q = [0.0; EFFECTS];
     q[EFFECT_BIT_SHADOWS as usize] = shadow_lights as f64;
@@ -229,8 +206,7 @@ pub fn estimated_rays(o: &ObjectStats, shadow_lights: u32, lights: u32) -> [f64;
 /// What effects mode chose.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EffectsSelection {
-    /// Per object, the selection word: EFFECT_* bits traced on every pixel,
-    /// and the partial pair's bit and fraction ([`selection_word`]).
+    /// Per object: EFFECT_* bits traced on every pixel, plus the partial pair ([`selection_word`]).
     pub bits: Vec<u32>,
     /// The partial pair: object, effect, fraction of its pixels.
     pub partial: Option<(usize, usize, f64)>,
@@ -242,8 +218,7 @@ pub struct EffectsSelection {
     pub base_ms: f64,
 }
 
-/// Selects (object, effect) pairs within `budget_ms` for the ray stages.
-/// `previous`: the bits selected last frame (stickiness per pair).
+/// Selects (object, effect) pairs within `budget_ms`; `previous` gives per-pair stickiness.
 pub fn select(
     objects: &[ObjectStats],
     screen: Screen,
@@ -256,7 +231,6 @@ pub fn select(
     let scored = paper::score(objects, screen, params);
     let stickiness = if params.stickiness.is_finite() { params.stickiness as f64 } else { 0.0 };
     let k = [0usize, 1].map(|s| model.stages[s].ms_per_ray());
-    // Per pair: its score, and the rays it would trace (all its pixels).
     let mut pairs = Vec::new();
     let mut pair_rays = Vec::new();
     for (o, (stats, s)) in objects.iter().zip(&scored).enumerate() {
@@ -296,8 +270,7 @@ pub fn select(
             take(i, &mut bits[p.object / EFFECTS], 1.0);
         }
     }
-    // What the greedy rule left goes to the most relevant pair that did
-    // not fit, on that share of its pixels.
+    // The leftover goes to the most relevant pair that did not fit, on that share of its pixels.
     let left = budget_ms - base_ms - chosen.spent;
     let partial = (0..pairs.len())
         .filter(|&i| {

@@ -1,10 +1,7 @@
-//! The budget's host side in a frame. Before the frame: reset the
-//! statistics the `heuristic` pass gathers and write the selection the ray
-//! passes honour. After it: turn the statistics into the next frame's
-//! selection. One frame of latency, so neither side ever waits for the
-//! other inside a frame; a renderer without a selection for the current
-//! settings (the first frame, or the budget changed) measures one frame
-//! first (see `Renderer::render`).
+//! The budget's host side: before a frame, reset the `heuristic` statistics and write the selection;
+//! after it, turn the statistics into the next selection. One frame of latency, so neither side waits
+//! inside a frame; without a selection for the current settings (first frame, budget changed) a
+//! renderer measures one frame first (`Renderer::render`).
 
 use anyhow::Result;
 
@@ -23,20 +20,16 @@ const WORDS: usize = BUDGET_STAT_WORDS as usize;
 #[derive(Clone, Debug, PartialEq)]
 pub struct BudgetReport {
     pub settings: BudgetSettings,
-    /// Per object: what the frame measured.
     pub objects: Vec<ObjectStats>,
-    /// The objects selected for any effect (`spent`: paper mode's cost
-    /// units; effects mode's predicted ms of the traced rays).
+    /// Objects selected for any effect (`spent`: paper cost units, or effects mode's predicted ms).
     pub selection: Selection,
     /// Per object, the EFFECT_* bits selected.
     pub effects: Vec<u32>,
-    /// Effects mode: predicted ms of the ray stages for the selection, and
-    /// what the frame measured them at (`direct` + `specular`).
+    /// Effects mode: predicted and measured ms of the ray stages (`direct` + `specular`).
     pub predicted_ms: Option<f64>,
     pub measured_ms: f64,
-    /// Effects mode: the rays per ray stage (`direct`, `specular`) the
-    /// selection is predicted to trace, and what the frame traced: they
-    /// tell a wrong ray estimate from a wrong ms per ray.
+    /// Effects mode: predicted and traced rays per ray stage (`direct`, `specular`), to tell a wrong ray
+    /// estimate from a wrong ms per ray.
     pub predicted_rays: Option<[f64; 2]>,
     pub measured_rays: [f64; 2],
 }
@@ -72,8 +65,7 @@ impl BudgetReport {
 
 #[derive(Default)]
 pub struct BudgetState {
-    /// The selection the next frame honours (EFFECT_* bits per object),
-    /// and the settings it was made under.
+    /// EFFECT_* bits per object for the next frame, and the settings they were made under.
     mask: Option<(BudgetSettings, Vec<u32>)>,
     /// The bits the frame in flight traces, per object.
     in_flight: Vec<u32>,
@@ -83,8 +75,7 @@ pub struct BudgetState {
 }
 
 impl BudgetState {
-    /// Whether a selection exists for `settings` (else the next frame only
-    /// measures).
+    /// Whether a selection exists for `settings` (else the next frame only measures).
     pub fn ready(&self, settings: &BudgetSettings) -> bool {
         self.mask_for(settings).is_some()
     }
@@ -99,16 +90,14 @@ impl BudgetState {
         self.last.as_ref()
     }
 
-    /// Sets the selection the next frame under `settings` honours (EFFECT_*
-    /// bits per object) in place of the heuristic's: to check the passes
-    /// honour any selection, and to replay one.
+    /// Overrides the heuristic's selection for the next frame under `settings` (EFFECT_* bits per
+    /// object): to check the passes honour any selection, and to replay one.
     pub fn set_selection(&mut self, settings: &BudgetSettings, bits: Vec<u32>) {
         self.mask = Some((*settings, bits));
     }
 
-    /// Whether the frame in flight (after `before_frame`) leaves out the
-    /// shadows of an object with pixels: visible in the last statistics,
-    /// or any object before there are any.
+    /// Whether the frame in flight leaves out the shadows of an object with pixels (visible in the last
+    /// statistics, or any object before there are any).
     pub fn shadows_left_out(&self) -> bool {
         let visible =
             |o: usize| self.last.as_ref().is_none_or(|r| r.objects.get(o).is_none_or(|s| s.pixels > 0));
@@ -120,12 +109,10 @@ impl BudgetState {
         &self.model
     }
 
-    /// Resets the statistics and writes the selection for `objects`
-    /// objects (through the frame's ring slot): the current one, or, before
-    /// there is one, everything (a measuring frame; effects mode calibrates
-    /// first with nothing). Returns the selection, for `after_frame` of
-    /// this frame (with frames in flight, later frames select before it
-    /// completes).
+    /// Resets the statistics and writes the selection for `objects` objects through the frame's ring
+    /// slot: the current one, or everything before there is one (a measuring frame; effects mode
+    /// calibrates with nothing). Returns it for this frame's `after_frame`, since with frames in flight
+    /// later frames select before this one completes.
     pub fn before_frame(
         &mut self,
         up: &mut Uploads,
@@ -135,8 +122,7 @@ impl BudgetState {
     ) -> Result<Vec<u32>> {
         let mut words = vec![0u32; objects.max(1) * WORDS];
         for w in words.chunks_exact_mut(WORDS) {
-            // Count, maxima and ray counts 0, minima at the largest value:
-            // atomicMin/Max/Add.
+            // Minima start at the largest value for atomicMin; the rest at 0.
             (w[1], w[2]) = (u32::MAX, u32::MAX);
         }
         up.write(&gpu.budget_stats, 0, bytemuck::cast_slice(&words))?;
@@ -152,11 +138,9 @@ impl BudgetState {
         Ok(self.in_flight.clone())
     }
 
-    /// Takes the statistics (`words`, read back) of a completed frame that
-    /// traced `traced` (rendered from `camera` at `screen`, its passes' GPU
-    /// ms in `timings`, None when they are not representative) and selects
-    /// what the next frame traces. With frames in flight the selection is
-    /// one frame older than the frame it applies to.
+    /// Selects what the next frame traces from a completed frame's read-back statistics `words`.
+    /// `timings`: its passes' GPU ms, None when not representative. With frames in flight the selection
+    /// is one frame older than the frame it applies to.
     #[allow(clippy::too_many_arguments)]
     pub fn after_frame(
         &mut self,
@@ -236,12 +220,9 @@ impl BudgetState {
     }
 }
 
-/// The paper's per-object inputs: A and the covered-pixel bounds from the
-/// `heuristic` pass (`words`), D from the camera to the centre of the
-/// object's world bounds, reflective / refractive from its materials (a
-/// surface at most MIRROR_ROUGHNESS rough spawns reflection rays, a
-/// transmissive one refraction rays), E and K from the object's properties,
-/// S from `previous`.
+/// The paper's per-object inputs: A and pixel bounds from `heuristic` (`words`), D to the centre of
+/// the world bounds, reflective (roughness <= MIRROR_ROUGHNESS) / refractive (transmissive) from the
+/// materials, E and K from the object's properties, S from `previous`.
 pub fn object_stats(
     scene: &Scene,
     camera: &Camera,

@@ -1,7 +1,5 @@
-//! Paper mode: the formulas and the greedy selection of Walewski et al.
-//! (2019) as stated (see the module above for the symbols), computed in
-//! f64. Degenerate inputs never produce NaN: each function says how it
-//! treats them.
+//! Paper mode: Walewski et al. (2019)'s formulas and greedy selection as stated (symbols in the module
+//! above), in f64. Degenerate inputs never produce NaN; each function says how it treats them.
 
 use std::cmp::Ordering;
 
@@ -10,8 +8,7 @@ use std::cmp::Ordering;
 pub struct ObjectStats {
     /// `A`: visible pixels this frame (0: not visible, never selected).
     pub pixels: u32,
-    /// The projected bounding box in pixels (x right, y down); it may
-    /// extend off screen.
+    /// Projected bounding box in pixels (x right, y down); may extend off screen.
     pub bbox_min: [f32; 2],
     pub bbox_max: [f32; 2],
     /// `D`: distance from the camera in world units.
@@ -50,8 +47,7 @@ pub struct Params {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scored {
     pub object: usize,
-    /// `A`, carried so that `select` can leave out invisible objects (a
-    /// sticky one has `R > 0` with no pixels).
+    /// `A`, so `select` can leave out invisible objects (a sticky one has `R > 0` with no pixels).
     pub pixels: u32,
     /// `V = A·P/D`.
     pub visibility: f64,
@@ -66,19 +62,15 @@ pub struct Scored {
 pub struct Selection {
     /// Object ids in the order they were taken.
     pub selected: Vec<usize>,
-    /// The sum of their costs.
     pub spent: f64,
-    /// Per object id: selected. Its length is one more than the largest
-    /// id in the input (`objects.len()` for the output of `score`).
+    /// Per object id: selected. Length is one more than the largest id in the input.
     pub mask: Vec<bool>,
 }
 
-/// The lower bound on `D`: a camera inside (or on) an object's bounding
-/// volume measures a distance of 0, which would make `V` infinite. Negative
-/// distances are clamped to it as well.
+/// Lower bound on `D` (also for negative distances): a camera inside an object's bounding volume
+/// measures 0, which would make `V` infinite.
 pub const MIN_DISTANCE: f64 = 1e-4;
 
-/// `P` of the bounding box's `[min, max]` as f64 (see `centrality`).
 fn centrality_f64(bbox_min: [f32; 2], bbox_max: [f32; 2], screen: Screen) -> f64 {
     let (w, h) = (screen.width as f64, screen.height as f64);
     let cx = 0.5 * (bbox_min[0] as f64 + bbox_max[0] as f64);
@@ -93,13 +85,10 @@ fn centrality_f64(bbox_min: [f32; 2], bbox_max: [f32; 2], screen: Screen) -> f64
     (1.0 - d).clamp(0.01, 1.0)
 }
 
-/// `P`: how close the centre of the projected bounding box is to the screen
-/// centre. The paper gives only its range, [0.01, 1] (1 at the centre, 0.01
-/// off screen); the falloff is ours: with `d` the centre's offset from the
-/// screen centre in half-screen units, its length over sqrt(2) (0 at the
-/// centre, 1 at a corner), `P = clamp(1 - d, 0.01, 1)`, linear along every
-/// ray from the centre. A centre off `[0, w] x [0, h]` (edges on screen),
-/// NaN, or a screen of zero size gives 0.01.
+/// `P`: closeness of the projected box's centre to the screen centre. The paper gives only the range
+/// [0.01, 1] (1 at the centre, 0.01 off screen); our falloff is `P = clamp(1 - d, 0.01, 1)` with `d`
+/// the centre's offset in half-screen units over sqrt(2) (1 at a corner). A centre off
+/// `[0, w] x [0, h]`, NaN, or a zero-size screen gives 0.01.
 pub fn centrality(bbox_min: [f32; 2], bbox_max: [f32; 2], screen: Screen) -> f32 {
     centrality_f64(bbox_min, bbox_max, screen) as f32
 }
@@ -116,9 +105,8 @@ fn rays_per_pixel_f64(shadow_lights: u32, lights: u32, reflective: bool, refract
     q
 }
 
-/// `Q`: the rays per pixel the paper estimates: one shadow ray per
-/// shadow-casting light, plus `lights + 1` when reflective, plus
-/// `lights + 4` when refractive.
+/// `Q`: one shadow ray per shadow-casting light, plus `lights + 1` when reflective, plus `lights + 4`
+/// when refractive.
 pub fn rays_per_pixel(shadow_lights: u32, lights: u32, reflective: bool, refractive: bool) -> f32 {
     rays_per_pixel_f64(shadow_lights, lights, reflective, refractive) as f32
 }
@@ -133,15 +121,12 @@ fn finite_or_zero(x: f32) -> f64 {
 }
 
 /// `V`, `C` and `R` of every object, in input order. Degenerate inputs:
-/// - `D` is clamped below by `MIN_DISTANCE`; a NaN or infinite `D` counts
-///   as infinitely far (`V = 0`);
-/// - an `E` that is NaN, infinite or negative makes `C` +inf: such an
-///   object never fits a budget, not even an infinite one;
-/// - a non-finite `K` or `I` counts as 0 (`K`: never selected);
+/// - `D` is clamped below by `MIN_DISTANCE`; NaN or infinite `D` is infinitely far (`V = 0`);
+/// - a NaN, infinite or negative `E` makes `C` +inf: never fits, not even an infinite budget;
+/// - a non-finite `K` or `I` counts as 0;
 /// - a NaN bounding box gives `P = 0.01`.
 ///
-/// `K < 0` or `I < 0` are used as given (`K < 0` gives `R <= 0`, never
-/// selected).
+/// Negative `K` or `I` are used as given (`K < 0`: `R <= 0`, never selected).
 pub fn score(objects: &[ObjectStats], screen: Screen, params: &Params) -> Vec<Scored> {
     let stickiness = finite_or_zero(params.stickiness);
     let (shadow_lights, lights) = (params.shadow_lights, params.lights);
@@ -166,40 +151,26 @@ pub fn score(objects: &[ObjectStats], screen: Screen, params: &Params) -> Vec<Sc
         .collect()
 }
 
-/// Whether `s` can be selected at all: visible (`A > 0`), relevant
-/// (`R > 0`, so `K = 0` never is) and of a finite cost >= 0. NaN fails.
+/// Visible (`A > 0`), relevant (`R > 0`) and of finite cost >= 0. NaN fails.
 pub(super) fn candidate(s: &Scored) -> bool {
     s.pixels > 0 && s.relevance > 0.0 && s.cost.is_finite() && s.cost >= 0.0
 }
 
-/// The tie rule: higher `R` first; equal `R`, lower cost first (it leaves
-/// more budget); equal both, lower object id first. A total order on
-/// candidates (finite values, distinct ids), so the result does not depend
-/// on the input order.
+/// Higher `R` first, then lower cost (leaves more budget), then lower id: a total order on
+/// candidates, so the result does not depend on input order.
 pub(super) fn rank(a: &Scored, b: &Scored) -> Ordering {
     let by = |x: f64, y: f64| x.partial_cmp(&y).unwrap_or(Ordering::Equal);
     by(b.relevance, a.relevance).then(by(a.cost, b.cost)).then(a.object.cmp(&b.object))
 }
 
-/// The paper's greedy selection: while budget remains (`remaining > 0`),
-/// among the objects not taken whose cost fits it (`C <= remaining`), take
-/// the most relevant and subtract its cost; stop when none fits. Ties in
-/// `R` go to the lower cost, then to the lower object id, whatever the
-/// input order. Only candidates count (visible, `R > 0`, a finite,
-/// non-negative cost), so zero-area and `K = 0` objects are never taken,
-/// even with an infinite budget, which takes every candidate. Objects of cost 0 are
-/// taken only while budget remains: a budget <= 0 or NaN takes nothing,
-/// and nothing is taken once the budget is used up exactly. An id given
-/// twice is taken at most once.
+/// The paper's greedy selection: while budget remains (`> 0`), take the most relevant candidate
+/// (visible, `R > 0`, finite cost >= 0) whose cost fits, ties by `rank`. An infinite budget takes
+/// every candidate; cost-0 objects are taken only while budget remains, so nothing is taken once it
+/// is used up exactly or when it is <= 0 or NaN. A repeated id is taken at most once.
 ///
-/// Implemented as one scan in that order instead of a search per step,
-/// with the same result: costs are non-negative, so the remaining budget
-/// never grows and an object skipped because it did not fit never fits
-/// later. Hence when the scan reaches position j, every earlier object is
-/// taken or cannot fit, and the first object from j on that fits, the one
-/// the scan takes, is the best fitting one the loop would take. The scan
-/// ends exactly when the loop does: nothing fits or no budget remains.
-/// `tests::scan_equals_the_literal_loop` checks this against the loop.
+/// One scan in rank order instead of a search per step, same result: costs are non-negative, so an
+/// object that did not fit never fits later, and the first fitting object from the scan position is
+/// the one the loop would take. `tests::scan_equals_the_literal_loop` checks this.
 pub fn select(scored: &[Scored], budget: f64) -> Selection {
     let ids = scored.iter().map(|s| s.object + 1).max().unwrap_or(0);
     let mut out = Selection { selected: Vec::new(), spent: 0.0, mask: vec![false; ids] };

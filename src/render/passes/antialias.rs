@@ -1,10 +1,6 @@
-//! The anti-aliasing stage after tone mapping (DESIGN.md: tonemap -> aa):
-//! its output target, which LDR target is the frame's result, and when a
-//! technique is left out. The techniques are one pass each: `edge_aa`
-//! (geometric edges from the G-buffer) and `fxaa` (luminance edges); at
-//! most one runs. They filter the 8-bit tone-mapped image, so the exposure
-//! and tone curve are already applied (anti-aliasing HDR values would let
-//! a few bright pixels dominate an edge).
+//! The anti-aliasing stage after tone mapping (DESIGN.md: tonemap -> aa): its output target, which LDR
+//! target is final, and when a technique is left out. At most one of `edge_aa` and `fxaa` runs, on the
+//! 8-bit tone-mapped image: on HDR values a few bright pixels would dominate an edge.
 
 use ash::vk;
 
@@ -15,8 +11,7 @@ use crate::render::targets::TargetDesc;
 /// The anti-aliased displayable frame (sRGB-encoded values, like `LDR`).
 pub static AA_LDR: TargetDesc = TargetDesc::new("anti-aliased output", vk::Format::R8G8B8A8_UNORM);
 
-/// The frame's final LDR image for this configuration: what is read back,
-/// presented and screenshotted. Tone mapping's output when no
+/// The frame's final LDR image (read back, presented, screenshotted): tone mapping's output when no
 /// anti-aliasing runs.
 pub fn final_ldr(c: &ShadingConfig) -> &'static TargetDesc {
     if runs(c) {

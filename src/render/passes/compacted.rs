@@ -1,16 +1,11 @@
-//! Compaction for a full-screen tracing pass whose work is sparse (only
-//! some pixels trace, e.g. `specular`: the mirrors and glass): a select
-//! kernel, one invocation per pixel, lists the pixels that need the traced
-//! kernel, which then runs once per listed pixel, launched indirectly
-//! (glsl/common/work_list.glsl). Why: in a full-screen launch a SIMD vector
-//! or warp whose pixels mostly have nothing to do runs at the speed of its
-//! busiest lane; on llvmpipe the full-screen specular loop ran at 21 % lane
-//! occupancy on Sponza with spheres (bench/results/lavapipe-2core-vm-frame-passes.md,
-//! with what compaction gains and where it costs).
+//! Compaction for a full-screen tracing pass with sparse work (e.g. `specular`: mirrors and glass): a
+//! select kernel lists the pixels that need the traced kernel, which then runs once per listed pixel,
+//! launched indirectly (glsl/common/work_list.glsl). Why: a SIMD vector or warp runs at the speed of
+//! its busiest lane; on llvmpipe the full-screen specular loop ran at 21 % lane occupancy on Sponza
+//! with spheres (bench/results/lavapipe-2core-vm-frame-passes.md, with gains and costs).
 //!
-//! The header buffer and every barrier between the steps are private to the
-//! pass; the list is a target (`LIST`) so it follows the frame's size and is
-//! allocated only where such a pass runs.
+//! Header and barriers are private to the pass; the list is a target (`LIST`) so it follows the
+//! frame size and exists only where such a pass runs.
 
 use anyhow::Result;
 use ash::vk;
@@ -108,9 +103,8 @@ impl WorkList {
         bind_compute(ctx, cmd, self.select, layout, sets);
         unsafe { ctx.device.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1) };
         ctx.end_label(cmd);
-        // The list and header to the launch; the pass's images the select
-        // kernel wrote (pixels the listed kernel does not touch) are ordered
-        // before it too.
+        // The list and header to the launch; the select kernel's image writes (pixels the listed kernel
+        // does not touch) too.
         memory_barrier(
             ctx,
             cmd,

@@ -71,9 +71,8 @@ pub const PASS: PassDesc = PassDesc {
     this_frame: super::every_frame,
     skip: |_| None,
     uses: |c, up| {
-        // The primary hit's emission is looked up from its triangle's
-        // material (no G-buffer target): the scene geometry is read, and
-        // skinning may have just written it.
+        // Emission is looked up from the triangle's material, so this reads the scene geometry, which
+        // skinning may have just written.
         let mut u = fullscreen::uses(&io(c, &Inputs::of(up)), false);
         u.push(Use::buffer(SharedBuffer::Geometry, Access::ShaderRead));
         u

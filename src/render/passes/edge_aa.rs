@@ -1,15 +1,8 @@
-//! Pass `edge aa`: geometric edge anti-aliasing after tone mapping
-//! (Shishkovtsov, GPU Gems 2 ch. 9; Sabino's Eq. 4.2). Depth and normal
-//! differences to the 8 neighbours give each pixel a blur factor; pixels
-//! with factor 0 (away from discontinuities) are copied unchanged, edge
-//! pixels get a blur-factor-weighted average of their neighbours
-//! (glsl/aa_edge.comp).
+//! Pass `edge aa`: geometric edge anti-aliasing after tone mapping (Shishkovtsov, GPU Gems 2 ch. 9;
+//! Sabino's Eq. 4.2; glsl/aa_edge.comp). Pixels away from depth/normal discontinuities are copied.
 //!
-//! Depth comes from the G-buffer's primary hit, not from the depth
-//! attachment: the camera ray through each pixel meets its stored triangle's
-//! plane, giving reversed-Z depth (znear / view depth). Pure-RT mode has no
-//! depth attachment (pass `primary` writes the other G-buffer targets), so
-//! both modes measure the same depth the same way.
+//! Depth comes from intersecting each pixel's camera ray with its stored triangle's plane, not from
+//! the depth attachment: pure-RT mode has none, so both modes measure depth the same way.
 
 use super::antialias::{self, AA_LDR};
 use super::fullscreen::{self, FullScreen, Shader, TargetBinding};

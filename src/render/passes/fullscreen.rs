@@ -1,8 +1,6 @@
-//! A full-screen pass: set 0 the scene, set 1 its images (each binding
-//! number tied to one declared use), set 2 the tracer's when it traces, and
-//! one kernel invocation per pixel, or per listed pixel where a select
-//! kernel compacts the work first (compacted.rs). Every pass but `gbuffer`
-//! is one.
+//! A full-screen pass (every pass but `gbuffer`): set 0 the scene, set 1 its images (each binding tied
+//! to one declared use), set 2 the tracer's when it traces; one invocation per pixel, or per listed
+//! pixel where a select kernel compacts the work (compacted.rs).
 
 use anyhow::Result;
 use ash::vk;
@@ -52,9 +50,8 @@ pub fn uses(io: &[TargetBinding], traced: bool) -> Vec<Use> {
     u
 }
 
-/// The declared uses of a traced pass that accumulates into `accumulation`
-/// across frames (`reference`, `terms`, `path`): a read-modify-write, so
-/// the previous frames' sum is read too.
+/// Uses of a pass accumulating into `accumulation` across frames (`reference`, `terms`, `path`):
+/// read-modify-write, so the previous sum is read too.
 pub fn accumulating_uses(io: &[TargetBinding], accumulation: &'static TargetDesc) -> Vec<Use> {
     let mut u = uses(io, true);
     u.push(Use::image(accumulation, Access::StorageRead));

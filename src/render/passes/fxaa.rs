@@ -1,9 +1,6 @@
-//! Pass `fxaa`: luminance edge anti-aliasing after tone mapping in the
-//! style of FXAA 3.11's quality preset (Lottes 2011), written for this
-//! renderer (glsl/aa_fxaa.comp). It needs no G-buffer, so it also smooths
-//! edges inside textures and shading (shadow boundaries, reflections) that
-//! the geometric edge filter cannot see; pixels below its local contrast
-//! threshold are copied unchanged.
+//! Pass `fxaa`: luminance edge AA after tone mapping, after FXAA 3.11's quality preset (Lottes 2011;
+//! glsl/aa_fxaa.comp). Needing no G-buffer, it also smooths edges the geometric filter cannot see
+//! (textures, shadow boundaries, reflections).
 
 use super::antialias::{self, AA_LDR};
 use super::fullscreen::{self, FullScreen, Shader, TargetBinding};

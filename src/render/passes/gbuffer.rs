@@ -1,17 +1,11 @@
-//! Pass `gbuffer`: rasterizes every instance as a visibility buffer: each
-//! pixel's (instance + 1, primitive) into the hit target, with a reversed-Z
-//! depth buffer (clear 0, GREATER). The `gbuffer_resolve` pass then fills
-//! the material targets from that triangle, so the vertex stage passes on
-//! no shading attributes: on llvmpipe, setting up and interpolating them
-//! for many tiny triangles was most of this pass's time (measured in
-//! bench/results/lavapipe-2core-vm-raster.md). Alpha-masked materials use a
-//! pipeline that interpolates uv and runs the alpha test; opaque ones keep
-//! early depth testing. Each instance is one non-indexed draw (with
-//! occlusion culling on, one indirect draw per cluster of it, the same
-//! pipelines) with its world matrix and index range as push constants: the vertex
-//! stage pulls its index and vertex and hands on the triangle number, so no
-//! stage reads gl_PrimitiveID or an instance per vertex (both slow on
-//! llvmpipe; glsl/common/gbuffer_draw.glsl).
+//! Pass `gbuffer`: rasterizes a visibility buffer, each pixel's (instance + 1, primitive), with
+//! reversed-Z depth (clear 0, GREATER); `gbuffer_resolve` fills the material targets. No shading
+//! attributes are interpolated: on llvmpipe that was most of this pass's time for many tiny triangles
+//! (bench/results/lavapipe-2core-vm-raster.md). Alpha-masked materials get a pipeline with uv and
+//! the alpha test; opaque ones keep early depth testing. Each instance is one non-indexed draw (or
+//! one indirect draw per cluster with occlusion culling) with world matrix and index range as push
+//! constants, so no stage reads gl_PrimitiveID or a per-vertex instance (both slow on llvmpipe;
+//! glsl/common/gbuffer_draw.glsl).
 
 use anyhow::Result;
 use ash::vk;
@@ -29,13 +23,10 @@ use crate::vk::pipeline::{pipeline_layout, Specialization};
 use crate::vk::raster::RasterPipeline;
 use crate::vk::Context;
 
-/// The G-buffer targets (written by `gbuffer` + `gbuffer_resolve` in hybrid
-/// mode, by `primary` in pure ray-traced mode). Albedo holds sRGB-encoded values in
-/// a UNORM image, encoded and decoded by the shaders (glsl/common/srgb.glsl)
-/// so both modes store the same bytes. The normal is octahedral-encoded
-/// into one uint (glsl/common/gbuffer_pack.glsl); emission is not stored
-/// (readers look it up from the material at the hit): 24 bytes a pixel
-/// with the depth buffer, 20 in pure ray-traced mode (no depth).
+/// G-buffer targets (`gbuffer` + `gbuffer_resolve` in hybrid mode, `primary` in pure-RT mode).
+/// Albedo is sRGB-encoded by the shaders into UNORM (glsl/common/srgb.glsl) so both modes store the
+/// same bytes; the normal is octahedral in one uint; emission is not stored. 24 bytes a pixel with
+/// depth, 20 in pure-RT mode.
 pub static ALBEDO: TargetDesc = TargetDesc::new("gbuffer albedo+occlusion", vk::Format::R8G8B8A8_UNORM);
 pub static NORMAL: TargetDesc = TargetDesc::new("gbuffer normal (octahedral)", vk::Format::R32_UINT);
 pub static MATERIAL: TargetDesc =
@@ -144,10 +135,8 @@ impl GBufferPass {
                 &[scene.set.set],
                 &[],
             );
-            // Opaque first so masked geometry is depth-tested against it.
-            // Only the draws the frustum test kept (cx.draws); single-sided
-            // geometry is back-face culled, and a mirroring transform turns
-            // its front faces clockwise.
+            // Opaque first so masked geometry is depth-tested against it. Single-sided geometry is back-face
+            // culled; a mirroring transform turns its front faces clockwise.
             for (pipeline, masked) in [(self.opaque, false), (self.masked, true)] {
                 d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
                 for fd in &cx.draws.draws {

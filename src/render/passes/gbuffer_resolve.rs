@@ -1,11 +1,7 @@
-//! Pass `gbuffer_resolve` (hybrid mode): the raster `gbuffer` pass is a
-//! visibility buffer (hit ids and depth only); this full-screen pass fills
-//! the material targets (albedo, normal, metallic/roughness/transmission)
-//! from each pixel's stored triangle, as the raster's fragment stage would
-//! have (glsl/gbuffer_resolve.comp). Material work is then done once per
-//! pixel instead of once per covered fragment and no attributes are
-//! interpolated per triangle, which is what llvmpipe spent its G-buffer time
-//! on (bench/results/lavapipe-2core-vm-raster.md).
+//! Pass `gbuffer_resolve` (hybrid mode): fills the material targets from each pixel's stored triangle,
+//! as the raster's fragment stage would have (glsl/gbuffer_resolve.comp): material work once per pixel
+//! and no per-triangle interpolation, which was llvmpipe's G-buffer time
+//! (bench/results/lavapipe-2core-vm-raster.md).
 
 use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
 use super::{gbuffer, Creation, PassDesc};

@@ -1,8 +1,6 @@
-//! Pass `heuristic`: per-object statistics of the primary hits for the
-//! ray-tracing budget (render/budget): covered pixels and their bounds, in
-//! one compute pass over the G-buffer's hit ids (glsl/heuristic.comp). The
-//! host reads them once the frame is done and selects the objects the next
-//! frame traces. Left out without `--budget`.
+//! Pass `heuristic`: per-object covered pixels and bounds for the budget (render/budget), from the
+//! G-buffer's hit ids (glsl/heuristic.comp); the host selects the next frame's objects from them.
+//! Left out without `--budget`.
 
 use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
 use super::{gbuffer, Creation, PassDesc};

@@ -1,8 +1,6 @@
-//! Pass `inject` (tests only): overwrites a few pixels of the HDR frame
-//! after `composite` with chosen values (NaN, Inf, 1e30), so the passes
-//! after it are tested on radiance that no sanitized scene input produces
-//! (glsl/inject.comp). It exists only while `Renderer::inject_radiance`
-//! has armed it; an ordinary pass otherwise, with its declared use.
+//! Pass `inject` (tests only): overwrites a few HDR pixels after `composite` with NaN, Inf, 1e30..., so
+//! later passes are tested on radiance no sanitized scene produces (glsl/inject.comp). Runs only while
+//! `Renderer::inject_radiance` has armed it.
 
 use anyhow::Result;
 use ash::vk;

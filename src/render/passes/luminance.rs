@@ -1,10 +1,7 @@
-//! Pass `luminance`: measures the frame's luminance (log-average and a
-//! log-luminance histogram, by a GPU reduction) and adapts the exposure the
-//! `tonemap` pass applies (glsl/luminance.comp). Two dispatches: a fixed
-//! grid of LUMINANCE_GROUPS groups writes partial sums, then one group
-//! combines them and updates the state kept across frames in set 0's
-//! exposure buffer. Left out when the exposure is fixed and no operator
-//! needs the frame's maximum.
+//! Pass `luminance`: log-average and histogram of the frame's luminance by GPU reduction, adapting the
+//! exposure `tonemap` applies (glsl/luminance.comp): LUMINANCE_GROUPS groups write partial sums, then
+//! one group updates the state in set 0's exposure buffer. Left out when the exposure is fixed and no
+//! operator needs the frame's maximum.
 
 use anyhow::Result;
 use ash::vk;

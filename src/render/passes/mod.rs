@@ -1,6 +1,5 @@
-//! The frame's passes, one module each, in frame order. A pass module
-//! exports a `PASS: PassDesc`: when it is left out (and why), what it reads
-//! and writes, and how to build it. Adding a pass is one module plus one
+//! The frame's passes, one module each, in frame order. Each exports a `PASS: PassDesc` (when it is
+//! left out and why, what it reads and writes, how to build it); a new pass is one module plus one
 //! line in `FRAME`.
 
 pub mod antialias;
@@ -37,14 +36,10 @@ use crate::gpu::GpuScene;
 use crate::vk::Context;
 use inject::Injected;
 
-/// The frame, top to bottom (DESIGN.md's data flow): primary hits (raster
-/// or traced visibility buffer + resolve, or camera rays) -> per-object
-/// statistics for the budget -> the budget's fallback shadow maps -> direct
-/// light -> the ambient reference (with --reference-samples) -> the
-/// report's attribution terms -> reflection/refraction chain -> composite
-/// -> luminance (auto exposure) -> tone map -> anti-aliasing (at most one
-/// technique). The scene update (skinning, refit, top level) comes before
-/// it, recorded by `Renderer` and the tracer.
+/// The frame (DESIGN.md's data flow): primary hits (raster or traced visibility + resolve, or camera
+/// rays) -> budget statistics -> fallback shadow maps -> direct -> ambient reference -> attribution
+/// terms -> specular chain -> composite -> luminance -> tone map -> anti-aliasing (at most one). The
+/// scene update (skinning, refit, top level) is recorded before it by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
     gbuffer::PASS,
     visibility_trace::PASS,
@@ -64,10 +59,8 @@ pub const FRAME: &[PassDesc] = &[
     fxaa::PASS,
 ];
 
-/// The frame of `--mode path` (DESIGN.md: path -> accumulate -> tone map):
-/// the path tracer writes the radiance the same luminance and tone mapping
-/// read; no G-buffer, and no anti-aliasing (the paths' jittered camera rays
-/// already integrate each pixel's area).
+/// `--mode path` (DESIGN.md: path -> accumulate -> tone map): no G-buffer and no anti-aliasing (the
+/// jittered camera rays already integrate each pixel's area).
 pub const PATH_FRAME: &[PassDesc] = &[path::PASS, luminance::PASS, tonemap::PASS];
 
 /// The pass list of a frame of this configuration.
@@ -89,9 +82,8 @@ pub struct Creation<'a> {
     pub upstream: &'a Upstream,
 }
 
-/// The targets the frame's passes so far write: a consumer takes the
-/// handle of an input from here (None: no pass of this frame makes it)
-/// instead of re-deriving whether its producer runs.
+/// Targets the frame's passes so far write: consumers take input handles from here (None: nothing
+/// makes it) instead of re-deriving whether the producer runs.
 #[derive(Clone, Default)]
 pub struct Upstream {
     written: Vec<&'static TargetDesc>,

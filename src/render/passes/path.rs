@@ -1,9 +1,7 @@
-//! Pass `path` (`--mode path`): the path-traced ground truth
-//! (glsl/path/path.glsl). Each frame adds PATH_SAMPLES_PER_FRAME camera
-//! paths per pixel to its kept accumulation and writes the mean radiance
-//! into the frame's HDR target, which `luminance` and `tonemap` read as
-//! they read `composite`'s. In path mode it is the frame's only shading
-//! pass (`PATH_FRAME`); render/path.rs drives the frames.
+//! Pass `path` (`--mode path`): the path-traced ground truth (glsl/path/path.glsl), adding
+//! PATH_SAMPLES_PER_FRAME paths per pixel a frame to its accumulation and writing the mean into the HDR
+//! target `luminance` and `tonemap` read. The only shading pass of `PATH_FRAME`; render/path.rs
+//! drives the frames.
 
 use ash::vk;
 

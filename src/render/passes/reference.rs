@@ -1,8 +1,6 @@
-//! Pass `reference` (`--reference-samples`): the ray-traced reference for
-//! the diffuse environment light at the primary hit, accumulated over
-//! frames into its own target, which `composite` reads in place of the
-//! ambient radiance (glsl/passes/reference.glsl; render/reference.rs
-//! drives the frames). Without the flag it is left out: no image, no work.
+//! Pass `reference` (`--reference-samples`): ray-traced diffuse environment light at the primary hit,
+//! accumulated into its own target that `composite` reads in place of the ambient
+//! (glsl/passes/reference.glsl; render/reference.rs drives the frames). Left out without the flag.
 
 use ash::vk;
 

@@ -1,18 +1,12 @@
-//! Pass `shadow_map`: the ray-tracing budget's raster shadow fallback
-//! (`--fallback raster`). Rasterizes depth from every shadow-casting
-//! directional light (orthographic, fitted to the scene's bounds) and spot
-//! light (perspective over its cone) into its layer of the scene's shadow
-//! maps (gpu/shadow_map.rs); `direct` samples them with PCF where a
-//! pixel's shadow bit is off. Point lights get none (unshadowed in the
-//! fallback). Created per configuration, recorded only in frames where
-//! some visible object's shadows are left out (`Renderer::record_with`).
+//! Pass `shadow_map`: the budget's raster shadow fallback (`--fallback raster`): depth from each
+//! shadow-casting directional (orthographic, fitted to the scene) and spot light (perspective over its
+//! cone) into its layer of gpu/shadow_map.rs's maps. Recorded only in frames where some visible
+//! object's shadows are left out (`Renderer::record_with`).
 //!
-//! Bias: the rasterizer adds a slope-scaled depth bias of SLOPE_BIAS (in
-//! units of the depth change across a texel: a surface tilted away from
-//! the light moves back by about that many texels' worth of its slope),
-//! no constant bias (in D32_SFLOAT it would scale with depth's exponent);
-//! the lookup adds a normal offset (glsl/common/shadow_map.glsl). 2 was the
-//! smallest slope factor without acne on the test plane at 60° incidence.
+//! Bias: slope-scaled SLOPE_BIAS (in units of the depth change across a texel), no constant bias (in
+//! D32_SFLOAT it would scale with depth's exponent), plus the lookup's normal offset
+//! (glsl/common/shadow_map.glsl). 2 was the smallest slope factor without acne on the test plane at
+//! 60° incidence.
 
 use anyhow::Result;
 use ash::vk;

@@ -1,8 +1,6 @@
-//! Pass `specular`: the reflection / refraction chain from the primary hit
-//! (Fresnel, total internal reflection, recursion to the max depth,
-//! environment on miss; glsl/passes/specular.glsl), traced only for the
-//! pixels whose primary hit spawns a branch (compacted.rs). Left out when
-//! nothing in the scene mirrors or transmits, or both effects are off.
+//! Pass `specular`: the reflection / refraction chain from the primary hit (glsl/passes/specular.glsl),
+//! traced only for pixels whose hit spawns a branch (compacted.rs). Left out when nothing mirrors or
+//! transmits, or both effects are off.
 
 use ash::vk;
 

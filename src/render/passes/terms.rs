@@ -1,11 +1,7 @@
-//! Pass `terms` (the report's attribution, report/attribution.rs): per
-//! pixel, the path-traced estimate of the selected light-transport terms
-//! the hybrid frame approximates or leaves out (environment specular on
-//! rough surfaces, diffuse visibility, one indirect bounce, emissive
-//! surfaces, caustics: `TERM_*`) minus what the hybrid shades for them,
-//! accumulated over frames into its own target, which `composite` adds
-//! (glsl/passes/terms.glsl). Only with `RenderSettings::terms`; never in
-//! a debug view or beside the ambient reference.
+//! Pass `terms` (report/attribution.rs): per pixel, the path-traced estimate of the selected terms the
+//! hybrid approximates or leaves out (`TERM_*`) minus what the hybrid shades for them, accumulated into
+//! a target `composite` adds (glsl/passes/terms.glsl). Only with `RenderSettings::terms`; never in a
+//! debug view or beside the ambient reference.
 
 use ash::vk;
 

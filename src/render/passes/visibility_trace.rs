@@ -1,14 +1,9 @@
-//! Pass `visibility_trace` (hybrid mode, traced primary visibility): camera
-//! rays through the pixel centres, traced by the active backend exactly as
-//! pass `primary` traces them (alpha test included), write only the
-//! visibility buffer's hit ids (instance + 1, primitive; 0 on a miss) —
-//! what the raster `gbuffer` pass writes — and resolve the material targets
-//! from them with `gbuffer_resolve`'s code, so that pass is left out and
-//! every later pass is unchanged (glsl/passes/visibility_trace.glsl). No depth
-//! buffer: only the raster's depth test reads it. On lavapipe a mesh of
-//! many small triangles rasterizes slower than it traces (the armadillo:
-//! bench/results/lavapipe-2core-vm-raster.md), so `--primary-visibility
-//! auto` measures both and keeps the cheaper (render/visibility.rs).
+//! Pass `visibility_trace` (hybrid mode, traced primary visibility): camera rays traced exactly as
+//! `primary` does write the hit ids the raster `gbuffer` would and resolve the material targets with
+//! `gbuffer_resolve`'s code, so that pass is left out (glsl/passes/visibility_trace.glsl). No depth
+//! buffer: only the raster's depth test reads it. On lavapipe a mesh of many small triangles
+//! rasterizes slower than it traces (bench/results/lavapipe-2core-vm-raster.md), so
+//! `--primary-visibility auto` measures both (render/visibility.rs).
 
 use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
 use super::{gbuffer, Creation, PassDesc};

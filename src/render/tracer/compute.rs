@@ -1,8 +1,6 @@
-//! Our own BVH traversed in compute shaders (glsl/trace/compute.glsl): no
-//! ray-tracing extension needed. Skinned trees are refit on the GPU after
-//! skinning and the top level is fit on the GPU after them (its topology
-//! built by the host before the frame), so the update needs no host step
-//! inside the frame.
+//! Our own BVH traversed in compute shaders (glsl/trace/compute.glsl): no ray-tracing extension
+//! needed. Skinned trees and then the top level are refit on the GPU (topology built by the host
+//! before the frame), so updates need no host step inside the frame.
 
 use anyhow::Result;
 use ash::vk;

@@ -1,9 +1,7 @@
-//! One tracing interface, three implementations: ray queries
-//! (`query.rs`), the ray-tracing pipeline (`pipeline.rs`) and our compute
-//! BVH (`compute.rs`). A tracer owns its acceleration data, records its own
-//! per-frame updates (refit, top level) and hands out the pipelines and the
-//! descriptor set (set 2) of the tracing passes, so no pass branches on the
-//! backend: a pass names its shader ("direct") and gets a `Kernel`.
+//! One tracing interface, three implementations: ray queries (`query.rs`), the RT pipeline
+//! (`pipeline.rs`) and our compute BVH (`compute.rs`). A tracer owns its acceleration data, records
+//! its per-frame updates and hands out the tracing passes' pipelines and set 2, so no pass branches on
+//! the backend: a pass names its shader ("direct") and gets a `Kernel`.
 
 pub mod compute;
 pub mod hardware;

@@ -1,11 +1,6 @@
-//! The stiff and extreme variants of a scene, and the transforms that make
-//! them. How variants are built: the loaded `Scene` is transformed in Rust
-//! (root nodes, hence every instance's world matrix, cameras, lights, the
-//! camera path) and objects are added to it in Rust (procedural primitives
-//! with their own materials); only what must go through a file loader is
-//! written to `DIR/cases/`: the OBJ meshes (tiny and zero-area triangles,
-//! read by the OBJ reader with its normal generation) and the environment
-//! maps (Radiance .hdr, read by the scene loader's HDR reader).
+//! The stiff and extreme variants of a scene. The loaded `Scene` is transformed and extended in Rust;
+//! only what must go through a loader is written to `DIR/cases/`: OBJ meshes (tiny and zero-area
+//! triangles, with the OBJ reader's normal generation) and Radiance .hdr environment maps.
 
 use std::path::Path;
 
@@ -99,12 +94,9 @@ pub const MODE_PSNR: f64 = 35.0;
 /// An object that must not show: no 8-bit channel off by more than this.
 pub const INVISIBLE_MAX_DIFF: u8 = 2;
 
-/// x -> scale * x + offset on a whole scene: every root node (so every
-/// instance and node-attached light), the cameras, the free lights and the
-/// camera path. Point and spot intensities are multiplied by scale^2 and
-/// ranges by scale, so the irradiance and the image stay the same;
-/// directional lights are unchanged. `scale` must be > 0. Placements move
-/// in f64 (the scene's own precision); the camera path's keys are f32.
+/// x -> scale * x + offset on a whole scene (roots, cameras, free lights, camera path). Point and spot
+/// intensities scale by scale^2 and ranges by scale so the image stays the same; directional lights are
+/// unchanged. `scale` > 0. Placements move in f64; the camera path's keys are f32.
 pub fn transform_scene(scene: &mut Scene, scale: f64, offset: DVec3) {
     let k = scale as f32;
     for &r in &scene.roots {

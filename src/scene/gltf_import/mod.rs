@@ -1,15 +1,12 @@
 //! glTF 2.0 (.gltf with external or data-URI buffers, .glb) into a [`Scene`].
 //!
-//! The `gltf` crate parses and validates the JSON; buffers and images are
-//! read here rather than with `gltf::import` so that errors can name the file
-//! that is missing, and every accessor is range- and type-checked before the
-//! crate's readers touch it (they panic or silently stop on bad ranges).
+//! The `gltf` crate parses and validates the JSON; buffers and images are read here rather than with
+//! `gltf::import` so errors name the missing file, and every accessor is range- and type-checked
+//! first (the crate's readers panic or silently stop on bad ranges).
 //!
-//! One module per step: `checks` (GLB header, dangling references, accessor
-//! types and ranges), `buffers` (buffers and URIs), `geometry` (primitives,
-//! attributes, indices, normals and tangents), `materials`, `images`
-//! (texture slots, samplers, parallel decoding), `nodes` (hierarchy,
-//! cameras, lights) and `animation` (animations and skins).
+//! Modules: `checks` (GLB header, dangling references, accessors), `buffers` (buffers and URIs),
+//! `geometry` (primitives, attributes, normals, tangents), `materials`, `images` (texture slots,
+//! samplers, parallel decoding), `nodes` (hierarchy, cameras, lights), `animation` (animations, skins).
 
 mod animation;
 mod buffers;

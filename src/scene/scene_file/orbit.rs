@@ -40,11 +40,9 @@ pub(super) struct Orbit {
 }
 
 impl Builder<'_> {
-    /// One animation, [`SCENE_ANIMATION`], with a rotation channel per
-    /// orbiting object's pivot. It loops at the longest period; every other
-    /// period must fit a whole number of times into it so that each orbit
-    /// closes seamlessly at the loop (the animation system loops whole
-    /// animations, not single channels).
+    /// One animation, [`SCENE_ANIMATION`], with a rotation channel per orbit pivot, looping at the longest
+    /// period. Every other period must divide it so each orbit closes seamlessly at the loop (animations
+    /// loop whole, not per channel).
     pub(super) fn add_orbit_animation(&mut self) -> Result<()> {
         let Some(duration) = self.orbits.iter().map(|o| o.period).reduce(f32::max) else { return Ok(()) };
         let mut channels = Vec::with_capacity(self.orbits.len());
@@ -72,10 +70,8 @@ impl Builder<'_> {
         Ok(())
     }
 
-    /// Hangs the root node `node` under a new pivot at `center` that the
-    /// orbit animation turns. The node's transform becomes relative to the
-    /// pivot, so with the pivot unrotated (t = 0) the object stays exactly
-    /// where its `translation` put it.
+    /// Hangs root node `node` under a new pivot at `center` that the orbit turns; the node's transform
+    /// becomes pivot-relative, so at t = 0 the object stays where its `translation` put it.
     pub(super) fn add_pivot(&mut self, node: usize, center: DVec3, name: &str) -> usize {
         let pivot = self.scene.nodes.len();
         self.scene.nodes.push(Node {

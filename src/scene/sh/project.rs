@@ -1,23 +1,15 @@
 //! Projection of an equirectangular [`HdrImage`] onto the SH basis, on the CPU.
 //!
-//! The map is read exactly as env.glsl reads it: for a direction d,
-//! u = (atan2(d.x, -d.z) + rotation) / 2pi + 0.5, v = acos(d.y) / pi, texel
-//! (x, y) covers u in [x/w, (x+1)/w] and v in [y/h, (y+1)/h], v = 0 is +Y.
-//! The radiance is multiplied by `intensity` (env.glsl's env_intensity).
+//! The map is read as env.glsl reads it: u = (atan2(d.x, -d.z) + rotation) / 2pi + 0.5,
+//! v = acos(d.y) / pi (v = 0 is +Y), texel (x, y) covering [x/w, (x+1)/w] x [y/h, (y+1)/h], radiance
+//! times `intensity`. Two integrators of L_lm = ∫ L(w) y_lm(w) dw:
 //!
-//! Two integrators of L_lm = ∫ L(w) y_lm(w) dw:
-//!
-//! - [`project_quadrature`]: one term per texel, weight = the texel's exact
-//!   solid angle (2pi / w)(cos theta_top - cos theta_bottom) (the weights sum
-//!   to 4pi exactly), basis evaluated at the texel's centre direction: the
-//!   midpoint rule per texel. "Exact" refers to the weights; the basis is
-//!   still sampled once per texel, an O(texel^2) error for smooth y_lm.
-//! - [`project_monte_carlo`]: Green's stratified jittered N x N grid over
-//!   (xi1, xi2) mapped uniformly to the sphere (cos theta = 1 - 2 xi1,
-//!   phi = 2pi xi2), each sample weighted 4pi / N^2, the map read with a
-//!   nearest-texel lookup (so both integrators integrate the same piecewise
-//!   constant map; bilinear would converge to a smoothed map instead). A
-//!   seeded PCG32 makes it deterministic.
+//! - [`project_quadrature`]: midpoint rule per texel with its exact solid angle
+//!   (2pi / w)(cos theta_top - cos theta_bottom) (weights sum to 4pi exactly); the basis is still
+//!   sampled once per texel, an O(texel^2) error for smooth y_lm.
+//! - [`project_monte_carlo`]: Green's stratified jittered N x N grid mapped uniformly to the sphere,
+//!   weight 4pi / N^2, nearest-texel lookups so both integrate the same piecewise-constant map
+//!   (bilinear would converge to a smoothed one). Seeded PCG32: deterministic.
 
 use std::f64::consts::PI;
 

@@ -1,32 +1,22 @@
 //! Windowing (per-band attenuation) against ringing.
 //!
-//! Truncating a map with a sun (one texel of ~6.5e4) to a few bands gives
-//! the Gibbs overshoot of a truncated series: a negative lobe around the sun.
-//! A window scales band l by a factor w_l that falls to 0 at l = `bands`, the
-//! first band that is not stored, so the spectrum is tapered instead of cut.
-//!
-//! Width: W = `bands` (number of stored bands), i.e.
+//! Truncating a map with a sun (one ~6.5e4 texel) to a few bands gives Gibbs overshoot: a negative
+//! lobe around the sun. A window scales band l by w_l, falling to 0 at l = `bands` (the first band
+//! not stored), tapering the spectrum instead of cutting it. With W = `bands`:
 //! - Hann:    w_l = (1 + cos(pi l / W)) / 2,
 //! - Lanczos: w_l = sinc(l / W) = sin(pi l / W) / (pi l / W),
 //!
 //! so for L2 (W = 3) Hann gives 1, 0.75, 0.25 and Lanczos 1, 0.827, 0.413.
 //!
-//! Hann is the default. For L2, the reconstruction of a single bright texel
-//! of power P (radiance x solid angle) has a minimum, around the antipode, of
-//! -1.8 P / 4pi unwindowed, -0.53 P / 4pi with Lanczos and -0.30 P / 4pi with
-//! Hann (the zonal kernel sum_l w_l (2l+1) P_l(t) / 4pi, minimised over t). No
-//! window of this family makes an isolated delta non-negative at L2; Hann
-//! shrinks the negative lobe six times, which keeps the radiance of a sun on
-//! a sky non-negative as long as the sky's own radiance exceeds 0.024 P
-//! (`tests_maps` checks a synthetic 6.5e4 sun on a 0.1 sky, `tests_hdri`
-//! venice_sunset).
+//! Hann is the default. At L2 a single bright texel of power P reconstructs with a minimum of
+//! -1.8 P / 4pi unwindowed, -0.53 P / 4pi with Lanczos, -0.30 P / 4pi with Hann (the zonal kernel
+//! sum_l w_l (2l+1) P_l(t) / 4pi minimised over t). None makes a delta non-negative at L2, but Hann
+//! keeps a sun on a sky non-negative when the sky exceeds 0.024 P (`tests_maps`: a 6.5e4 sun on a 0.1
+//! sky; `tests_hdri`: venice_sunset).
 //!
-//! The price is blur: for irradiance, Hann at width 3 (band 1 x 0.75, band 2
-//! x 0.25) is 9-25% off a brute-force convolution on the shipped maps
-//! (per-normal mean relative error) where plain L2 is 1.8-2.6%; the
-//! clamped-cosine kernel already damps bands 1-2, and unwindowed L2
-//! irradiance stays positive on four of the five maps (studio_small_03 goes
-//! to -0.17). A caller that only needs irradiance may prefer
+//! The price is blur: Hann irradiance is 9-25% off brute force on the shipped maps (plain L2:
+//! 1.8-2.6%), since the clamped cosine already damps bands 1-2, and unwindowed L2 irradiance stays
+//! positive on four of five maps (studio_small_03: -0.17). Irradiance-only callers may prefer
 //! `Window::None`.
 
 use super::basis::band_of;
