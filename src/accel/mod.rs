@@ -192,7 +192,7 @@ impl SceneAccel {
     pub fn build(ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<SceneAccel> {
         // Everything created lands in `accel` at once, so an error half-way
         // destroys what exists.
-        let mut accel = SceneAccel {
+        let accel = SceneAccel {
             tlas: AccelStruct {
                 raw: vk::AccelerationStructureKHR::null(),
                 buffer: Buffer::null(),
@@ -205,13 +205,7 @@ impl SceneAccel {
             build_ms: 0.0,
             origin: gpu.origin,
         };
-        match accel.fill(ctx, scene, gpu) {
-            Ok(()) => Ok(accel),
-            Err(e) => {
-                accel.destroy(ctx);
-                Err(e)
-            }
-        }
+        crate::vk::built(ctx, accel, |a| a.fill(ctx, scene, gpu))
     }
 
     fn fill(&mut self, ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<()> {
@@ -226,7 +220,9 @@ impl SceneAccel {
                                    // Primitives drawn only skinned (or not at all) get no static BLAS.
         let used = scene.rigidly_instanced();
         for (m, prims) in gpu.ranges.iter().enumerate() {
-            let mut row = Vec::new();
+            // In place from the start: a failure destroys what exists.
+            blases.push(Vec::new());
+            let row = blases.last_mut().expect("pushed");
             for (p, r) in prims.iter().enumerate() {
                 if r.index_count < 3 || !used[m][p] {
                     row.push(None);
@@ -234,22 +230,10 @@ impl SceneAccel {
                 }
                 let sizes = blas_sizes(ctx, gpu, r, flags);
                 let name = format!("BLAS '{}' #{p}", scene.meshes[m].name);
-                let blas = AccelStruct::new(
-                    ctx,
-                    &name,
-                    vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
-                    sizes.acceleration_structure_size,
-                );
-                match blas {
-                    Ok(b) => row.push(Some(b)),
-                    Err(e) => {
-                        blases.push(row);
-                        return Err(e);
-                    }
-                }
+                let level = vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL;
+                row.push(Some(AccelStruct::new(ctx, &name, level, sizes.acceleration_structure_size)?));
                 jobs.push((m, p, sizes.build_scratch_size));
             }
-            blases.push(row);
         }
 
         // 2. Build them one after another through one scratch buffer, then
@@ -536,3 +520,5 @@ impl SceneAccel {
         self.scratch.destroy(ctx);
     }
 }
+
+crate::destroy_by_method!(SceneAccel);

@@ -41,9 +41,9 @@ impl AccelUpdate {
     }
 
     /// Brings `renderer`'s acceleration structures to `scene`'s current
-    /// pose this way (its `update_timings` say what it cost).
+    /// pose this way (its `update.timings` say what it cost).
     pub fn update(self, ctx: &Context, renderer: &mut Renderer, scene: &Scene) -> Result<()> {
-        renderer.rebuild_policy = self.rebuild_policy();
+        renderer.update.policy = self.rebuild_policy();
         if self == AccelUpdate::Full {
             renderer.rebuild_all_structures(ctx, scene)
         } else {
@@ -112,7 +112,7 @@ fn bench_frame_inner(
     (warmup, frames): (usize, usize),
 ) -> Result<BenchFrame> {
     let settings = RenderSettings { mode: variant.mode, backend: variant.backend, ..job.settings };
-    renderer.rebuild_policy = variant.accel.rebuild_policy();
+    renderer.update.policy = variant.accel.rebuild_policy();
     let t = if frames > 1 { (i.saturating_sub(warmup)) as f32 / (frames - 1) as f32 } else { 0.0 };
     let camera = crate::scene::camera::on_path(&scene.camera_path, t, base_camera);
     let mut update = Vec::new();
@@ -121,8 +121,8 @@ fn bench_frame_inner(
         // Fixed-step clock: deterministic frames.
         scene.animate(a, job.time + i as f32 / job.fps.max(1e-3));
         variant.accel.update(ctx, renderer, scene)?;
-        update = renderer.update_timings.clone();
-        counts = renderer.update_counts;
+        update = renderer.update.timings.clone();
+        counts = renderer.update.counts;
     }
     // The prediction the selection this frame honours was made with.
     let predicted = renderer
@@ -209,10 +209,10 @@ pub fn bench(
             renderers.push(Renderer::new(ctx, &scene, extent)?);
             let renderer = renderers.last_mut().context("just pushed")?;
             // Auto primary visibility measures like the viewer's does.
-            renderer.visibility.measure = true;
+            renderer.choices.visibility.measure = true;
             // The camera path adapts like a played-back animation: 1 / fps
             // per frame (the first frame converges at once).
-            renderer.adapt_dt = Some(1.0 / job.fps.max(1e-3));
+            renderer.choices.adapt_dt = Some(1.0 / job.fps.max(1e-3));
             // One counted frame: the atomics would distort the timings.
             let settings = RenderSettings { mode: v.mode, backend: v.backend, ..job.settings };
             let counting =
@@ -308,7 +308,7 @@ pub fn bench(
                 occlusion: renderer
                     .occlusion_counts()
                     .map(|c| (c, renderer.gpu.clusters.list.clusters.len())),
-                visibility: renderer.visibility.describe(),
+                visibility: renderer.choices.visibility.describe(),
             });
         }
         Ok(())

@@ -15,7 +15,7 @@ use crate::render::rays::{BenchRay, RayRig, TraceRun, Traversal};
 use crate::render::shading::Backend;
 use crate::render::tracer::{self, Tracer};
 use crate::scene::Scene;
-use crate::vk::Context;
+use crate::vk::{built, Context};
 
 /// `bench --rays` traces each set untimed for this long first (RayRig::warm_up).
 const WARM_UP_MS: u64 = 300;
@@ -108,7 +108,9 @@ pub fn driver_backend(ctx: &Context, requested: Backend) -> Result<Backend> {
 /// The two tracers over one uploaded scene, with their pipelines.
 pub struct RayBench {
     pub gpu: GpuScene,
-    tracers: Vec<(Box<dyn Tracer>, RayRig)>,
+    tracers: Vec<Box<dyn Tracer>>,
+    /// One per tracer, in the same order.
+    rigs: Vec<RayRig>,
     driver: Backend,
 }
 
@@ -128,8 +130,8 @@ impl RayBench {
     ) -> Result<RayBench> {
         let driver = driver_backend(ctx, driver)?;
         let gpu = GpuScene::upload(ctx, scene)?;
-        let mut bench = RayBench { gpu, tracers: Vec::new(), driver };
-        let filled = (|| {
+        let bench = RayBench { gpu, tracers: Vec::new(), rigs: Vec::new(), driver };
+        built(ctx, bench, |bench| {
             if !bench.gpu.skinned.is_empty() {
                 bail!(
                     "{}: bench --rays traces static scenes only (this one has skinned meshes, which the \
@@ -140,24 +142,12 @@ impl RayBench {
             let frame = GpuFrame { light_count: bench.gpu.light_count, ..Default::default() };
             upload_now(ctx, "frame uniforms", |up| bench.gpu.write_frame(up, &frame))?;
             for backend in [Backend::Compute, driver] {
-                let mut t = tracer::create(ctx, backend, scene, &bench.gpu)?;
-                match RayRig::new(ctx, &bench.gpu, t.as_ref(), traversal) {
-                    Ok(rig) => bench.tracers.push((t, rig)),
-                    Err(e) => {
-                        t.destroy(ctx);
-                        return Err(e);
-                    }
-                }
+                bench.tracers.push(tracer::create(ctx, backend, scene, &bench.gpu)?);
+                let t = bench.tracers.last().expect("pushed");
+                bench.rigs.push(RayRig::new(ctx, &bench.gpu, t.as_ref(), traversal)?);
             }
             Ok(())
-        })();
-        match filled {
-            Ok(()) => Ok(bench),
-            Err(e) => {
-                bench.destroy(ctx);
-                Err(e)
-            }
-        }
+        })
     }
 
     fn run(
@@ -168,9 +158,7 @@ impl RayBench {
         kind: RayKind,
         reps: usize,
     ) -> Result<TraceRun> {
-        let (t, rig) = self
-            .tracers
-            .iter()
+        let (t, rig) = (self.tracers.iter().zip(&self.rigs))
             .find(|(_, r)| r.backend() == backend)
             .context("tracer missing from the ray benchmark")?;
         rig.trace(ctx, &self.gpu, t.as_ref(), rays, kind.is_shadow(), reps, backend == Backend::Compute)
@@ -202,19 +190,23 @@ impl RayBench {
 
     /// Untimed tracing of each set before its timed repetitions.
     pub fn warm_up(&mut self, d: std::time::Duration) {
-        for (_, rig) in &mut self.tracers {
+        for rig in &mut self.rigs {
             rig.warm_up = d;
         }
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
-        for (t, rig) in &mut self.tracers {
+        for rig in &mut self.rigs {
             rig.destroy(ctx);
+        }
+        for t in &mut self.tracers {
             t.destroy(ctx);
         }
         self.gpu.destroy(ctx);
     }
 }
+
+crate::destroy_by_method!(RayBench);
 
 /// `bench --rays`: prints one `rays <kind>:` line per kind, then the
 /// details (ray counts, mismatches, traversal statistics).

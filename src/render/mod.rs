@@ -4,9 +4,11 @@
 //! derives barriers, labels and timestamps from what each pass declares.
 
 pub mod budget;
+pub mod choices;
 pub mod cull;
 pub mod frame;
-mod frame_results;
+mod frame_passes;
+mod frame_slots;
 
 pub mod kernel;
 pub mod occlusion;
@@ -17,6 +19,7 @@ mod prt_state;
 pub mod rays;
 pub mod readback;
 pub mod reference;
+pub mod scene_update;
 pub mod settings;
 pub mod shading;
 pub mod skinning;
@@ -32,102 +35,37 @@ pub mod visibility;
 use anyhow::{Context as _, Result};
 use ash::vk;
 
-use crate::accel::dynamic::{RebuildPolicy, Update};
-use crate::gpu::shared::{FRAME_BUDGET, FRAME_FALLBACK_RASTER};
 use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
-use crate::vk::frame_ring::{FrameRing, Uploads};
-use crate::vk::timer::GpuTimer;
-use crate::vk::{Buffer, Context};
-use frame::{Access, Recorder, SharedBuffer, Use};
-use passes::{
-    antialias::final_ldr, composite::HDR, Creation, FrameState, Pass, PassDesc, Recording, Upstream,
-};
+use crate::vk::{built, Context};
+use choices::FrameChoices;
+use frame::Recorder;
+use frame_passes::FramePasses;
+use frame_slots::{FrameReads, FrameSlots};
+use passes::{antialias::final_ldr, composite::HDR, Recording};
+use scene_update::SceneUpdate;
 use shading::{SceneNeeds, ShadingConfig};
-use skinning::Skinning;
 use targets::Targets;
-use tone::ExposureState;
 use tracer::Tracer;
 
-pub use frame_results::Finished;
+pub use frame_slots::Finished;
 pub use output::FrameOutput;
 pub use path::PathSettings;
 pub use settings::{AmbientMode, DebugView, EnvProjection, PrtOptions, ReferenceSettings, RenderSettings};
 
-/// A pass of the current frame with what it declared.
-struct Recorded {
-    desc: &'static PassDesc,
-    uses: Vec<Use>,
-    pass: Box<dyn Pass>,
-}
-
-/// The readback and the viewer's blit copy these out of the frame: its
-/// final LDR image (anti-aliased, or tone mapping's) and the radiance.
-fn outputs(config: &ShadingConfig) -> [Use; 2] {
-    [Use::image(final_ldr(config), Access::TransferRead), Use::image(&HDR, Access::TransferRead)]
-}
-
+/// The renderer: a handful of owners, each with one job.
 pub struct Renderer {
     pub gpu: GpuScene,
-    targets: Targets,
-    extent: vk::Extent2D,
-    needs: SceneNeeds,
-    /// The configuration the passes were built for.
-    config: Option<ShadingConfig>,
-    passes: Vec<Recorded>,
     /// Built on first use by a configuration that traces rays.
     tracer: Option<Box<dyn Tracer>>,
-    pub timer: GpuTimer,
-    cmd: vk::CommandBuffer,
-    /// Skinning of skinned instances, if the scene has any.
-    skinning: Option<Skinning>,
-    /// When skinned acceleration structures are rebuilt instead of refit.
-    pub rebuild_policy: RebuildPolicy,
-    update_cmd: vk::CommandBuffer,
-    update_timer: GpuTimer,
-    /// GPU ms per pass of the last finished scene update (plus the host's
-    /// share), for benchmarks and the viewer (`finish_frame` sets it).
-    pub update_timings: Vec<(&'static str, f64)>,
-    /// Skinned structures refit / rebuilt by the last finished scene update.
-    pub update_counts: [usize; 2],
-    /// Per-slot staging of host writes and downloads (frames in flight):
-    /// one slot unless the viewer asks for more (`set_frames_in_flight`).
-    ring: FrameRing,
-    /// The frame being built: its slot, and whether its uploads were
-    /// recorded (`begin_frame` .. `record_downloads`).
-    open: Option<(usize, bool)>,
-    /// Per slot: what its frame left to read after its fence.
-    pending: Vec<frame_results::Pending>,
-    /// The budget selection the prepared frame traces (to its download).
-    budget_traced: Option<Vec<u32>>,
-    readback_ldr: Buffer,
-    readback_hdr: Buffer,
-    frame_index: u32,
-    /// Seconds since the previous frame for eye adaptation; None: converge
-    /// at once (a still frame: no adaptation history).
-    pub adapt_dt: Option<f32>,
-    /// Test fault injection into the HDR frame (`inject_radiance`).
-    injection: Vec<passes::inject::Injected>,
-    /// The per-object ray-tracing budget's selection across frames.
-    budget: budget::BudgetState,
-    /// Why this frame leaves out the `shadow_map` pass it has (None: it
-    /// records), decided in `prepare` from the budget's selection.
-    shadow_map_left_out: Option<&'static str>,
-    /// The passes were (re)created since the last recorded frame, and
-    /// whether the last recorded frame was their first: lavapipe compiles a
-    /// shader on first use, inside the GPU timestamps, so that frame's
-    /// times say nothing of the passes' cost (the budget ignores them).
-    passes_new: bool,
-    recorded_cold: bool,
-    /// Diffuse PRT transfer on the GPU (prt ambient modes only).
-    prt: prt_state::PrtState,
-    /// The G-buffer draws of the prepared frame (frustum-culled).
-    draw_list: cull::DrawList,
-    /// The `reference` pass's frames accumulated (--reference-samples).
-    reference: reference::Accumulation,
-    /// `--primary-visibility auto`'s per-view choice (the viewer and bench
-    /// switch its measuring on and the viewer feeds it each frame's times).
-    pub visibility: visibility::Chooser,
+    /// Skinning and the tracer's refit / rebuild of what moved.
+    pub update: SceneUpdate,
+    /// Frames in flight: staging, downloads, timer, readback buffers.
+    slots: FrameSlots,
+    /// The passes built for the current configuration, and their targets.
+    frame: FramePasses,
+    /// This frame's decisions: budget, shadow maps, draws, ambient, reference.
+    pub choices: FrameChoices,
 }
 
 impl Renderer {
@@ -135,111 +73,52 @@ impl Renderer {
         ctx.caps.limits.check_extent(extent.width, extent.height)?;
         let gpu = GpuScene::upload(ctx, scene)?;
         // Everything after the upload is created into a renderer that owns it
-        // from the start, so a failure part-way destroys what exists (an
-        // error exit leaks no Vulkan object).
-        let mut r = Renderer {
-            skinning: None,
-            rebuild_policy: RebuildPolicy::default(),
-            update_cmd: vk::CommandBuffer::null(),
-            update_timer: GpuTimer::empty(),
-            update_timings: Vec::new(),
-            update_counts: [0; 2],
-            ring: FrameRing::new(1, "frame ring")?,
-            open: None,
-            pending: vec![Default::default()],
-            budget_traced: None,
+        // from the start, so a failure part-way destroys what exists.
+        let empty = Renderer {
             gpu,
-            targets: Targets::empty(extent),
-            extent,
-            needs: SceneNeeds::of(scene),
-            config: None,
-            passes: Vec::new(),
             tracer: None,
-            timer: GpuTimer::empty(),
-            cmd: vk::CommandBuffer::null(),
-            readback_ldr: Buffer::null(),
-            readback_hdr: Buffer::null(),
-            frame_index: 0,
-            adapt_dt: None,
-            injection: Vec::new(),
-            budget: budget::BudgetState::default(),
-            shadow_map_left_out: None,
-            passes_new: false,
-            recorded_cold: false,
-            prt: Default::default(),
-            draw_list: cull::DrawList::default(),
-            reference: reference::Accumulation::default(),
-            visibility: visibility::Chooser::default(),
+            update: SceneUpdate::empty(),
+            slots: FrameSlots::empty()?,
+            frame: FramePasses::new(extent, SceneNeeds::of(scene)),
+            choices: FrameChoices::default(),
         };
-        match r.create_resources(ctx, scene) {
-            Ok(()) => Ok(r),
-            Err(e) => {
-                r.destroy(ctx);
-                Err(e)
-            }
-        }
-    }
-
-    fn create_resources(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
-        (self.readback_ldr, self.readback_hdr) = frame_results::readback_buffers(ctx, self.extent)?;
-        self.skinning = Skinning::new(ctx, scene, &self.gpu)?;
-        self.update_cmd = ctx.allocate_command_buffer("scene update")?;
-        self.update_timer = GpuTimer::new(ctx, 8)?;
-        self.targets = Targets::new(ctx, self.extent, &[])?;
-        self.timer = GpuTimer::new(ctx, 16)?;
-        self.cmd = ctx.allocate_command_buffer("frame")?;
-        Ok(())
+        built(ctx, empty, |r| {
+            r.update = SceneUpdate::new(ctx, scene, &r.gpu)?;
+            r.slots = FrameSlots::new(ctx, extent)?;
+            Ok(())
+        })
     }
 
     pub fn extent(&self) -> vk::Extent2D {
-        self.extent
+        self.frame.extent
     }
 
     /// The targets of the current frame (after `prepare`).
     pub fn targets(&self) -> &Targets {
-        &self.targets
+        &self.frame.targets
     }
 
     /// Recreates the per-resolution targets (the caller has waited for idle).
     pub fn resize(&mut self, ctx: &Context, extent: vk::Extent2D) -> Result<()> {
-        self.readback_ldr.destroy(ctx);
-        self.readback_hdr.destroy(ctx);
-        (self.readback_ldr, self.readback_hdr) = frame_results::readback_buffers(ctx, extent)?;
-        self.extent = extent;
-        self.reference.reset();
-        let uses: Vec<Use> = self.passes.iter().flat_map(|p| p.uses.iter().copied()).collect();
-        if let Some(config) = self.config {
-            self.allocate_targets(ctx, &config, &uses)?;
-        }
-        for p in &self.passes {
-            p.pass.bind(ctx, &self.targets);
-        }
-        Ok(())
-    }
-
-    /// Allocates exactly the targets `uses` (the passes' declarations) and
-    /// the outputs of `config` name.
-    fn allocate_targets(&mut self, ctx: &Context, config: &ShadingConfig, uses: &[Use]) -> Result<()> {
-        self.targets.destroy(ctx);
-        let all: Vec<Use> = uses.iter().copied().chain(outputs(config)).collect();
-        self.targets = Targets::new(ctx, self.extent, &all)?;
-        Ok(())
+        self.slots.resize(ctx, extent)?;
+        self.choices.reference.reset();
+        self.frame.resize(ctx, extent)
     }
 
     /// Brings the GPU copies of everything that can move up to date with
     /// `scene` (already posed by `Scene::animate`) in its own submission,
     /// waiting for it: instance transforms and lights, then skinning and
     /// the tracer's update (skinned BLAS refit or rebuild per
-    /// `rebuild_policy`, TLAS; or the compute BVH's refit and top level).
+    /// `update.policy`, TLAS; or the compute BVH's refit and top level).
     /// Static per-mesh structures are untouched. Call only when something
     /// moved (so a still scene rebuilds nothing). Pass times land in
-    /// `update_timings`. The viewer uses `record_scene_update` instead.
+    /// `update.timings`. The viewer uses `record_scene_update` instead.
     pub fn update_scene(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         self.begin_frame(0)?;
-        let cmd = self.update_cmd;
+        let cmd = self.update.cmd;
         ctx.begin_commands(cmd)?;
         self.record_scene_update(ctx, cmd, scene)?;
-        self.record_downloads(ctx, cmd, false)?;
+        self.slots.record_downloads(ctx, cmd, None)?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
         self.finish_frame(0).map(|_| ())
@@ -256,54 +135,23 @@ impl Renderer {
         cmd: vk::CommandBuffer,
         scene: &Scene,
     ) -> Result<()> {
-        let plan = self.plan_update(scene)?;
-        self.record_uploads(ctx, cmd)?;
-        self.record_update(ctx, cmd, scene)?;
-        self.download_update(plan)
-    }
-
-    /// Host work before an update is recorded, staged in the open frame's
-    /// slot: moved transforms and lights, joint matrices, and the tracer's
-    /// refit / rebuild decisions (returned, for its finish).
-    fn plan_update(&mut self, scene: &Scene) -> Result<Vec<Update>> {
-        self.reference.reset(); // the scene moved
-        let (slot, _) = self.open.context("begin_frame() must run before the scene update")?;
-        let up = &mut Uploads { ring: &mut self.ring, slot };
-        self.gpu.update_dynamic(up, scene)?;
-        if let Some(s) = &self.skinning {
-            s.write(up, scene, self.gpu.origin)?;
-        }
-        match &mut self.tracer {
-            Some(t) => t.prepare_update(up, scene, &self.gpu, &self.rebuild_policy),
-            None => Ok(Vec::new()),
-        }
-    }
-
-    /// The update's GPU passes, timed by `update_timer`.
-    fn record_update(&mut self, ctx: &Context, cmd: vk::CommandBuffer, scene: &Scene) -> Result<()> {
-        let mut rec = Recorder::new(ctx, cmd, &mut self.update_timer, None);
-        if let Some(s) = &self.skinning {
-            let uses = [Use::buffer(SharedBuffer::Geometry, Access::ShaderWrite)];
-            rec.pass("skinning", vk::PipelineStageFlags2::COMPUTE_SHADER, &uses, |cmd| {
-                s.record(ctx, cmd);
-                Ok(())
-            })?;
-        }
-        if let Some(t) = &mut self.tracer {
-            t.record_update(&mut rec, scene, &self.gpu)?;
-        }
-        Ok(())
+        self.choices.reference.reset(); // the scene moved
+        let up = &mut self.slots.uploads("the scene update")?;
+        let plan = self.update.plan(up, scene, &mut self.gpu, self.tracer.as_deref_mut())?;
+        self.slots.record_uploads(ctx, cmd)?;
+        self.update.record(ctx, cmd, scene, &self.gpu, self.tracer.as_deref_mut())?;
+        self.slots.download_update(&self.update, self.tracer.as_deref(), plan)
     }
 
     /// The baseline dynamic structures are measured against: skin, then
     /// throw every acceleration structure away and build all of them again
     /// (static BLASes included), as a renderer without refit and
-    /// instance-only updates would. `update_timings` gets "skinning" and the
-    /// rebuild's wall time.
+    /// instance-only updates would. `update.timings` gets "skinning" and
+    /// the rebuild's wall time.
     pub fn rebuild_all_structures(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         self.update_scene(ctx, scene)?;
-        let skinning: Vec<_> =
-            self.update_timings.iter().filter(|(n, _)| *n == "skinning").copied().collect();
+        let timings = &mut self.update.timings;
+        timings.retain(|(n, _)| *n == "skinning");
         let t0 = std::time::Instant::now();
         if let Some(mut old) = self.tracer.take() {
             let backend = old.backend();
@@ -312,84 +160,73 @@ impl Renderer {
             // defined identically.
             self.tracer = Some(tracer::create(ctx, backend, scene, &self.gpu)?);
         }
-        self.update_timings = skinning;
-        self.update_timings.push(("full AS rebuild (wall)", t0.elapsed().as_secs_f64() * 1e3));
+        self.update.timings.push(("full AS rebuild (wall)", t0.elapsed().as_secs_f64() * 1e3));
         Ok(())
     }
 
     /// The configuration of the current frame (after `prepare`).
     pub fn shading_config(&self) -> Option<ShadingConfig> {
-        self.config
+        self.frame.config
     }
 
     /// The current frame's final LDR target (after `prepare`): what is
     /// read back and presented.
     pub fn output_ldr(&self) -> Result<&'static targets::TargetDesc> {
-        self.config.as_ref().map(final_ldr).context("prepare() must run before the output is known")
+        self.frame.config.as_ref().map(final_ldr).context("prepare() must run before the output is known")
     }
 
     /// The G-buffer draws of the last prepared frame: (recorded, left out
     /// as outside the view frustum). (0, 0) in pure ray-traced mode.
     pub fn raster_draws(&self) -> (usize, u32) {
-        (self.draw_list.draws.len(), self.draw_list.culled)
+        let d = &self.choices.draw_list;
+        (d.draws.len(), d.culled)
     }
 
     /// The triangles of the draws the last prepared frame records (before
     /// occlusion culling).
     pub fn raster_triangles(&self) -> u64 {
-        self.draw_list
-            .draws
-            .iter()
-            .map(|d| self.gpu.draws[d.draw as usize].range.index_count as u64 / 3)
-            .sum()
+        let draws = &self.choices.draw_list.draws;
+        draws.iter().map(|d| self.gpu.draws[d.draw as usize].range.index_count as u64 / 3).sum()
     }
 
     /// Occlusion culling's counters of the last finished frame that culled
     /// (render/occlusion.rs): clusters drawn in phase 1, drawn in phase 2,
     /// occluded, outside the frustum; triangles drawn. None when culling is off.
     pub fn occlusion_counts(&self) -> Option<[u32; crate::gpu::shared::OCC_COUNTER_SLOTS as usize]> {
-        let on = self.config.is_some_and(|c| c.occlusion) && !self.gpu.clusters.list.clusters.is_empty();
+        let on =
+            self.frame.config.is_some_and(|c| c.occlusion) && !self.gpu.clusters.list.clusters.is_empty();
         on.then(|| self.gpu.clusters.counts().ok()).flatten()
     }
 
     /// Starts the reference's accumulation over at the next frame.
     pub fn reset_reference(&mut self) {
-        self.reference.reset();
+        self.choices.reference.reset();
     }
 
     /// Frames the reference has accumulated since it last started over.
     pub fn reference_frames(&self) -> u32 {
-        self.reference.frames()
+        self.choices.reference.frames()
     }
 
     /// Names of the passes the current frame records, in order.
     pub fn pass_names(&self) -> Vec<&'static str> {
-        let state = self.frame_state();
-        self.passes.iter().filter(|p| (p.desc.this_frame)(&state).is_none()).map(|p| p.desc.name).collect()
-    }
-
-    /// What decides, per frame, which of the created passes record.
-    fn frame_state(&self) -> FrameState {
-        FrameState { shadow_maps_left_out: self.shadow_map_left_out, visibility: self.visibility.technique() }
+        self.frame.names(&self.choices.frame_state())
     }
 
     /// Makes the frame's passes, tracer and targets match `settings`. Waits
     /// for the GPU when it has to rebuild.
     fn ensure_frame(&mut self, ctx: &Context, scene: &Scene, settings: &RenderSettings) -> Result<()> {
-        let settings = &visibility::effective(settings, self.visibility.measure);
+        let settings = &visibility::effective(settings, self.choices.visibility.measure);
         let config = ShadingConfig {
-            inject: !self.injection.is_empty(),
-            ..ShadingConfig::resolve(ctx, self.needs, settings)?
+            inject: !self.frame.injection.is_empty(),
+            ..ShadingConfig::resolve(ctx, self.frame.needs, settings)?
         };
-        if self.config == Some(config) {
+        if self.frame.config == Some(config) {
             return Ok(());
         }
         unsafe { ctx.device.device_wait_idle()? };
-        for mut p in self.passes.drain(..) {
-            p.pass.destroy(ctx);
-        }
-        self.config = None;
-        self.reference.reset(); // new targets
+        self.frame.clear(ctx);
+        self.choices.reference.reset(); // new targets
         if self.tracer.as_ref().map(|t| t.backend()) != config.backend {
             if let Some(mut t) = self.tracer.take() {
                 t.destroy(ctx);
@@ -398,45 +235,11 @@ impl Renderer {
                 self.tracer = Some(tracer::create(ctx, b, scene, &self.gpu)?);
             }
         }
-        let mut left_out = Vec::new();
-        let mut chosen = Vec::new();
-        for desc in passes::frame(&config) {
-            match (desc.skip)(&config) {
-                Some(why) => left_out.push(format!("{}: {why}", desc.name)),
-                None => chosen.push(desc),
-            }
-        }
         if config.occlusion {
             self.gpu.ensure_clusters(ctx, scene)?;
         }
-        // Targets first (passes bind them), from what the passes declare.
-        self.passes = Vec::new();
-        // Each pass sees what the passes before it write (its inputs' handles).
-        let mut upstream = vec![Upstream::default()];
-        let mut uses: Vec<Vec<Use>> = Vec::new();
-        for d in &chosen {
-            let before = upstream.last().expect("one per pass and the start");
-            let u = (d.uses)(&config, before);
-            let mut after = before.clone();
-            after.add(&u);
-            upstream.push(after);
-            uses.push(u);
-        }
-        self.allocate_targets(ctx, &config, &uses.iter().flatten().copied().collect::<Vec<_>>())?;
-        for ((desc, uses), upstream) in chosen.into_iter().zip(uses).zip(&upstream) {
-            let init = Creation {
-                ctx,
-                config: &config,
-                gpu: &self.gpu,
-                targets: &self.targets,
-                tracer: self.tracer.as_deref(),
-                upstream,
-            };
-            let pass = (desc.create)(&init).with_context(|| format!("creating pass {}", desc.name))?;
-            self.passes.push(Recorded { desc, uses, pass });
-        }
-        self.passes_new = true;
-        self.visibility.passes_rebuilt(&config);
+        let left_out = self.frame.build(ctx, config, &self.gpu, self.tracer.as_deref())?;
+        self.choices.visibility.passes_rebuilt(&config);
         if ctx.caps.device_type == vk::PhysicalDeviceType::CPU {
             log::info!(
                 "frame: compiling shaders: a software device compiles each pipeline on first use, inside the \
@@ -448,16 +251,15 @@ impl Renderer {
         if !left_out.is_empty() {
             log::info!("frame: left out {}", left_out.join("; "));
         }
-        let described = self.targets.describe();
+        let described = self.frame.targets.describe();
         let bytes: u32 = described.iter().map(|(_, b)| b).sum();
         let list: Vec<String> = described.iter().map(|(n, b)| format!("{n} ({b} B)")).collect();
         log::info!("frame: targets {} = {bytes} bytes/pixel", list.join(", "));
-        self.config = Some(config);
         Ok(())
     }
 
-    /// Fills the frame uniforms for `camera` and builds the frame's passes;
-    /// its host writes are staged in the open frame's slot (`begin_frame`).
+    /// Builds the frame's passes and makes its choices for `camera`; its
+    /// host writes are staged in the open frame's slot (`begin_frame`).
     pub fn prepare(
         &mut self,
         ctx: &Context,
@@ -465,85 +267,13 @@ impl Renderer {
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<()> {
-        let (slot, _) = self.open.context("begin_frame() must run before prepare()")?;
+        self.slots.uploads("prepare()")?;
         self.ensure_frame(ctx, scene, settings)?;
-        let up = &mut Uploads { ring: &mut self.ring, slot };
-        frame_results::reset_counters(up, &self.gpu.ray_counters)?;
-        let e = self.extent;
-        let aspect = e.width as f32 / e.height.max(1) as f32;
-        // The camera relative to the render origin, like every GPU transform.
-        let budget_on = self.config.is_some_and(|c| c.budget);
-        if let (true, Some(b)) = (budget_on, &settings.budget) {
-            self.budget_traced = Some(self.budget.before_frame(up, &self.gpu, b, scene.objects.len())?);
-        }
-        // The shadow maps render only when some visible object's shadows are
-        // left out (a per-frame choice: the pass itself exists per config).
-        let left_out = match self.config.is_some_and(|c| c.shadow_fallback) {
-            false => None,
-            true if !self.budget.shadows_left_out() => Some("every visible object's shadows are ray-traced"),
-            true => {
-                self.gpu.shadow.write_views(up, scene, self.gpu.origin)?;
-                None
-            }
-        };
-        if left_out != self.shadow_map_left_out {
-            match left_out {
-                Some(why) => log::debug!("frame: left out shadow_map: {why}"),
-                None if self.config.is_some_and(|c| c.shadow_fallback) => {
-                    log::debug!("frame: shadow_map records")
-                }
-                None => {}
-            }
-            self.shadow_map_left_out = left_out;
-        }
-        let camera = &Camera { world: self.gpu.origin.relative(&camera.world), ..camera.clone() };
-        let view = camera.view().as_mat4();
-        let proj = camera.projection(aspect);
-        // Only the raster pass draws; pure RT mode and traced visibility find hits by tracing.
-        self.draw_list = if self.visibility.before_frame(camera, &scene.bounds, self.config) {
-            cull::draw_list(scene, &self.gpu, self.gpu.origin, &(proj.as_dmat4() * camera.view()))
-        } else {
-            cull::DrawList::default()
-        };
-        let path_mode = settings.mode == shading::Mode::Path;
-        // The path tracer integrates the environment itself: no SH or PRT work.
-        let ambient = if path_mode {
-            AmbientMode::Constant
-        } else {
-            AmbientMode::resolve(settings, &scene.environment)
-        };
-        let settings = &RenderSettings { ambient, ..*settings };
-        self.prt.ensure(ctx, &mut self.gpu, scene, settings)?;
-        let env = &scene.environment;
-        // No map: no SH (the constant colour's irradiance is pi L, exactly
-        // the constant ambient).
-        let sh_radiance = self.prt.sh_radiance(&self.gpu, scene, settings.prt.projection)?;
-        let sh = match (settings.ambient, &sh_radiance) {
-            (AmbientMode::Constant, _) => None,
-            // PRT shades static primary hits; the rest keep SH irradiance.
-            (_, Some(sh)) => Some(crate::gpu::env_sh::irradiance_uniform(sh, env)),
-            _ => None,
-        };
-        let budget_flags = match settings.budget.map(|b| b.fallback) {
-            _ if !budget_on => 0,
-            Some(budget::Fallback::Raster) => FRAME_BUDGET | FRAME_FALLBACK_RASTER,
-            _ => FRAME_BUDGET,
-        };
-        let inputs = uniforms::Inputs {
-            camera,
-            view,
-            proj,
-            extent: e,
-            gpu: &self.gpu,
-            env,
-            frame_index: self.frame_index,
-            adapt_dt: self.adapt_dt,
-            budget_flags,
-            sh,
-            prt: self.prt.radiance().map(|l| crate::gpu::prt_buffer::radiance_uniform(l, env)),
-        };
-        let frame = uniforms::frame(&inputs, settings, &mut self.reference);
-        self.gpu.write_frame(&mut Uploads { ring: &mut self.ring, slot }, &frame)
+        let config = self.frame.config.context("no frame configuration")?;
+        let up = &mut self.slots.uploads("prepare()")?;
+        frame_slots::reset_counters(up, &self.gpu.ray_counters)?;
+        let extent = self.frame.extent;
+        self.choices.prepare(ctx, up, &mut self.gpu, scene, camera, settings, config, extent)
     }
 
     /// Records every pass of one frame; the displayable result is in the
@@ -560,31 +290,29 @@ impl Renderer {
         cmd: vk::CommandBuffer,
         tail: impl FnOnce(&mut Recorder, &Targets) -> Result<()>,
     ) -> Result<()> {
-        anyhow::ensure!(self.config.is_some(), "prepare() must run before record()");
-        self.record_uploads(ctx, cmd)?;
-        let state = self.frame_state();
-        let mut rec = Recorder::new(ctx, cmd, &mut self.timer, Some(&self.targets));
+        let config = self.frame.config.context("prepare() must run before record()")?;
+        self.slots.record_uploads(ctx, cmd)?;
+        let frame = &self.frame;
+        let mut rec = Recorder::new(ctx, cmd, &mut self.slots.timer, Some(&frame.targets));
         let cx = Recording {
             ctx,
             gpu: &self.gpu,
-            targets: &self.targets,
+            targets: &frame.targets,
             tracer: self.tracer.as_deref(),
-            draws: &self.draw_list,
-            injected: &self.injection,
+            draws: &self.choices.draw_list,
+            injected: &frame.injection,
         };
-        for p in &self.passes {
-            if (p.desc.this_frame)(&state).is_some() {
-                continue;
-            }
-            rec.pass(p.desc.name, p.pass.stage(), &p.uses, |cmd| {
-                p.pass.record(&cx, cmd);
-                Ok(())
-            })?;
-        }
-        tail(&mut rec, &self.targets)?;
-        self.frame_index = self.frame_index.wrapping_add(1);
-        self.recorded_cold = std::mem::take(&mut self.passes_new);
-        self.record_downloads(ctx, cmd, true)
+        frame.record(&mut rec, &cx, &self.choices.frame_state())?;
+        tail(&mut rec, &frame.targets)?;
+        self.choices.recorded();
+        self.frame.recorded_cold = std::mem::take(&mut self.frame.passes_new);
+        let reads = FrameReads {
+            gpu: &self.gpu,
+            exposure: config.luminance,
+            budget_traced: self.choices.budget_traced.take(),
+            cold: self.frame.recorded_cold,
+        };
+        self.slots.record_downloads(ctx, cmd, Some(reads))
     }
 
     /// Renders one frame offscreen and reads back both outputs. With a
@@ -600,10 +328,10 @@ impl Renderer {
         settings: &RenderSettings,
     ) -> Result<FrameOutput> {
         // (A budget the frame leaves out, with nothing traced, needs none.)
-        let measures = self.config.is_none_or(|c| c.budget);
+        let measures = self.frame.config.is_none_or(|c| c.budget);
         // (Up to two calibration frames, and one per cold pass set.)
         for _ in 0..4 {
-            if !(measures && settings.budget.is_some_and(|b| !self.budget.ready(&b))) {
+            if !(measures && settings.budget.is_some_and(|b| !self.choices.budget_ready(&b))) {
                 break;
             }
             self.render_frame(ctx, scene, camera, settings)?;
@@ -620,18 +348,18 @@ impl Renderer {
     ) -> Result<FrameOutput> {
         self.begin_frame(0)?;
         self.prepare(ctx, scene, camera, settings)?;
-        let cmd = self.cmd;
+        let cmd = self.slots.cmd;
         ctx.begin_commands(cmd)?;
-        let copies = [(self.output_ldr()?, self.readback_ldr.raw), (&HDR, self.readback_hdr.raw)];
+        let copies = [(self.output_ldr()?, self.slots.readback_ldr.raw), (&HDR, self.slots.readback_hdr.raw)];
         self.record_with(ctx, cmd, |rec, t| readback::record(ctx, rec, t, &copies))?;
         unsafe { ctx.device.end_command_buffer(cmd)? };
         ctx.submit_and_wait(cmd)?;
         let done = self.finish_frame(0)?;
-        let ldr = self.readback_ldr.read()?.to_vec();
-        let hdr = bytemuck::pod_collect_to_vec::<u8, f32>(self.readback_hdr.read()?);
+        let ldr = self.slots.readback_ldr.read()?.to_vec();
+        let hdr = bytemuck::pod_collect_to_vec::<u8, f32>(self.slots.readback_hdr.read()?);
         self.finish_budget(scene, camera, settings, &done)?;
-        self.visibility.after_frame(&done.timings);
-        let e = self.extent;
+        self.choices.visibility.after_frame(&done.timings);
+        let e = self.frame.extent;
         Ok(FrameOutput {
             width: e.width,
             height: e.height,
@@ -642,8 +370,57 @@ impl Renderer {
             truncated_pixels: done.truncated_pixels,
             bad_pixels: done.bad_pixels,
             exposure: done.exposure,
-            cold: self.recorded_cold,
+            cold: self.frame.recorded_cold,
         })
+    }
+
+    /// Starts building the frame of ring slot `slot` (the viewer's frame
+    /// slot; offline paths use 0): its host writes are staged there. Call
+    /// after the slot's previous frame finished (`finish_frame`).
+    pub fn begin_frame(&mut self, slot: usize) -> Result<()> {
+        self.slots.begin(slot)
+    }
+
+    /// After slot `slot`'s fence: the scene update's results (into
+    /// `update`, and the tracer's rebuild policy) and the frame's reads.
+    /// Empty when the slot held no frame.
+    pub fn finish_frame(&mut self, slot: usize) -> Result<Finished> {
+        self.slots.finish(slot, &mut self.update, self.tracer.as_deref_mut())
+    }
+
+    /// Replaces the frame ring by one of `slots` frames in flight (the
+    /// viewer's); waits for the device.
+    pub fn set_frames_in_flight(&mut self, ctx: &Context, slots: usize) -> Result<()> {
+        self.slots.set_frames_in_flight(ctx, slots)
+    }
+
+    /// After a completed frame (`done`, from `finish_frame`): the budget's
+    /// selection for the next one (nothing without a budget, or when the
+    /// frame measured nothing). With frames in flight the statistics are
+    /// one frame older than the frame the selection applies to.
+    pub fn finish_budget(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        settings: &RenderSettings,
+        done: &Finished,
+    ) -> Result<()> {
+        if !self.frame.config.is_some_and(|c| c.budget) {
+            return Ok(());
+        }
+        let screen = budget::Screen { width: self.frame.extent.width, height: self.frame.extent.height };
+        self.choices.finish_budget(scene, camera, settings, done, screen)
+    }
+
+    /// Makes the next frame under `budget` trace the effects `bits` (EFFECT_*
+    /// bits per object) instead of what the heuristic chose.
+    pub fn set_budget_selection(&mut self, budget: &budget::BudgetSettings, bits: Vec<u32>) {
+        self.choices.set_budget_selection(budget, bits);
+    }
+
+    /// The budget's last selection and what it was made from.
+    pub fn budget_report(&self) -> Option<&budget::BudgetReport> {
+        self.choices.budget_report()
     }
 
     /// Fault injection for tests: from the next frame on, these HDR pixels
@@ -651,34 +428,20 @@ impl Renderer {
     /// only while armed (empty: disarmed; the next frame rebuilds its passes).
     pub fn inject_radiance(&mut self, pixels: &[passes::inject::Injected]) -> Result<()> {
         passes::inject::check(pixels)?;
-        self.injection = pixels.to_vec();
+        self.frame.injection = pixels.to_vec();
         Ok(())
     }
 
     pub fn destroy(&mut self, ctx: &Context) {
         unsafe {
             let _ = ctx.device.device_wait_idle();
-            let cmds: Vec<vk::CommandBuffer> =
-                [self.cmd, self.update_cmd].into_iter().filter(|c| *c != vk::CommandBuffer::null()).collect();
-            if !cmds.is_empty() {
-                ctx.device.free_command_buffers(ctx.command_pool, &cmds);
-            }
         }
-        self.update_timer.destroy(ctx);
-        if let Some(mut s) = self.skinning.take() {
-            s.destroy(ctx);
-        }
-        self.readback_ldr.destroy(ctx);
-        self.readback_hdr.destroy(ctx);
-        self.ring.destroy(ctx);
-        self.timer.destroy(ctx);
-        for mut p in self.passes.drain(..) {
-            p.pass.destroy(ctx);
-        }
+        self.update.destroy(ctx);
+        self.slots.destroy(ctx);
+        self.frame.destroy(ctx);
         if let Some(mut t) = self.tracer.take() {
             t.destroy(ctx);
         }
-        self.targets.destroy(ctx);
         self.gpu.destroy(ctx);
     }
 }

@@ -8,31 +8,26 @@ use ash::vk;
 
 use super::frame::Recorder;
 use super::targets::Targets;
-use super::uses::{Access, TargetDesc, Use};
-use crate::vk::{copy_image_to_buffer, memory_barrier, Context};
+use super::uses::{Access, SharedBuffer, TargetDesc, Use};
+use crate::vk::{copy_image_to_buffer, Context};
 
-/// Records the pass `readback`: each target of `copies` into its buffer,
-/// then the copies, and the counters and exposure state the frame's
-/// shaders wrote, made visible to the host.
+/// Records the pass `readback`: each target of `copies` into its buffer
+/// (host-visible), then the copies' hand-over to the host.
 pub fn record(
     ctx: &Context,
     rec: &mut Recorder,
     targets: &Targets,
     copies: &[(&'static TargetDesc, vk::Buffer)],
 ) -> Result<()> {
-    let uses: Vec<Use> = copies.iter().map(|(d, _)| Use::image(d, Access::TransferRead)).collect();
+    let mut uses: Vec<Use> = copies.iter().map(|(d, _)| Use::image(d, Access::TransferRead)).collect();
+    uses.push(Use::buffer(SharedBuffer::Readback, Access::TransferWrite));
     rec.pass("readback", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
         for (desc, buffer) in copies {
             let image =
                 targets.get(desc).with_context(|| format!("{} is not a target of this frame", desc.name))?;
             copy_image_to_buffer(ctx, cmd, image, *buffer);
         }
-        memory_barrier(
-            ctx,
-            cmd,
-            (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_WRITE),
-            (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
-        );
         Ok(())
-    })
+    })?;
+    rec.transition(&[Use::buffer(SharedBuffer::Readback, Access::HostRead)])
 }

@@ -42,6 +42,8 @@ pub enum SharedBuffer {
     Counters,
     /// The ray-tracing budget's per-object statistics.
     Budget,
+    /// Host-visible buffers a frame's images are copied into (readbacks).
+    Readback,
 }
 
 /// How a pass uses a resource. Shader accesses happen in the pass's own
@@ -65,6 +67,8 @@ pub enum Access {
     /// Handed to the presentation engine (an imported swapchain image's
     /// last use; no later access in the command buffer).
     Present,
+    /// Read by the host after the submission's fence (a readback's last use).
+    HostRead,
     /// Storage-buffer or acceleration-structure reads in shaders.
     ShaderRead,
     /// Storage-buffer writes in shaders.
@@ -158,6 +162,7 @@ impl Access {
             Access::TransferWrite => (S::COPY | S::BLIT, A::TRANSFER_WRITE),
             // Presentation waits on the frame's semaphore, not a stage.
             Access::Present => (S::BOTTOM_OF_PIPE, A::NONE),
+            Access::HostRead => (S::HOST, A::HOST_READ),
             Access::ShaderRead => (shader, A::SHADER_READ | as_read),
             Access::ShaderWrite => (shader, A::SHADER_STORAGE_WRITE),
             Access::VertexInput => {

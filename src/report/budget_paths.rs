@@ -1,17 +1,10 @@
-//! `report budget-paths`: the per-object ray-tracing budget's image error
-//! against run time along the scene's camera path. For each budget mode
-//! (paper; effects; effects with the raster fallback)
-//! and each share of the full cost, one renderer (so the selection, its
-//! stickiness and effects mode's cost model carry from frame to frame, as
-//! in the viewer) renders `warmup` frames at the path's start and then
-//! `frames` points along it; each frame is compared with the full-effects
-//! frame of the same point (no budget). Per run: frame ms (median, p95),
-//! ray-stage ms (`direct` + `specular`), `heuristic` ms and its share of
-//! the frame, ꟻLIP mean and PSNR (means over the frames). Shares are of
-//! what tracing everything costs in the mode's own unit: effects mode of
-//! the full-effects frames' median ray-stage ms, paper mode of its cost
-//! units for every visible object at the path's start. The raster-only and
-//! full-effects frames are the curve's two ends.
+//! `report budget-paths`: the budget's image error against run time along the scene's camera path.
+//! Per mode (paper; effects; effects with raster fallback) and share of the full cost, one renderer
+//! (so selection, stickiness and cost model carry across frames, as in the viewer) renders `warmup`
+//! frames, then `frames` path points, each compared with the full-effects frame there. Per run: frame
+//! ms (median, p95), ray-stage ms, `heuristic` ms and share, mean ꟻLIP and PSNR. Shares are in the
+//! mode's unit: effects mode of the full-effects median ray-stage ms, paper mode of the cost units of
+//! every visible object at the path's start. Raster-only and full effects are the curve's ends.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -108,20 +101,17 @@ fn run_path(
     settings: &RenderSettings,
     warmup: usize,
 ) -> Result<(Vec<Frame>, Renderer)> {
-    let mut r = Renderer::new(ctx, scene, extent)?;
-    let result = (|| {
+    let mut frames = Vec::new();
+    let r = crate::vk::built(ctx, Renderer::new(ctx, scene, extent)?, |r| {
         for _ in 0..warmup {
             r.render(ctx, scene, &cams[0], settings)?;
         }
-        cams.iter().map(|c| Ok(frame_of(&r.render(ctx, scene, c, settings)?))).collect::<Result<Vec<_>>>()
-    })();
-    match result {
-        Ok(frames) => Ok((frames, r)),
-        Err(e) => {
-            r.destroy(ctx);
-            Err(e)
+        for c in cams {
+            frames.push(frame_of(&r.render(ctx, scene, c, settings)?));
         }
-    }
+        Ok(())
+    })?;
+    Ok((frames, r))
 }
 
 fn summarize(

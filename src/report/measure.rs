@@ -124,13 +124,10 @@ pub struct Playback {
     pub fps: f32,
 }
 
-/// Measures a variant whose acceleration structures follow an animation
-/// (`variant.accel`): a renderer of its own is built on the pose of the
-/// first of `warmup + frames` frames that end at `playback.end`, one frame
-/// apart; every frame poses the scene, updates the structures the
-/// variant's way and renders. The timed frames include the update's passes
-/// (and a full rebuild's wall time); the image is the last frame's, so its
-/// error is that of the structures after `warmup + frames - 1` updates.
+/// Measures a variant whose acceleration structures follow an animation (`variant.accel`): its own
+/// renderer, built on the first of `warmup + frames` poses one frame apart ending at `playback.end`,
+/// updates the structures the variant's way every frame. Timed frames include the update (and a
+/// rebuild's wall time); the image is the last frame's, after `warmup + frames - 1` updates.
 #[allow(clippy::too_many_arguments)]
 pub fn measure_animated(
     ctx: &Context,
@@ -160,7 +157,7 @@ pub fn measure_animated(
             accel.update(ctx, &mut renderer, &scene)?;
             let out = renderer.render(ctx, &scene, camera, &settings)?;
             if i >= n - frames.max(1) {
-                times.add(&out.timings, &renderer.update_timings);
+                times.add(&out.timings, &renderer.update.timings);
                 last = Some(out);
             }
         }

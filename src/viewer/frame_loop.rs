@@ -16,8 +16,8 @@ use super::swapchain::Acquired;
 use super::{Flow, FRAMES_IN_FLIGHT};
 use crate::render::frame::{Access, Use};
 use crate::render::uses::TargetDesc;
-use crate::render::{Finished, FrameOutput};
-use crate::vk::{copy_image_to_buffer, copy_to_host_barrier, Buffer};
+use crate::render::{readback, Finished, FrameOutput};
+use crate::vk::Buffer;
 
 pub(super) struct FrameSlot {
     pub(super) cmd: vk::CommandBuffer,
@@ -68,7 +68,7 @@ impl Viewer {
         if !done.timings.is_empty() {
             let mut t = done.timings.clone();
             if done.updated {
-                t.extend(self.renderer.update_timings.iter().copied());
+                t.extend(self.renderer.update.timings.iter().copied());
             }
             self.stats.gpu(&t);
         }
@@ -184,7 +184,7 @@ impl Viewer {
         // selection follows a frame later).
         let camera = self.controller.camera();
         self.renderer.finish_budget(&self.scene, &camera, &self.settings, &done)?;
-        self.renderer.visibility.after_frame(&done.timings);
+        self.renderer.choices.visibility.after_frame(&done.timings);
 
         // --capture-frame N or F9: this frame, from its uniforms to its
         // present, in a RenderDoc capture.
@@ -227,7 +227,7 @@ impl Viewer {
         let FrameSlot { cmd, fence, image_available } = self.slots[s];
         self.controller.update(dt);
         // Eye adaptation follows the wall clock (the first frame converges).
-        self.renderer.adapt_dt = (self.presented > 0).then_some(dt);
+        self.renderer.choices.adapt_dt = (self.presented > 0).then_some(dt);
         if let Some((i, clock, paused)) = &mut self.animation {
             if !*paused {
                 // Wall-clock playback unless a fixed step was asked for (the
@@ -297,7 +297,7 @@ impl Viewer {
 
     /// The frame's commands: the scene update when `update`, the renderer's
     /// passes, then the blit of the tone-mapped image into swapchain image
-    /// `index` (and a readback copy for a screenshot), ending in PRESENT_SRC.
+    /// `index` (and the readback of a screenshot), ending in PRESENT_SRC.
     fn record(
         &mut self,
         cmd: vk::CommandBuffer,
@@ -345,12 +345,11 @@ impl Viewer {
                         filter,
                     )
                 };
-                if let Some(buf) = shot {
-                    copy_image_to_buffer(ctx, cmd, ldr, buf.raw);
-                    copy_to_host_barrier(ctx, cmd);
-                }
                 Ok(())
             })?;
+            if let Some(buf) = shot {
+                readback::record(ctx, rec, t, &[(final_ldr, buf.raw)])?;
+            }
             rec.transition(&[Use::image(&SWAPCHAIN, Access::Present)])
         })?;
         unsafe { ctx.device.end_command_buffer(cmd)? };

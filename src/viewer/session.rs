@@ -121,7 +121,7 @@ impl Viewer {
         let renderer = Renderer::new(&ctx, &scene, requested)?;
         let mut renderer = built(&ctx, renderer, |r| r.set_frames_in_flight(&ctx, FRAMES_IN_FLIGHT))?;
         // An interactive view: auto primary visibility measures per view.
-        renderer.visibility.measure = true;
+        renderer.choices.visibility.measure = true;
         let presenter =
             Presenter::new(&ctx, &window, opts.present_mode).inspect_err(|_| renderer.destroy(&ctx))?;
         let controller = CameraController::new(scene.bounds, scene.cameras.clone(), camera, start_index);

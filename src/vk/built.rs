@@ -26,6 +26,13 @@ pub fn built<T: Destroy>(ctx: &Context, mut value: T, fill: impl FnOnce(&mut T) 
     }
 }
 
+impl<T: Destroy> Destroy for Vec<T> {
+    fn destroy(&mut self, ctx: &Context) {
+        self.iter_mut().for_each(|v| v.destroy(ctx));
+        self.clear();
+    }
+}
+
 /// `Destroy` for types with an inherent `destroy(&mut self, &Context)`.
 #[macro_export]
 macro_rules! destroy_by_method {

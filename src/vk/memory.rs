@@ -7,7 +7,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-use super::{image_barrier, Context};
+use super::{built, image_barrier, Context};
 
 pub struct Buffer {
     pub raw: vk::Buffer,
@@ -281,44 +281,28 @@ impl Image {
     /// per texture.
     pub fn textures(ctx: &Context, descs: &[TextureDesc]) -> Result<Vec<Image>> {
         const BATCH_BYTES: usize = 64 << 20;
-        let mut images = Vec::with_capacity(descs.len());
-        let mut start = 0;
-        while start < descs.len() {
-            // Take textures until the batch is full (at least one).
-            let mut end = start + 1;
-            let mut bytes = descs[start].texels.len();
-            while end < descs.len() && bytes + descs[end].texels.len() <= BATCH_BYTES {
-                bytes += descs[end].texels.len();
-                end += 1;
-            }
-            match Image::upload_batch(ctx, &descs[start..end]) {
-                Ok(batch) => images.extend(batch),
-                Err(e) => {
-                    images.iter_mut().for_each(|i| i.destroy(ctx));
-                    return Err(e);
+        built(ctx, Vec::with_capacity(descs.len()), |images| {
+            let mut start = 0;
+            while start < descs.len() {
+                // Take textures until the batch is full (at least one).
+                let mut end = start + 1;
+                let mut bytes = descs[start].texels.len();
+                while end < descs.len() && bytes + descs[end].texels.len() <= BATCH_BYTES {
+                    bytes += descs[end].texels.len();
+                    end += 1;
                 }
+                images.extend(Image::upload_batch(ctx, &descs[start..end])?);
+                start = end;
             }
-            start = end;
-        }
-        Ok(images)
+            Ok(())
+        })
     }
 
     fn upload_batch(ctx: &Context, descs: &[TextureDesc]) -> Result<Vec<Image>> {
-        let mut images = Vec::with_capacity(descs.len());
+        // Buffer-to-image copies want offsets aligned to the texel size (4).
         let mut offsets = Vec::with_capacity(descs.len());
         let mut size = 0u64;
         for d in descs {
-            let e = d.extent;
-            let levels = if d.mipmaps { 32 - e.width.max(e.height).max(1).leading_zeros() } else { 1 };
-            let usage = vk::ImageUsageFlags::SAMPLED
-                | vk::ImageUsageFlags::TRANSFER_DST
-                | vk::ImageUsageFlags::TRANSFER_SRC;
-            let created = Image::new_2d(ctx, &d.name, d.format, e, levels, usage);
-            // A failure destroys the images of this batch made so far.
-            let created =
-                created.inspect_err(|_| images.iter_mut().for_each(|i: &mut Image| i.destroy(ctx)))?;
-            images.push(created);
-            // Buffer-to-image copies want offsets aligned to the texel size (4).
             offsets.push(size);
             size += (d.texels.len() as u64).div_ceil(16) * 16;
         }
@@ -328,9 +312,16 @@ impl Image {
             size,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
-        )
-        .inspect_err(|_| images.iter_mut().for_each(|i| i.destroy(ctx)))?;
-        let r = (|| {
+        )?;
+        let images = built(ctx, Vec::with_capacity(descs.len()), |images| {
+            for d in descs {
+                let e = d.extent;
+                let levels = if d.mipmaps { 32 - e.width.max(e.height).max(1).leading_zeros() } else { 1 };
+                let usage = vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_DST
+                    | vk::ImageUsageFlags::TRANSFER_SRC;
+                images.push(Image::new_2d(ctx, &d.name, d.format, e, levels, usage)?);
+            }
             for (d, &o) in descs.iter().zip(&offsets) {
                 staging.write(o as usize, d.texels)?;
             }
@@ -340,15 +331,9 @@ impl Image {
                 }
                 Ok(())
             })
-        })();
+        });
         staging.destroy(ctx);
-        if let Err(e) = r {
-            for mut img in images {
-                img.destroy(ctx);
-            }
-            return Err(e);
-        }
-        Ok(images)
+        images
     }
 
     /// Copies level 0 from `src` at `offset`, blits the mip chain, leaves it

@@ -401,9 +401,6 @@ pub fn image_barrier(
     };
 }
 
-/// A global memory barrier (buffers, and images that keep their layout).
-/// The copies recorded before it become visible to the host (read after
-/// the submission's fence).
 /// Records the copy of a whole single-mip image, in TRANSFER_SRC_OPTIMAL,
 /// into `buffer` (tightly packed rows): every readback goes through here.
 pub fn copy_image_to_buffer(ctx: &Context, cmd: vk::CommandBuffer, image: &Image, buffer: vk::Buffer) {
@@ -414,6 +411,8 @@ pub fn copy_image_to_buffer(ctx: &Context, cmd: vk::CommandBuffer, image: &Image
     unsafe { ctx.device.cmd_copy_image_to_buffer(cmd, image.raw, src, buffer, &region) };
 }
 
+/// The copies recorded before it become visible to the host (read after
+/// the submission's fence).
 pub fn copy_to_host_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
     memory_barrier(
         ctx,
@@ -423,6 +422,7 @@ pub fn copy_to_host_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
     );
 }
 
+/// A global memory barrier (buffers, and images that keep their layout).
 pub fn memory_barrier(
     ctx: &Context,
     cmd: vk::CommandBuffer,

@@ -28,17 +28,9 @@ pub struct RasterPipeline<'a> {
 
 impl RasterPipeline<'_> {
     pub fn create(&self, ctx: &Context, layout: vk::PipelineLayout) -> Result<vk::Pipeline> {
-        let vs = shader_module(ctx, self.vertex)?;
-        let fs = match self.fragment {
-            Some((name, _)) => match shader_module(ctx, name) {
-                Ok(m) => Some(m),
-                Err(e) => {
-                    unsafe { ctx.device.destroy_shader_module(vs, None) };
-                    return Err(e);
-                }
-            },
-            None => None,
-        };
+        let mut modules = Modules { ctx, list: Vec::new() };
+        let vs = modules.load(self.vertex)?;
+        let fs = self.fragment.map(|(name, _)| modules.load(name)).transpose()?;
         let spec_info = self.fragment.map(|(_, spec)| spec.info());
         let mut stages = vec![vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::VERTEX)
@@ -101,14 +93,31 @@ impl RasterPipeline<'_> {
             .layout(layout)
             .push_next(&mut rendering)];
         let r = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
-        unsafe {
-            ctx.device.destroy_shader_module(vs, None);
-            if let Some(fs) = fs {
-                ctx.device.destroy_shader_module(fs, None);
-            }
-        }
         let p = r.map_err(|(_, e)| e).with_context(|| format!("create {} pipeline", self.name))?[0];
         ctx.name(p, self.name);
         Ok(p)
+    }
+}
+
+/// The shader modules of one pipeline: they are needed only until it is
+/// created, and go on every path out of `create`.
+struct Modules<'a> {
+    ctx: &'a Context,
+    list: Vec<vk::ShaderModule>,
+}
+
+impl Modules<'_> {
+    fn load(&mut self, name: &str) -> Result<vk::ShaderModule> {
+        let m = shader_module(self.ctx, name)?;
+        self.list.push(m);
+        Ok(m)
+    }
+}
+
+impl Drop for Modules<'_> {
+    fn drop(&mut self) {
+        for m in self.list.drain(..) {
+            unsafe { self.ctx.device.destroy_shader_module(m, None) };
+        }
     }
 }

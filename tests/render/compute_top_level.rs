@@ -189,8 +189,8 @@ fn render_in_one_submission(
     ctx.submit_and_wait(cmd).unwrap();
     let gpu_wall = t0.elapsed().as_secs_f64() * 1e3;
     r.finish_frame(0).unwrap();
-    let fit = r.update_timings.iter().find(|(n, _)| *n == "top level fit").map_or(f64::NAN, |t| t.1);
-    let refit = r.update_timings.iter().find(|(n, _)| *n == "bvh refit").map_or(f64::NAN, |t| t.1);
+    let fit = r.update.timings.iter().find(|(n, _)| *n == "top level fit").map_or(f64::NAN, |t| t.1);
+    let refit = r.update.timings.iter().find(|(n, _)| *n == "bvh refit").map_or(f64::NAN, |t| t.1);
     eprintln!(
         "  one submission: {gpu_wall:.1} ms wall; GPU bvh refit {refit:.3} ms, top level fit {fit:.3} ms"
     );
@@ -237,11 +237,11 @@ fn in_frame_update_renders_like_the_reference_paths() {
         // is a copy in the frame), the others refit them.
         let (policy, counts) =
             if i == 2 { (RebuildPolicy::ALWAYS, [0, 2]) } else { (RebuildPolicy::NEVER, [2, 0]) };
-        in_frame.rebuild_policy = policy;
-        separate.rebuild_policy = policy;
+        in_frame.update.policy = policy;
+        separate.update.policy = policy;
         eprintln!("t {t} ({policy:?}):");
         let frame = render_in_one_submission(&ctx, &mut in_frame, &scene, &camera, &compute, &readback, cmd);
-        assert_eq!(in_frame.update_counts, counts, "t {t}: skinned trees refit / rebuilt");
+        assert_eq!(in_frame.update.counts, counts, "t {t}: skinned trees refit / rebuilt");
         let t0 = std::time::Instant::now();
         separate.update_scene(&ctx, &scene).unwrap();
         eprintln!("  separate update submission: {:.1} ms wall", t0.elapsed().as_secs_f64() * 1e3);

@@ -63,7 +63,7 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
     // Under auto a frame records one technique: the first probe frame, the
     // raster and its resolve.
     let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: 48, height: 27 }).unwrap();
-    r.visibility.measure = true;
+    r.choices.visibility.measure = true;
     let s = RenderSettings { backend: Backend::Compute, ..Default::default() };
     let out = r.render(&ctx, &scene, &scene.cameras[0], &s).unwrap();
     assert_eq!(r.pass_names()[..3], ["gbuffer", "gbuffer resolve", "direct"]);

@@ -103,7 +103,7 @@ fn auto_without_measuring_is_raster() {
     // first frame after a pass was made compiles it, then PROBE_SAMPLES
     // measured ones), then the traced pass alike, then only the one chosen,
     // whatever the times were. No frame records both.
-    r.visibility.measure = true;
+    r.choices.visibility.measure = true;
     let probes = 1 + hybrid_rt::render::visibility::PROBE_SAMPLES as usize;
     let mut seq = Vec::new();
     for _ in 0..2 * probes + 2 {
@@ -118,7 +118,7 @@ fn auto_without_measuring_is_raster() {
     }
     assert_eq!(seq[..2 * probes], [vec!["raster"; probes], vec!["traced"; probes]].concat(), "{seq:?}");
     assert!(seq[2 * probes + 1] == seq[2 * probes], "{seq:?}");
-    let d = r.visibility.describe().unwrap();
+    let d = r.choices.visibility.describe().unwrap();
     assert!(
         d.contains(&format!("last frame {}", seq[2 * probes + 1]))
             && d.contains("raster")

@@ -44,7 +44,7 @@ fn gpu_skinning_matches_the_pose_baked_on_the_cpu() {
             let mut r = Renderer::new(&ctx, &start, extent).unwrap();
             let first = r.render(&ctx, &start, &camera, &settings).unwrap();
             r.update_scene(&ctx, &target).unwrap();
-            assert_eq!(r.update_counts, [1, 0], "{model} {backend:?}: one skinned structure refit");
+            assert_eq!(r.update.counts, [1, 0], "{model} {backend:?}: one skinned structure refit");
             let dynamic = r.render(&ctx, &target, &camera, &settings).unwrap();
             r.destroy(&ctx);
             // Static: the CPU pose uploaded as ordinary geometry.
@@ -77,13 +77,13 @@ fn refit_and_rebuild_give_the_same_image() {
         for (policy, expect) in [(RebuildPolicy::NEVER, [1, 0]), (RebuildPolicy::ALWAYS, [0, 1])] {
             let mut scene = posed(&loaded, anim, 0.0);
             let mut r = Renderer::new(&ctx, &scene, extent).unwrap();
-            r.rebuild_policy = policy;
+            r.update.policy = policy;
             r.render(&ctx, &scene, &camera, &settings).unwrap();
             // Several refits in a row: errors would accumulate.
             for i in 1..=6 {
                 scene.animate(anim, 0.25 * i as f32);
                 r.update_scene(&ctx, &scene).unwrap();
-                assert_eq!(r.update_counts, expect, "{backend:?} {policy:?}");
+                assert_eq!(r.update.counts, expect, "{backend:?} {policy:?}");
             }
             frames.push(r.render(&ctx, &scene, &camera, &settings).unwrap());
             r.destroy(&ctx);

@@ -253,7 +253,7 @@ material = "floor"
         let mut r = Renderer::new(&ctx, &scene, vk::Extent2D { width: 48, height: 27 }).unwrap();
         let settings = auto(AutoExposure::LogAverage);
         let mut states = vec![state(&r.render(&ctx, &scene, &scene.cameras[0], &settings).unwrap())];
-        r.adapt_dt = Some(1.0 / fps as f32);
+        r.choices.adapt_dt = Some(1.0 / fps as f32);
         for _ in 0..fps {
             states.push(state(&r.render(&ctx, &scene, &scene.cameras[1], &settings).unwrap()));
         }

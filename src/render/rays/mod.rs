@@ -1,9 +1,7 @@
-//! Ray microbenchmark (`bench --rays`): traces fixed ray sets (sets.rs)
-//! through one tracer with glsl/passes/rays.glsl (rays.comp, or rays.rgen on
-//! the RT pipeline), one invocation per ray, timed with
-//! GPU timestamps, and reads back what every ray hit, so two tracers can be
-//! compared ray by ray. The compute tracer also has a statistics variant
-//! (nodes visited and triangles tested per ray).
+//! Ray microbenchmark (`bench --rays`): traces fixed ray sets (sets.rs) through one tracer with
+//! glsl/passes/rays.glsl, one invocation per ray, GPU-timed, and reads back every hit so two tracers
+//! can be compared ray by ray. The compute tracer also has a statistics variant (nodes and triangles
+//! per ray).
 
 pub mod sets;
 
@@ -145,7 +143,7 @@ pub struct RayRig {
 impl RayRig {
     pub fn new(ctx: &Context, gpu: &GpuScene, tracer: &dyn Tracer, traversal: Traversal) -> Result<RayRig> {
         let backend = tracer.backend();
-        let mut rig = RayRig {
+        let rig = RayRig {
             set: DescriptorSet::null(),
             layout: vk::PipelineLayout::null(),
             kernel: Kernel::Compute(vk::Pipeline::null()),
@@ -154,13 +152,7 @@ impl RayRig {
             backend,
             warm_up: std::time::Duration::ZERO,
         };
-        match rig.fill(ctx, gpu, tracer, traversal) {
-            Ok(()) => Ok(rig),
-            Err(e) => {
-                rig.destroy(ctx);
-                Err(e)
-            }
-        }
+        crate::vk::built(ctx, rig, |r| r.fill(ctx, gpu, tracer, traversal))
     }
 
     fn fill(
@@ -376,3 +368,5 @@ impl RayRig {
         self.set.destroy(ctx);
     }
 }
+
+crate::destroy_by_method!(RayRig);
