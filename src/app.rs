@@ -1,5 +1,4 @@
-//! The program's commands (`info`, `render`, `bench`), callable from the CLI
-//! and from tests in-process.
+//! The program's commands (`info`, `render`, `bench`), callable from the CLI and from tests in-process.
 
 use std::path::{Path, PathBuf};
 
@@ -32,9 +31,8 @@ pub use path_args::{PathArgs, MAX_PATH_SAMPLES};
 pub use rays::{rays_command, KindReport, RayBench};
 pub use view_args::{OnOff, ToneArgs, ViewArgs};
 
-/// The bundled default scene, looked for in the working directory, next to
-/// the executable (an installed copy, or `target/<profile>/` inside the
-/// source tree), and in the source tree the binary was built from.
+/// The bundled default scene, looked for in the working directory, next to the executable (an installed
+/// copy, or `target/<profile>/` in the source tree), and in the source tree the binary was built from.
 pub fn default_scene_path() -> Result<PathBuf> {
     const REL: &str = "assets/default.toml";
     let mut candidates = vec![PathBuf::from(REL)];
@@ -48,8 +46,7 @@ pub fn default_scene_path() -> Result<PathBuf> {
     Ok(path)
 }
 
-/// The first of `candidates` that exists; else an error listing where it
-/// looked and pointing to `--scene`.
+/// The first of `candidates` that exists; else an error listing where it looked and pointing to `--scene`.
 pub fn find_default_scene(candidates: &[PathBuf]) -> Result<PathBuf> {
     if let Some(p) = candidates.iter().find(|p| p.is_file()) {
         return Ok(p.clone());
@@ -153,10 +150,7 @@ impl RenderJob {
     }
 }
 
-/// Loads, uploads and renders one frame; returns it with the context's
-/// validation error count.
-/// Loads the job's scene; with an animation, also returns its index (the
-/// scene is posed at `job.time`).
+/// Loads the job's scene; with an animation, also returns its index (the scene is posed at `job.time`).
 pub(crate) fn load_posed(job: &RenderJob) -> Result<(Scene, Option<usize>)> {
     let mut scene = load_scene(job)?;
     let anim = match &job.animation {
@@ -284,10 +278,9 @@ pub fn render_command(
     })
 }
 
-/// Runs `f` with a new context, then destroys the context and fails if the
-/// validation layer reported anything during its life or teardown (objects
-/// leaked at vkDestroyDevice), on the error path too: an error exit must
-/// leave nothing behind either.
+/// Runs `f` with a new context, then destroys it and fails if the validation layer reported anything
+/// during its life or teardown (objects leaked at vkDestroyDevice), on the error path too: an error exit
+/// must leave nothing behind either.
 pub fn with_context<R>(gpu: &GpuOptions, f: impl FnOnce(&Context) -> Result<R>) -> Result<R> {
     let ctx = gpu.context()?;
     let result = f(&ctx);
@@ -298,8 +291,7 @@ pub fn with_context<R>(gpu: &GpuOptions, f: impl FnOnce(&Context) -> Result<R>) 
     }
 }
 
-/// Pixels whose radiance has a NaN or Inf component: how many, and the
-/// first one (x, y) in row order.
+/// Pixels whose radiance has a NaN or Inf component: how many, and the first one (x, y) in row order.
 pub fn non_finite_pixels(frame: &FrameOutput) -> (usize, Option<(u32, u32)>) {
     let mut first = None;
     let mut count = 0;
@@ -312,9 +304,8 @@ pub fn non_finite_pixels(frame: &FrameOutput) -> (usize, Option<(u32, u32)>) {
     (count, first)
 }
 
-/// Writes the frame; non-finite pixels are logged and written marked
-/// (magenta in the PNG, 0 in the HDR) so they can be found, and fail only
-/// with `strict`. Returns the number of non-finite pixels.
+/// Writes the frame; non-finite pixels are logged and written marked (magenta in the PNG, 0 in the HDR) so
+/// they can be found, and fail only with `strict`. Returns the number of non-finite pixels.
 pub fn write_outputs(frame: &FrameOutput, out: &Path, hdr_out: Option<&Path>, strict: bool) -> Result<usize> {
     let (count, first) = non_finite_pixels(frame);
     let marked;

@@ -1,16 +1,14 @@
-//! The crate's layer order, written once, and the tests that hold the
-//! source to it: a module imports only the modules before it in [`LAYERS`],
-//! and no chain of imports between files leaves a folder and comes back.
-//! Both read the `crate::` / `super::` paths of every file under src/
-//! (comments skipped, test modules included).
+//! The crate's layer order, written once, and the tests that hold the source to it: a module imports
+//! only modules before it in [`LAYERS`], and no chain of imports between files leaves a folder and
+//! comes back. Both read the `crate::` / `super::` paths of every file under src/ (comments skipped,
+//! test modules included).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// Top-level modules, lowest first. Helpers with no dependencies come first,
-/// then the Vulkan plumbing, the CPU scene, its GPU copy, acceleration data,
-/// PRT (it traces the CPU BVH and packs for the GPU), the frame, and the
-/// commands, the report and the viewer built on them.
+/// Top-level modules, lowest first: dependency-free helpers, the Vulkan plumbing, the CPU scene, its
+/// GPU copy, acceleration data, PRT (it traces the CPU BVH and packs for the GPU), the frame, and the
+/// commands, report and viewer built on them.
 pub const LAYERS: &[&str] =
     &["par", "csv", "image_diff", "vk", "scene", "gpu", "accel", "prt", "render", "app", "report", "viewer"];
 
@@ -19,9 +17,8 @@ struct Source {
     file: String,
     module: Vec<String>,
     text: String,
-    /// The text before an inline `mod tests { .. }` (at the end of a file
-    /// by convention): the modules' own imports, without the tests' (whose
-    /// `super` is the file itself, not its parent).
+    /// The text before an inline `mod tests { .. }` (at a file's end by convention): the module's own
+    /// imports, without the tests' (whose `super` is the file itself, not its parent).
     code: String,
 }
 
@@ -54,8 +51,8 @@ fn sources() -> Vec<Source> {
     out
 }
 
-/// The text without `//` comments (outside string literals; good enough for
-/// this code base, whose strings hold no unbalanced quotes before a `//`).
+/// The text without `//` comments (outside string literals; good enough here: no string holds an
+/// unbalanced quote before a `//`).
 fn strip_comments(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for line in text.lines() {
@@ -82,9 +79,8 @@ fn is_ident(c: char) -> bool {
     c.is_ascii_alphanumeric() || c == '_'
 }
 
-/// Every path a file names: `use` trees expanded (`a::{b, c::d}` gives
-/// `a::b` and `a::c::d`) and paths in code starting with crate, super or
-/// self. Segments are identifiers; a glob or `self` ends a path.
+/// Every path a file names: `use` trees expanded (`a::{b, c::d}` gives `a::b` and `a::c::d`) and paths
+/// in code starting with crate, super or self. Segments are identifiers; a glob or `self` ends a path.
 fn paths(text: &str) -> Vec<Vec<String>> {
     let mut out = Vec::new();
     let bytes: Vec<char> = text.chars().collect();
@@ -92,8 +88,7 @@ fn paths(text: &str) -> Vec<Vec<String>> {
     while i < bytes.len() {
         let starts_word = i == 0 || !is_ident(bytes[i - 1]) && bytes[i - 1] != ':';
         let word: String = bytes[i..].iter().take_while(|c| is_ident(**c)).collect();
-        // A `use` item starts its line (after a visibility), which keeps the
-        // word in strings and prose out.
+        // A `use` item starts its line (after a visibility), which keeps the word in strings and prose out.
         let line_start = bytes[..i].iter().rposition(|c| *c == '\n').map_or(0, |p| p + 1);
         let before: String = bytes[line_start..i].iter().collect();
         let item_start = matches!(before.trim(), "" | "pub" | "pub(crate)" | "pub(super)");
@@ -179,8 +174,8 @@ fn resolve(files: &BTreeMap<Vec<String>, String>, from: &Source, path: &[String]
     (1..=absolute.len()).rev().find_map(|n| module_file(files, &absolute[..n]))
 }
 
-/// A module's folder: the directory its children live in (`app.rs` and
-/// `app/x.rs` are one folder, as are `render/mod.rs` and `render/x.rs`).
+/// A module's folder: the directory its children live in (`app.rs` and `app/x.rs` are one folder, as
+/// are `render/mod.rs` and `render/x.rs`).
 fn folder(module: &[String], file: &str) -> String {
     let dir = Path::new("src").join(file);
     let has_children = file.ends_with("mod.rs")
@@ -327,8 +322,8 @@ mod tests {
         assert!(report.is_empty(), "import cycles across folders:\n{}", report.join("\n"));
     }
 
-    /// The parser and the cycle finder on known input, so a parser that
-    /// finds nothing cannot pass the two checks above.
+    /// The parser and the cycle finder on known input, so a parser that finds nothing cannot pass the two
+    /// checks above.
     #[test]
     fn the_checks_see_imports_and_cycles() {
         let text = strip_comments(

@@ -1,6 +1,5 @@
-//! Command line: `info`, `render`, `bench`, `report`, `compare`, `view`. With no command it opens
-//! the viewer on the bundled default scene when a display is available, else
-//! renders it headless to `out/default.png`.
+//! Command line: `info`, `render`, `bench`, `report`, `compare`, `view`. With no command it opens the
+//! viewer on the bundled default scene when a display is available, else renders it to `out/default.png`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;

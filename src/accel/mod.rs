@@ -1,6 +1,6 @@
-//! Vulkan acceleration structures: one BLAS per mesh primitive, built from
-//! the single shared vertex/index copy (PREFER_FAST_TRACE, compacted), and
-//! one TLAS over all instances. Sizes come from the driver's queries.
+//! Vulkan acceleration structures: one BLAS per mesh primitive, built from the single shared
+//! vertex/index copy (PREFER_FAST_TRACE, compacted), and one TLAS over all instances. Sizes come from
+//! the driver's queries.
 
 use crate::gpu::origin::RenderOrigin;
 use anyhow::{Context as _, Result};
@@ -26,15 +26,15 @@ use crate::vk::{memory_barrier, Buffer, Context};
 pub const MASK_VISIBLE: u8 = crate::gpu::shared::MASK_VISIBLE as u8;
 pub const MASK_SHADOW: u8 = crate::gpu::shared::MASK_SHADOW as u8;
 
-/// Whether every hit on `inst` is final (no alpha test, no transmission):
-/// such instances skip any-hit processing in every backend.
+/// Whether every hit on `inst` is final (no alpha test, no transmission): such instances skip any-hit
+/// processing in every backend.
 pub fn instance_opaque(scene: &Scene, inst: &Instance) -> bool {
     let m = &scene.materials[scene.instance_material(inst)];
     m.alpha_mode == AlphaMode::Opaque && m.transmission <= 0.0
 }
 
-/// Which rays may hit `inst` (MASK_VISIBLE always, MASK_SHADOW when both the
-/// object and its material cast shadows).
+/// Which rays may hit `inst`: MASK_VISIBLE always, MASK_SHADOW when both the object and its material
+/// cast shadows.
 pub fn instance_mask(scene: &Scene, inst: &Instance) -> u8 {
     let m = &scene.materials[scene.instance_material(inst)];
     let casts = scene.objects.get(inst.object).is_none_or(|o| o.props.casts_shadows) && m.casts_shadows;
@@ -139,9 +139,8 @@ pub(crate) fn triangles<'a>(gpu: &GpuScene, r: &PrimitiveRange) -> vk::Accelerat
         .index_data(vk::DeviceOrHostAddressConstKHR {
             device_address: gpu.indices.address + r.first_index as u64 * 4,
         });
-    // Opacity is decided per instance (FORCE_OPAQUE / FORCE_NO_OPAQUE) since
-    // objects can override the material of a shared primitive.
-    // Shadow transmittance multiplies every crossing once: no duplicates.
+    // Opacity is decided per instance (FORCE_OPAQUE / FORCE_NO_OPAQUE): objects can override a shared
+    // primitive's material. Shadow transmittance multiplies every crossing once: no duplicates.
     vk::AccelerationStructureGeometryKHR::default()
         .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
         .flags(vk::GeometryFlagsKHR::NO_DUPLICATE_ANY_HIT_INVOCATION)
@@ -190,8 +189,7 @@ pub struct SceneAccel {
 
 impl SceneAccel {
     pub fn build(ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<SceneAccel> {
-        // Everything created lands in `accel` at once, so an error half-way
-        // destroys what exists.
+        // Everything created lands in `accel` at once, so an error half-way destroys what exists.
         let accel = SceneAccel {
             tlas: AccelStruct {
                 raw: vk::AccelerationStructureKHR::null(),
@@ -236,8 +234,7 @@ impl SceneAccel {
             }
         }
 
-        // 2. Build them one after another through one scratch buffer, then
-        //    query compacted sizes.
+        // 2. Build them one after another through one scratch buffer, then query compacted sizes.
         let max_scratch = jobs.iter().map(|j| j.2).max().unwrap_or(0);
         let scratch_addr = self.scratch.address(ctx, max_scratch)?;
         let blases = &mut self.blases;
@@ -388,8 +385,8 @@ impl SceneAccel {
         r
     }
 
-    /// Records the refit / rebuild of every skinned BLAS (one entry per
-    /// slot), followed by the barrier the TLAS build needs.
+    /// Records the refit / rebuild of every skinned BLAS (one entry per slot), then the barrier the TLAS
+    /// build needs.
     pub fn record_dynamic(&self, ctx: &Context, cmd: vk::CommandBuffer, gpu: &GpuScene, updates: &[Update]) {
         let Some(d) = &self.dynamic else { return };
         d.record(ctx, cmd, gpu, updates);
@@ -402,8 +399,8 @@ impl SceneAccel {
         );
     }
 
-    /// Stages the instance records in the frame's ring slot (copied at the
-    /// frame's start, before `record_tlas` reads them).
+    /// Stages the instance records in the frame's ring slot (copied at the frame's start, before
+    /// `record_tlas` reads them).
     pub fn write_instances(&self, up: &mut Uploads, scene: &Scene) -> Result<()> {
         let dynamic = self.dynamic.as_ref();
         let records: Vec<vk::AccelerationStructureInstanceKHR> = scene
@@ -446,8 +443,8 @@ impl SceneAccel {
         up.write(&self.instances, 0, bytes)
     }
 
-    /// Records the TLAS build over the instance records `write_instances`
-    /// staged, growing the TLAS first if it must.
+    /// Records the TLAS build over the instance records `write_instances` staged, growing the TLAS first if
+    /// it must.
     pub fn record_tlas(&mut self, ctx: &Context, cmd: vk::CommandBuffer, scene: &Scene) -> Result<()> {
         let loader = ctx.accel.as_ref().context("acceleration structures are not enabled")?;
         let count = scene.instances.len() as u32;
@@ -473,8 +470,8 @@ impl SceneAccel {
             )
         };
         if self.tlas.buffer.size < sizes.acceleration_structure_size {
-            // A frame in flight may still trace the old TLAS (the scene's
-            // instance count is fixed, so this is the load-time build).
+            // A frame in flight may still trace the old TLAS (the instance count is fixed, so this is the
+            // load-time build).
             unsafe { ctx.device.device_wait_idle() }.context("vkDeviceWaitIdle before growing the TLAS")?;
             self.tlas.destroy(ctx);
             self.tlas = AccelStruct::new(

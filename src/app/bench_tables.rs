@@ -34,19 +34,16 @@ pub struct BenchReport {
     pub bad_pixels: u64,
     /// The auto exposure of the last measured frame (None: fixed).
     pub exposure: Option<crate::render::tone::ExposureState>,
-    /// Effects mode's budget: T and, per measured frame, the ray stages'
-    /// predicted and measured ms.
+    /// Effects mode's budget: T and, per measured frame, the ray stages' predicted and measured ms.
     pub budget: Option<(f64, Vec<BudgetFrame>)>,
     /// Bytes per pixel of the G-buffer targets the run allocated.
     pub gbuffer_bytes_per_pixel: u32,
-    /// G-buffer draws of the last measured frame: recorded, and left out
-    /// as outside the view frustum.
+    /// G-buffer draws of the last measured frame: recorded, and left out as outside the view frustum.
     pub raster_draws: (usize, u32),
     /// Their triangles (before occlusion culling).
     pub raster_triangles: u64,
-    /// Occlusion culling's counters of the last measured frame (None: off):
-    /// clusters drawn in phase 1, in phase 2, occluded, outside the
-    /// frustum; triangles drawn. And the scene's cluster count.
+    /// Occlusion culling's counters of the last measured frame (None: off): clusters drawn in phase 1, in
+    /// phase 2, occluded, outside the frustum; triangles drawn. And the scene's cluster count.
     pub occlusion: Option<([u32; 5], usize)>,
     /// Auto primary visibility: what the last measured frame used and the
     /// times it chose by (None: raster or traced was fixed, or pure RT).
@@ -139,9 +136,8 @@ pub struct BudgetFrame {
     pub measured_rays: f64,
 }
 
-/// Effects mode's budget against what the ray stages took, per frame. The
-/// rays tell a wrong ray estimate (the selection's latency on a moving
-/// camera) from a wrong or noisy time per ray.
+/// Effects mode's budget against what the ray stages took, per frame. The rays tell a wrong ray estimate (the
+/// selection's latency on a moving camera) from a wrong or noisy time per ray.
 fn budget_table(t: f64, frames: &[BudgetFrame]) -> String {
     let mut s = format!("budget T = {t:.3} ms (effects mode), ray stages (direct + specular) per frame:\n");
     s.push_str(&format!(
@@ -188,10 +184,8 @@ pub(super) fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
     }
 }
 
-/// Per-frame ratios of frame times `r` to `base` (frames of the same path
-/// position, rendered next to each other): quartiles and median, as
-/// [first quartile, median, third quartile]. None where the runs differ in
-/// length or a base frame took no time.
+/// Per-frame ratios of frame times `r` to `base` (same path position, rendered next to each other): [first
+/// quartile, median, third quartile]. None where the runs differ in length or a base frame took no time.
 pub fn paired_ratios(r: &[f64], base: &[f64]) -> Option<[f64; 3]> {
     if r.len() != base.len() || r.is_empty() {
         return None;
@@ -210,8 +204,7 @@ pub fn paired_ratios(r: &[f64], base: &[f64]) -> Option<[f64; 3]> {
     Some([at(0.25), at(0.5), at(0.75)])
 }
 
-/// The tables of `reports` as CSV: one row per variant and pass (the
-/// frame total last), GPU ms.
+/// The tables of `reports` as CSV: one row per variant and pass (the frame total last), GPU ms.
 pub fn bench_csv(reports: &[BenchReport]) -> String {
     use crate::csv::{csv_field, csv_number};
     let mut s = String::from(

@@ -149,15 +149,11 @@ fn bench_frame_inner(
     })
 }
 
-/// `bench`: every variant gets a renderer of its own and is warmed up first
-/// (one ray-counting frame, then `warmup` unmeasured frames along the
-/// path's start, so no variant absorbs the process's warm-up). Then the
-/// variants are measured interleaved, frame by frame along the scene's
-/// camera path (or from its camera), each frame of the path once per
-/// variant and the order rotating: a drift of the device's speed (a CPU's
-/// clock, other load) falls on every variant alike, and the frames pair up
-/// for per-frame ratios (`paired_ratios`). Per-pass GPU times. Progress goes
-/// to stderr.
+/// `bench`: each variant gets its own renderer and a warm-up (one ray-counting frame, then `warmup`
+/// unmeasured frames at the path's start, so no variant absorbs the process's warm-up). The variants
+/// are then measured interleaved, frame by frame along the camera path (or from its camera) with the
+/// order rotating: a drift in the device's speed (a CPU's clock, other load) falls on every variant
+/// alike, and frames pair up for per-frame ratios (`paired_ratios`). Progress goes to stderr.
 pub fn bench(
     ctx: &Context,
     job: &RenderJob,
@@ -168,8 +164,7 @@ pub fn bench(
     let extent = job.extent()?;
     let (mut scene, anim) = load_posed(job)?;
     let base_camera = job.camera.resolve(&scene)?;
-    // An explicit --look-from/--look-at holds the camera there: the scene's
-    // path is for the default run.
+    // An explicit --look-from/--look-at holds the camera there: the scene's path is for the default run.
     if matches!(job.camera, crate::app::CameraChoice::LookAt { .. }) && !scene.camera_path.is_empty() {
         log::info!("bench: --look-from holds the camera; the scene's camera path is not followed");
         scene.camera_path.clear();
@@ -186,9 +181,8 @@ pub fn bench(
         bail!("bench: not every variant asked for can run on {}: {}", ctx.caps.name, unavailable.join("; "));
     }
     let n = variants.len();
-    // Frames in the order rendered: per variant a ray-counting frame and the
-    // warm-up, then the measured frames, one per variant for each frame of
-    // the path; `--capture-frame` counts the same way.
+    // Frames in rendering order: per variant a ray-counting frame and the warm-up, then one measured
+    // frame per variant for each frame of the path; `--capture-frame` counts the same way.
     let total = n * (1 + warmup + frames);
     if let Some(c) = ctx.capture_frame.filter(|&c| c >= total as u64) {
         bail!("--capture-frame {c}: this bench renders {total} frames (0..={})", total - 1);
@@ -413,12 +407,10 @@ fn bench_with(
     check_validation(ctx)
 }
 
-/// What refitting costs in tree quality, and what a CPU refit would cost in
-/// time, over the benchmark's own animation frames: every skinned
-/// instance's tree is built at the first frame and refit at each later one,
-/// and compared with a tree freshly built for that frame (SAH cost ratio)
-/// and the bounds' area growth the rebuild policy watches. None without
-/// skinned instances.
+/// What refitting costs in tree quality, and a CPU refit in time, over the benchmark's own animation
+/// frames: each skinned instance's tree is built at the first frame, refit at each later one and
+/// compared with a fresh build for that frame (SAH cost ratio) and by the bounds' area growth the
+/// rebuild policy watches. None without skinned instances.
 pub struct RefitQuality {
     /// Median host ms per frame of CPU skinning + triangle boxes + refit.
     pub cpu_refit_ms: f64,

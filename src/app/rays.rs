@@ -1,8 +1,6 @@
-//! `bench --rays`: the ray microbenchmark. Fixed ray sets on the scene
-//! (render/rays/sets.rs) traced through our compute BVH tracer and through
-//! the driver's tracer (its ray query, or its ray-tracing pipeline where it
-//! has no ray query, as NVIDIA's driver on some machines) on the same rays,
-//! timed with GPU timestamps, compared ray by ray.
+//! `bench --rays`: the ray microbenchmark. Fixed ray sets on the scene (render/rays/sets.rs) traced
+//! through our compute BVH tracer and the driver's (its ray query, or its ray-tracing pipeline where it
+//! has no ray query, as NVIDIA's driver on some machines), timed with GPU timestamps, compared ray by ray.
 
 use crate::vk::frame_ring::upload_now;
 use anyhow::{bail, Context as _, Result};
@@ -173,9 +171,8 @@ impl RayBench {
         Ok(KindReport { kind, rays: rays.len(), compute, driver, driver_backend: self.driver, mismatches })
     }
 
-    /// Every kind in order: primary rays from the camera, then shadow and
-    /// diffuse rays from the compute tracer's primary hits (both tracers
-    /// trace the same sets).
+    /// Every kind in order: primary rays from the camera, then shadow and diffuse rays from the compute
+    /// tracer's primary hits (both tracers trace the same sets).
     pub fn all(&self, ctx: &Context, scene: &Scene, job: &RenderJob, reps: usize) -> Result<Vec<KindReport>> {
         let camera = job.camera.resolve(scene)?;
         let extent = job.extent()?;

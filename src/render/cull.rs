@@ -1,13 +1,10 @@
-//! Which G-buffer draws a frame records, decided on the host each frame:
-//! an instance whose world bounds lie entirely outside one plane of the
-//! camera frustum is not drawn (clipping would have removed all of its
-//! triangles, so the image cannot change), and an instance whose transform
-//! mirrors (negative determinant) is drawn with the opposite front face, so
-//! back-face culling of single-sided geometry keeps its outside.
+//! Which G-buffer draws a frame records, decided on the host each frame: an instance whose world bounds
+//! lie entirely outside one frustum plane is not drawn (clipping would remove all its triangles, so the
+//! image cannot change), and one whose transform mirrors (negative determinant) is drawn with the
+//! opposite front face, so back-face culling of single-sided geometry keeps its outside.
 //!
-//! Bounds: a rigid instance's mesh-primitive box under its current world
-//! matrix; a skinned one's is the union of that box under every joint
-//! matrix of the current pose (a skinned vertex is a convex blend of its
+//! Bounds: a rigid instance's primitive box under its world matrix; a skinned one's is the union of
+//! that box under every joint matrix of the current pose (a skinned vertex is a convex blend of its
 //! joints' transforms of it, so it lies in that union).
 
 use glam::{DMat4, DVec3, DVec4};
@@ -16,16 +13,14 @@ use crate::gpu::origin::RenderOrigin;
 use crate::gpu::scene::GpuScene;
 use crate::scene::{Aabb, Scene};
 
-/// One draw of the frame: an index into `GpuScene::draws`, its winding and
-/// its instance's transform.
+/// One draw of the frame: an index into `GpuScene::draws`, its winding and its instance's transform.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameDraw {
     pub draw: u32,
     /// The instance's transform mirrors: its front faces wind clockwise.
     pub mirrored: bool,
-    /// The instance's world matrix relative to the render origin, as the
-    /// instance buffer holds it: the G-buffer's vertex stage takes it as a
-    /// push constant instead of fetching the instance per vertex.
+    /// The instance's world matrix relative to the render origin, as the instance buffer holds it: the
+    /// G-buffer's vertex stage takes it as a push constant instead of fetching the instance per vertex.
     pub world: glam::Mat4,
 }
 
@@ -114,9 +109,8 @@ mod tests {
         Aabb { min: c - h, max: c + h }
     }
 
-    /// Boxes in front, straddling a side plane or the near plane are kept;
-    /// behind the camera, beyond a side plane or inside the near distance
-    /// they are culled.
+    /// Boxes in front, straddling a side plane or the near plane are kept; behind the camera, beyond a side
+    /// plane or inside the near distance they are culled.
     #[test]
     fn boxes_are_culled_only_when_entirely_outside_one_plane() {
         let p = camera_planes();

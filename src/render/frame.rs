@@ -1,10 +1,7 @@
-//! The pass layer. A pass declares the images (render targets) and the
-//! shared buffers it reads and writes, with how (`Access`); the recorder
-//! derives every layout transition and synchronization2 barrier from those
-//! declarations, wraps the pass in a debug label and a pair of GPU
-//! timestamps, and remembers what ran. Nothing at a call site writes a
-//! barrier, a label or a timestamp. (Deliberately small: one queue, passes
-//! in the order given, no aliasing or reordering.)
+//! The pass layer. A pass declares the targets and shared buffers it reads and writes (`Access`); the
+//! recorder derives every layout transition and synchronization2 barrier from that, wraps the pass in a debug
+//! label and a pair of GPU timestamps, and remembers what ran: no call site writes a barrier, a label or a
+//! timestamp. Deliberately small: one queue, passes in the given order, no aliasing or reordering.
 
 use std::collections::HashMap;
 
@@ -53,9 +50,8 @@ pub struct Recorder<'a> {
     buffers: HashMap<SharedBuffer, State>,
     /// Names of the passes recorded, in order.
     pub recorded: Vec<&'static str>,
-    /// Drain each pass before its end timestamp (CPU devices, see `pass`;
-    /// not under synchronization validation, where the drain would hide a
-    /// missing derived barrier).
+    /// Drain each pass before its end timestamp (CPU devices, see `pass`); not under synchronization
+    /// validation, where the drain would hide a missing derived barrier.
     drain_for_timing: bool,
 }
 
@@ -98,9 +94,8 @@ impl<'a> Recorder<'a> {
         barriers.record(ctx, cmd);
         let r = f(cmd);
         if self.drain_for_timing {
-            // A CPU device writes timestamps without waiting for the work
-            // before them; a barrier makes it finish this pass first, so the
-            // pass is charged its own work.
+            // A CPU device writes timestamps without waiting for the work before them; a barrier makes it
+            // finish this pass first, so the pass is charged its own work.
             let all = (S::ALL_COMMANDS, A::MEMORY_WRITE);
             crate::vk::memory_barrier(ctx, cmd, all, (S::ALL_COMMANDS, A::MEMORY_READ | A::MEMORY_WRITE));
         }
@@ -111,9 +106,8 @@ impl<'a> Recorder<'a> {
         r
     }
 
-    /// Makes `image`, which the frame does not own (a swapchain image),
-    /// usable by passes as `desc`: its barriers are derived like a target's,
-    /// from undefined contents that earlier work on the queue (the
+    /// Makes `image`, which the frame does not own (a swapchain image), usable by passes as `desc`: its
+    /// barriers are derived like a target's, from undefined contents that earlier work on the queue (the
     /// acquire's semaphore wait) may still touch.
     pub fn import(&mut self, desc: &'static TargetDesc, image: vk::Image, aspect: vk::ImageAspectFlags) {
         self.imported.insert(desc.name, (image, aspect));
@@ -170,9 +164,8 @@ impl<'a> Recorder<'a> {
                 Resource::Buffer(_) => vk::ImageLayout::UNDEFINED,
             };
             let transition = layout != state.layout;
-            // Write after write / read, or a layout change: wait for the
-            // writer and the readers. Read after write: wait for the writer,
-            // once per reading stage.
+            // Write after write / read, or a layout change: wait for the writer and the readers. Read after
+            // write: wait for the writer, once per reading stage.
             let src = if writes || transition {
                 Some((state.write.0 | state.readers, state.write.1))
             } else if !state.visible_to.contains(stage) {

@@ -1,7 +1,6 @@
-//! The frame's passes as built for one configuration, with the targets
-//! they declare: rebuilt when the configuration changes, rebound when the
-//! frame is resized, and recorded in order, each only when its per-frame
-//! predicate lets it.
+//! The frame's passes as built for one configuration, with the targets they declare: rebuilt when the
+//! configuration changes, rebound on resize, and recorded in order, each when its per-frame predicate
+//! lets it.
 
 use anyhow::{Context as _, Result};
 use ash::vk;
@@ -33,10 +32,9 @@ pub(super) struct FramePasses {
     pub targets: Targets,
     /// Test fault injection into the HDR frame (`Renderer::inject_radiance`).
     pub injection: Vec<Injected>,
-    /// The passes were (re)created since the last recorded frame, and
-    /// whether the last recorded frame was their first: lavapipe compiles a
-    /// shader on first use, inside the GPU timestamps, so that frame's
-    /// times say nothing of the passes' cost (the budget ignores them).
+    /// The passes were (re)created since the last recorded frame, and whether that frame was their first:
+    /// lavapipe compiles a shader on first use, inside the GPU timestamps, so that frame's times say
+    /// nothing of the passes' cost (the budget ignores them).
     pub passes_new: bool,
     pub recorded_cold: bool,
 }
@@ -61,8 +59,7 @@ impl FramePasses {
         }
     }
 
-    /// Recreates the targets at `extent` and rebinds the passes to them
-    /// (the caller has waited for idle).
+    /// Recreates the targets at `extent` and rebinds the passes to them (the caller has waited for idle).
     pub fn resize(&mut self, ctx: &Context, extent: vk::Extent2D) -> Result<()> {
         self.extent = extent;
         let uses: Vec<Use> = self.passes.iter().flat_map(|p| p.uses.iter().copied()).collect();
@@ -79,8 +76,7 @@ impl FramePasses {
         Ok(())
     }
 
-    /// Allocates exactly the targets `uses` (the passes' declarations) and
-    /// the outputs of `config` name.
+    /// Allocates exactly the targets `uses` (the passes' declarations) and the outputs of `config` name.
     fn allocate_targets(&mut self, ctx: &Context, config: &ShadingConfig, uses: &[Use]) -> Result<()> {
         self.targets.destroy(ctx);
         let all: Vec<Use> = uses.iter().copied().chain(outputs(config)).collect();
@@ -96,8 +92,7 @@ impl FramePasses {
         self.config = None;
     }
 
-    /// Builds the passes of `config` and their targets; returns the passes
-    /// the configuration leaves out, with why.
+    /// Builds the passes of `config` and their targets; returns the passes it leaves out, with why.
     pub fn build(
         &mut self,
         ctx: &Context,

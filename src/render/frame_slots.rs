@@ -1,10 +1,8 @@
-//! What the host reads of a finished frame, after its ring slot's fence:
-//! the readback buffers, pass times, the budget's statistics, auto
-//! exposure's state, the bad-pixel counter and the scene update's results.
-//! With frames in flight (vk/frame_ring.rs) each of these is a download
-//! copied at the end of the frame's command buffer into its slot, and
-//! what the host needs to interpret it (pass names, the budget's
-//! selection, the update's plan) waits per slot in `Pending`.
+//! What the host reads of a finished frame after its ring slot's fence: readback buffers, pass times,
+//! budget statistics, auto exposure's state, the bad-pixel counter and the scene update's results. With
+//! frames in flight (vk/frame_ring.rs) each is a download copied into the slot at the end of the frame's
+//! command buffer; what the host needs to interpret it (pass names, the budget's selection, the
+//! update's plan) waits per slot in `Pending`.
 
 use anyhow::{Context as _, Result};
 use ash::vk;
@@ -19,9 +17,8 @@ use crate::vk::frame_ring::{Download, FrameRing, Source, Uploads};
 use crate::vk::timer::{GpuTimer, Readback};
 use crate::vk::{built, Buffer, Context};
 
-/// The frames in flight: per-slot staging of host writes and downloads
-/// (one slot unless the viewer asks for more), the frame passes' timer,
-/// and the offline path's command buffer and readback buffers.
+/// The frames in flight: per-slot staging of host writes and downloads (one slot unless the viewer asks
+/// for more), the frame passes' timer, and the offline path's command buffer and readback buffers.
 pub(super) struct FrameSlots {
     ring: FrameRing,
     /// The frame being built: its slot, and whether its uploads were
@@ -164,9 +161,8 @@ impl FrameSlots {
         Ok(())
     }
 
-    /// Registers the frame's own downloads (`frame`: it recorded passes,
-    /// not only an update) and records all of the slot's into `cmd` (its
-    /// last commands); closes the frame.
+    /// Registers the frame's own downloads (`frame`: it recorded passes, not only an update) and records
+    /// all of the slot's into `cmd` as its last commands; closes the frame.
     pub fn record_downloads(
         &mut self,
         ctx: &Context,
@@ -191,9 +187,8 @@ impl FrameSlots {
         ring.record_downloads(ctx, cmd, slot)
     }
 
-    /// After slot `slot`'s fence: the scene update's results (into
-    /// `update`, feeding the tracer's rebuild policy) and the frame's
-    /// reads. Empty when the slot held no frame.
+    /// After slot `slot`'s fence: the scene update's results (into `update`, feeding the tracer's rebuild
+    /// policy) and the frame's reads. Empty when the slot held no frame.
     pub fn finish(
         &mut self,
         slot: usize,
@@ -224,8 +219,7 @@ impl FrameSlots {
         Ok(done)
     }
 
-    /// Replaces the ring by one of `slots` frames in flight; waits for the
-    /// device.
+    /// Replaces the ring by one of `slots` frames in flight; waits for the device.
     pub fn set_frames_in_flight(&mut self, ctx: &Context, slots: usize) -> Result<()> {
         unsafe { ctx.device.device_wait_idle() }
             .context("vkDeviceWaitIdle before replacing the frame ring")?;

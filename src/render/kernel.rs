@@ -1,7 +1,6 @@
-//! The pipeline of a full-screen pass: a compute shader (8x8 workgroups,
-//! one invocation per pixel) or a ray-tracing pipeline launched one
-//! ray-generation invocation per pixel. Passes hold one without knowing
-//! which: the tracer picks it (render/tracer).
+//! The pipeline of a full-screen pass: a compute shader (8x8 workgroups, one invocation per pixel) or a
+//! ray-tracing pipeline launched one ray-generation invocation per pixel. Passes hold one without
+//! knowing which: the tracer picks it (render/tracer).
 
 use anyhow::Result;
 use ash::vk;
@@ -84,11 +83,9 @@ impl Kernel {
         }
     }
 
-    /// Binds like `dispatch` and runs the invocations `work`'s header asks
-    /// for (glsl/common/work_list.glsl): WORK_GROUP_SIZE-wide workgroups, or
-    /// a (count, 1, 1) ray-generation launch; without an indirect launch on
-    /// the device, one invocation per pixel of `extent` (the spare ones find
-    /// no entry).
+    /// Binds like `dispatch` and runs the invocations `work`'s header asks for
+    /// (glsl/common/work_list.glsl): WORK_GROUP_SIZE-wide workgroups, or a (count, 1, 1) ray-generation
+    /// launch; without indirect launches on the device, one per pixel of `extent` (spares find no entry).
     pub fn dispatch_indirect(
         &self,
         ctx: &Context,

@@ -1,27 +1,22 @@
 //! Two-phase occlusion culling of the G-buffer's clusters (gpu/clusters.rs),
 //! recorded inside the `gbuffer` pass (render/passes/gbuffer.rs):
 //!
-//! 1. `cull` phase 1 (compute): a cluster visible last frame and in the
-//!    frustum gets instance count 1 in phase 1's indirect draws;
+//! 1. `cull` phase 1 (compute): a cluster visible last frame and in the frustum gets instance count 1
+//!    in phase 1's indirect draws;
 //! 2. the raster draws phase 1 (depth cleared);
-//! 3. `pyramid` (compute): the depth pyramid of phase 1's depth, each texel
-//!    the FARTHEST (reversed-Z: minimum) depth of its pixels;
-//! 4. `cull` phase 2: every cluster is tested against the pyramid (frustum,
-//!    then projected box -> level -> farthest depth there); the visible ones
-//!    phase 1 did not draw get instance count 1 in phase 2's draws, and the
-//!    visibility is kept for the next frame;
+//! 3. `pyramid` (compute): phase 1's depth pyramid, each texel the FARTHEST (reversed-Z: minimum) depth
+//!    of its pixels;
+//! 4. `cull` phase 2: every cluster is tested against the pyramid (frustum, then projected box -> level
+//!    -> farthest depth there); visible ones phase 1 did not draw get instance count 1 in phase 2's
+//!    draws, and the visibility is kept for the next frame;
 //! 5. the raster draws phase 2 (depth and hits loaded).
 //!
-//! Conservative: a cluster is left out only when its box lies behind
-//! everything phase 1 drew over the box's pixels, and phase 1's depth is
-//! never nearer than the final depth, so the image is the one drawing every
-//! cluster gives (up to the order of equal-depth fragments). The pass on the
-//! host still frustum-culls whole draws (render/cull.rs) and sets each
-//! draw's cull mode, winding and pipeline; one multi-draw call per draw and
-//! phase covers its clusters.
-//!
-//! The pyramid and every barrier between the steps are private to the pass;
-//! what the recorder sees is the `gbuffer` pass's declared uses.
+//! Conservative: a cluster is left out only when its box lies behind everything phase 1 drew over its
+//! pixels, and phase 1's depth is never nearer than the final depth, so the image is the one drawing
+//! every cluster gives (up to the order of equal-depth fragments). The host still frustum-culls whole
+//! draws (render/cull.rs) and sets each draw's cull mode, winding and pipeline; one multi-draw call per
+//! draw and phase covers its clusters. The pyramid and the barriers between steps are private to the
+//! pass; the recorder sees the `gbuffer` pass's declared uses.
 
 use std::cell::RefCell;
 
@@ -220,9 +215,8 @@ impl Occlusion {
         Ok(())
     }
 
-    /// Records the cull pass of `phase` (1 or 2), with the barriers that
-    /// make its results visible to the indirect draws (and, in phase 2, to
-    /// the host's read of the counters).
+    /// Records the cull pass of `phase` (1 or 2) with the barriers that make its results visible to the
+    /// indirect draws (and, in phase 2, to the host's read of the counters).
     pub fn cull(&self, ctx: &Context, cmd: vk::CommandBuffer, gpu: &GpuScene, phase: u32) {
         let pyramid = self.pyramid.borrow();
         let Some(p) = pyramid.as_ref() else { return };
@@ -233,8 +227,7 @@ impl Occlusion {
             [0.9, 0.5, 0.1, 1.0],
         );
         if phase == 1 {
-            // The previous frame's draws and culls are done with the
-            // commands, the visibility and the pyramid.
+            // The previous frame's draws and culls are done with the commands, visibility and pyramid.
             let reads = A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE | A::SHADER_SAMPLED_READ;
             memory_barrier(ctx, cmd, (S::ALL_COMMANDS, A::MEMORY_WRITE), (S::COMPUTE_SHADER, reads));
         }

@@ -10,27 +10,22 @@ use super::tone::ExposureState;
 pub struct FrameOutput {
     pub width: u32,
     pub height: u32,
-    /// The final displayable image (tone-mapped, anti-aliased unless
-    /// `--aa none`), sRGB, RGBA8, row-major, top row first.
+    /// The final image (tone-mapped, anti-aliased unless `--aa none`): sRGB RGBA8, row-major, top row first.
     pub ldr: Vec<u8>,
     /// Linear radiance, RGBA32F.
     pub hdr: Vec<f32>,
     /// GPU milliseconds per pass.
     pub timings: Vec<(&'static str, f64)>,
-    /// Rays traced by kind (camera, shadow, secondary) when
-    /// `Effects::count_rays` is on, else zeros.
+    /// Rays traced by kind (camera, shadow, secondary) when `Effects::count_rays` is on, else zeros.
     pub ray_counts: [u32; 3],
-    /// Pixels whose reflection/refraction tree was cut by the per-pixel ray
-    /// budget or a full branch stack (`RAY_BUDGET_PER_PIXEL`,
-    /// `BRANCH_STACK_SIZE`); always counted.
+    /// Pixels whose reflection/refraction tree was cut by the per-pixel ray budget or a full branch stack
+    /// (`RAY_BUDGET_PER_PIXEL`, `BRANCH_STACK_SIZE`); always counted.
     pub truncated_pixels: u32,
-    /// Pixels whose radiance reached tone mapping as NaN or Inf (shown
-    /// magenta); always counted.
+    /// Pixels whose radiance reached tone mapping as NaN or Inf (shown magenta); always counted.
     pub bad_pixels: u32,
     /// What auto exposure measured and applied (None: fixed exposure).
     pub exposure: Option<ExposureState>,
-    /// The first frame of its passes: a driver that compiles shaders on
-    /// first use (lavapipe) did so inside `timings`.
+    /// The first frame of its passes: a driver compiling shaders on first use (lavapipe) did so in `timings`.
     pub cold: bool,
 }
 

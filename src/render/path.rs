@@ -1,6 +1,5 @@
-//! The path-traced ground truth (`--mode path`, pass `path`): its
-//! settings. The frames of a converged image are rendered by
-//! `reference::render_converged`, as the ambient reference's are.
+//! The path-traced ground truth's settings (`--mode path`, pass `path`). Its converged frames are
+//! rendered by `reference::render_converged`, as the ambient reference's are.
 
 use crate::gpu::shared::PATH_SAMPLES_PER_FRAME;
 

@@ -1,7 +1,6 @@
-//! The frame's readback: a pass that copies targets into host-visible
-//! buffers, recorded after the frame's passes with the same recorder (so
-//! its barriers follow from theirs). `render`, `report`, `bench` and the
-//! tests read frames through it.
+//! The frame's readback: a pass copying targets into host-visible buffers, recorded after the frame's
+//! passes with the same recorder (so its barriers follow from theirs). `render`, `report`, `bench` and
+//! the tests read frames through it.
 
 use anyhow::{Context as _, Result};
 use ash::vk;

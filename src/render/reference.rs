@@ -1,9 +1,7 @@
-//! The ray-traced reference for diffuse environment light
-//! (`--reference-samples N`): the `reference` pass (passes/reference.rs)
-//! accumulates REFERENCE_SAMPLES_PER_FRAME hemisphere samples per pixel per
-//! frame; here is when the accumulation starts over and the loop that
-//! renders the ⌈N/S⌉ frames of a converged image (its settings:
-//! settings.rs `ReferenceSettings`).
+//! The ray-traced reference for diffuse environment light (`--reference-samples N`): the `reference`
+//! pass (passes/reference.rs) accumulates REFERENCE_SAMPLES_PER_FRAME hemisphere samples per pixel per
+//! frame; here is when the accumulation starts over and the loop that renders a converged image's
+//! ⌈N/S⌉ frames (settings: settings.rs `ReferenceSettings`).
 
 use anyhow::Result;
 
@@ -36,8 +34,7 @@ impl Accumulation {
     /// The frame's `accum_frame` uniform for `frame` (the others
     /// filled): 0 when what it shows differs from the accumulated frames'.
     pub fn next(&mut self, frame: &GpuFrame) -> u32 {
-        // Everything the image depends on; not the frame counter, exposure
-        // or tone mapping.
+        // Everything the image depends on; not the frame counter, exposure or tone mapping.
         let f = frame;
         let key: Vec<u32> =
             [&f.view_proj[..], &f.camera_pos, &f.env_color, &[f.env_intensity, f.env_rotation, f.path_clamp]]
@@ -56,11 +53,9 @@ impl Accumulation {
     }
 }
 
-/// Renders the frames of one view's converged image, from scratch: the
-/// path tracer's (`--mode path`) or the ambient reference's
-/// (`settings.reference`), and returns the last. Logs progress every few
-/// seconds (a software device takes minutes for N = 1024). Without either
-/// it is one `render`.
+/// Renders one view's converged image from scratch, the path tracer's (`--mode path`) or the ambient
+/// reference's (`settings.reference`), and returns the last frame; without either it is one `render`.
+/// Logs progress every few seconds (a software device takes minutes for N = 1024).
 pub fn render_converged(
     renderer: &mut Renderer,
     ctx: &Context,

@@ -1,6 +1,5 @@
-//! The scene update's owner: skinning and the tracer's refit / rebuild of
-//! what moved, recorded at the start of a frame (or in a submission of its
-//! own), with its GPU times and counts read after the frame's fence.
+//! The scene update's owner: skinning and the tracer's refit / rebuild of what moved, recorded at a
+//! frame's start (or in a submission of its own), its GPU times and counts read after the fence.
 
 use anyhow::Result;
 use ash::vk;
@@ -23,8 +22,7 @@ pub struct SceneUpdate {
     /// The command buffer of an update submitted on its own (`update_scene`).
     pub(super) cmd: vk::CommandBuffer,
     timer: GpuTimer,
-    /// GPU ms per pass of the last finished update (plus the host's share),
-    /// for benchmarks and the viewer.
+    /// GPU ms per pass of the last finished update (plus the host's share), for benchmarks and the viewer.
     pub timings: Vec<(&'static str, f64)>,
     /// Skinned structures refit / rebuilt by the last finished update.
     pub counts: [usize; 2],
@@ -60,9 +58,8 @@ impl SceneUpdate {
         })
     }
 
-    /// Host work before the update is recorded, staged in the frame's slot:
-    /// moved transforms and lights, joint matrices, and the tracer's
-    /// refit / rebuild decisions (returned, for `finish`).
+    /// Host work before the update is recorded, staged in the frame's slot: moved transforms and lights,
+    /// joint matrices, and the tracer's refit / rebuild decisions (returned, for `finish`).
     pub(super) fn plan(
         &self,
         up: &mut Uploads,

@@ -1,5 +1,4 @@
-//! What a frame is asked for: the settings every command and the viewer
-//! pass to `Renderer::render`.
+//! What a frame is asked for: the settings every command and the viewer pass to `Renderer::render`.
 
 use super::budget;
 use super::tone::ToneSettings;
@@ -45,9 +44,8 @@ impl AmbientMode {
     }
 }
 
-/// The PRT precompute's parameters (`--prt-samples`, `--prt-bounces`,
-/// `--prt-bands`); used only by the prt ambient modes. `projection` is how
-/// the environment is projected onto SH for the sh and prt modes.
+/// The PRT precompute's parameters (`--prt-samples`, `--prt-bounces`, `--prt-bands`); used only by the prt
+/// ambient modes. `projection` is how the environment is projected onto SH for the sh and prt modes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PrtOptions {
     /// N: N×N directions a vertex.
@@ -57,8 +55,7 @@ pub struct PrtOptions {
     pub projection: EnvProjection,
 }
 
-/// The integrator of the environment's SH projection (report knob
-/// `sh-samples`; scene/sh/project.rs).
+/// The integrator of the environment's SH projection (report knob `sh-samples`; scene/sh/project.rs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum EnvProjection {
     /// Per-texel solid-angle quadrature (what the scene upload uses).
@@ -69,8 +66,7 @@ pub enum EnvProjection {
 }
 
 impl EnvProjection {
-    /// The seed of the Monte-Carlo projection (fixed: a report row is
-    /// reproducible).
+    /// The Monte-Carlo projection's seed, fixed so a report row is reproducible.
     pub const SEED: u64 = 0x5eed;
 
     pub fn integrator(self) -> crate::scene::sh::Integrator {
@@ -101,8 +97,8 @@ impl Default for PrtOptions {
 pub enum PrimaryVisibility {
     /// Measure both (GPU timestamps of a probe frame each) and keep the
     /// cheaper, re-measuring when the view changes a lot or every few
-    /// hundred frames. Only a renderer told to measure (`Renderer::
-    /// measure_visibility`: the viewer and `bench`) does; elsewhere (`render`,
+    /// hundred frames. Only a renderer told to measure (the viewer and
+    /// `bench` set `choices.visibility.measure`) does; elsewhere (`render`,
     /// tests, goldens: images must not depend on timing) auto is raster.
     #[default]
     Auto,
@@ -163,8 +159,7 @@ impl DebugView {
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderSettings {
-    /// The exposure with auto exposure off; with it on, a compensation
-    /// factor on the measured one.
+    /// The exposure with auto exposure off; with it on, a compensation factor on the measured one.
     pub exposure: f32,
     pub tone: ToneSettings,
     pub debug_view: DebugView,
@@ -175,8 +170,7 @@ pub struct RenderSettings {
     pub aa: AaMode,
     /// Per-object ray-tracing budget (None: every object is traced).
     pub budget: Option<budget::BudgetSettings>,
-    /// Diffuse environment light with a map (without one it is the
-    /// constant colour either way).
+    /// Diffuse environment light with a map (without one it is the constant colour either way).
     pub ambient: AmbientMode,
     /// `ambient` was not given on the command line: the scene file's
     /// `[environment] ambient` wins where it has one.
@@ -185,25 +179,20 @@ pub struct RenderSettings {
     /// The ray-traced reference replaces the ambient radiance at primary
     /// hits (--reference-samples; render/reference.rs).
     pub reference: Option<ReferenceSettings>,
-    /// The report's attribution: these `TERM_*` terms come from the path
-    /// tracer, accumulated over frames like the reference (pass `terms`;
-    /// 0: none). Not with `reference` or a debug view. No flag.
+    /// The report's attribution: these `TERM_*` terms come from the path tracer, accumulated over frames like
+    /// the reference (pass `terms`; 0: none). Not with `reference` or a debug view. No flag.
     pub terms: u32,
     /// The path tracer's samples, path length and clamp (`--mode path` only).
     pub path: super::path::PathSettings,
     /// How hybrid mode finds primary hits (--primary-visibility).
     pub primary_visibility: PrimaryVisibility,
-    /// Two-phase occlusion culling of the raster G-buffer's clusters
-    /// (render/occlusion.rs; --occlusion-culling). The image is the same
-    /// either way; off draws every cluster of the draws in the frustum.
-    /// Off by default: on the shipped scenes' camera paths almost nothing
-    /// is hidden (Sponza: 3 of 5,731 clusters) and the culling's cost
-    /// shows; interior views that face walls cull ~40% of their clusters
-    /// (bench/results/lavapipe-2core-vm-raster.md).
+    /// Two-phase occlusion culling of the raster G-buffer's clusters (render/occlusion.rs;
+    /// --occlusion-culling); the image is the same either way. Off by default: the shipped camera paths
+    /// hide almost nothing (Sponza: 3 of 5,731 clusters) and the cost shows; wall-facing interiors cull
+    /// ~40% of their clusters (bench/results/lavapipe-2core-vm-raster.md).
     pub occlusion_culling: bool,
-    /// The edge filter shares its pixels' depths and triangle exits within
-    /// 8x8 tiles (glsl/aa_edge.comp). False runs the per-pixel version:
-    /// the same image, slower; the tiled one's reference in tests. No flag.
+    /// The edge filter shares its pixels' depths and triangle exits within 8x8 tiles (glsl/aa_edge.comp).
+    /// False runs the per-pixel version: the same image, slower; the tiled one's reference in tests. No flag.
     pub edge_aa_tiled: bool,
 }
 
@@ -236,8 +225,7 @@ impl Default for RenderSettings {
 pub struct ReferenceSettings {
     /// Samples per pixel of the converged image (rounded up to whole frames).
     pub samples: u32,
-    /// Rays per path: 1 = environment light with visibility, K > 1 adds
-    /// K - 1 diffuse bounces.
+    /// Rays per path: 1 = environment light with visibility, K > 1 adds K - 1 diffuse bounces.
     pub bounces: u32,
 }
 

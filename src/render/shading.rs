@@ -1,9 +1,7 @@
-//! What a frame runs: the render mode, the secondary effects the scene
-//! actually needs (and the user did not switch off), the ray backend and
-//! whether a debug view replaces the lighting. The passes decide from this
-//! whether they are recorded (render/passes); effects nobody needs are
-//! compiled out through specialization constants; with none at all, no ray
-//! is traced and no acceleration structure is built.
+//! What a frame runs: the render mode, the secondary effects the scene needs (and the user did not
+//! switch off), the ray backend and whether a debug view replaces the lighting. The passes decide from
+//! this whether they record; unneeded effects are compiled out through specialization constants, and
+//! with none at all no ray is traced and no acceleration structure is built.
 
 use anyhow::{bail, Result};
 
@@ -23,8 +21,7 @@ pub struct SceneNeeds {
     pub shadows: bool,
     pub reflections: bool,
     pub refractions: bool,
-    /// A directional or spot light casts shadows (the budget's raster
-    /// fallback renders shadow maps for them).
+    /// A directional or spot light casts shadows (the budget's raster fallback renders shadow maps for them).
     pub shadow_maps: bool,
     /// Triangles of the largest primitive (one BLAS each) and the instance
     /// count (TLAS entries), checked against the driver's limits.
@@ -59,16 +56,12 @@ impl SceneNeeds {
     }
 }
 
-/// The backend for `requested` on a device with `rt` enabled. The hardware
-/// backends must hold the scene within the driver's acceleration-structure
-/// limits (lavapipe before Mesa 25.2.7: 2^24 - 1 triangles per BLAS): `auto`
-/// falls back to the compute BVH with a warning, an explicit request fails
-/// with the numbers, before any driver call could crash on them. On a
-/// `software` (CPU) device `auto` takes the compute BVH: there the driver's
-/// ray queries and pipelines are traversal loops on the CPU too, and
-/// measured slower than ours on every shipped scene (lavapipe, 2 threads:
-/// even on the default scene, 2x on Sponza, ~50x / ~100x on the armadillo;
-/// bench/results/report/*/report.md, knob backend).
+/// The backend for `requested` on a device with `rt` enabled. The hardware backends must hold the scene
+/// within the driver's acceleration-structure limits (lavapipe before Mesa 25.2.7: 2^24 - 1 triangles per
+/// BLAS): `auto` falls back to the compute BVH with a warning, an explicit request fails with the numbers,
+/// before a driver call could crash on them. On a `software` device `auto` takes the compute BVH: the
+/// driver's traversal runs on the CPU too and measured slower than ours on every shipped scene (lavapipe, 2
+/// threads: 2x on Sponza, ~50x / ~100x on the armadillo; bench/results/report/*/report.md, knob backend).
 pub fn pick_backend(
     requested: Backend,
     rt: &RtEnables,
@@ -141,12 +134,11 @@ pub struct ShadingConfig {
     pub debug_view: bool,
     /// What the scene contains that the effects need.
     pub needs: SceneNeeds,
-    /// The frame's luminance is measured (auto exposure, or the white point
-    /// of `reinhard-white` from the frame's maximum): the `luminance` pass runs.
+    /// The frame's luminance is measured (auto exposure, or `reinhard-white`'s white point from the frame's
+    /// maximum): the `luminance` pass runs.
     pub luminance: bool,
-    /// The per-object ray-tracing budget selects which pixels get traced
-    /// effects: the `heuristic` pass runs and the ray passes honour the
-    /// selection (only when something is traced, or its debug view shows).
+    /// The per-object ray budget selects which pixels get traced effects: the `heuristic` pass runs and the
+    /// ray passes honour it (only when something is traced, or its debug view shows).
     pub budget: bool,
     /// The budget's raster fallback for shadows: the `shadow_map` pass
     /// exists (it records only in frames where a shadow bit is off).
@@ -161,17 +153,13 @@ pub struct ShadingConfig {
     /// The report's attribution terms run (RenderSettings::terms; not in
     /// debug views, not beside `reference`): the `terms` pass exists.
     pub terms: bool,
-    /// How hybrid mode finds primary hits: `Raster` (pass `gbuffer`),
-    /// `Traced` (pass `visibility_trace`) or `Auto` (both exist, each frame
-    /// records one: render/visibility.rs). `Raster` in pure ray-traced mode
-    /// (not used there).
+    /// How hybrid mode finds primary hits: `Raster` (pass `gbuffer`), `Traced` (pass `visibility_trace`) or
+    /// `Auto` (both exist, each frame records one: render/visibility.rs); `Raster` in pure ray-traced mode.
     pub visibility: crate::render::settings::PrimaryVisibility,
-    /// The raster G-buffer culls occluded clusters (render/occlusion.rs):
-    /// asked for, the pass rasterizes, and the device has multi-draw
-    /// indirect with a first instance.
+    /// The raster G-buffer culls occluded clusters (render/occlusion.rs): asked for, the pass rasterizes,
+    /// and the device has multi-draw indirect with a first instance.
     pub occlusion: bool,
-    /// Fault injection is armed (tests: `Renderer::inject_radiance`): the
-    /// `inject` pass exists.
+    /// Fault injection is armed (tests: `Renderer::inject_radiance`): the `inject` pass exists.
     pub inject: bool,
 }
 

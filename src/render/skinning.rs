@@ -1,8 +1,7 @@
-//! The skinning pass (glsl/anim/skinning.comp): once per frame, every
-//! skinned instance's bind-pose vertices are blended by its joint matrices
-//! into its range of the shared vertex buffer, which the G-buffer pass, the
-//! acceleration-structure refits and the compute tracer then read. It also
-//! measures each instance's deformed bounds for the BLAS rebuild policy.
+//! The skinning pass (glsl/anim/skinning.comp): once per frame every skinned instance's bind-pose
+//! vertices are blended by its joint matrices into its range of the shared vertex buffer, read by the
+//! G-buffer pass, the acceleration-structure refits and the compute tracer. It also measures each
+//! instance's deformed bounds for the BLAS rebuild policy.
 
 use anyhow::Result;
 use ash::vk;
@@ -163,8 +162,7 @@ impl Skinning {
         Ok(())
     }
 
-    /// Writes this frame's joint matrices and resets the bounds accumulators
-    /// (through the frame's ring slot).
+    /// Writes this frame's joint matrices and resets the bounds accumulators (via the frame's ring slot).
     pub fn write(&self, up: &mut Uploads, scene: &Scene, origin: RenderOrigin) -> Result<()> {
         // Node matrices relative to the render origin (joint matrices are
         // relative products, combined in f64 either way).
@@ -179,9 +177,8 @@ impl Skinning {
         up.write(&self.bounds, 0, bytemuck::cast_slice(&reset))
     }
 
-    /// Records the dispatches. The pass layer orders the vertex writes
-    /// before their readers (declared `Geometry` uses); the ring's download
-    /// at the frame's end waits for the bounds (`bounds_download`).
+    /// Records the dispatches. The pass layer orders the vertex writes before their readers (declared
+    /// `Geometry` uses); the ring's download at the frame's end waits for the bounds (`bounds_source`).
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let d = &ctx.device;
         unsafe {
@@ -198,8 +195,7 @@ impl Skinning {
         Source::Buffer { buffer: self.bounds.raw, offset: 0, size: self.bounds.size }
     }
 
-    /// Deformed bounds of each slot, from the bytes of `bounds_source` of a
-    /// completed frame.
+    /// Deformed bounds of each slot, from the bytes of `bounds_source` of a completed frame.
     pub fn bounds(&self, bytes: &[u8]) -> Result<Vec<Aabb>> {
         let raw: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..self.jobs.len() * 24]);
         Ok(raw

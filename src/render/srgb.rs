@@ -1,6 +1,5 @@
-//! The sRGB transfer function on the CPU, the mirror of
-//! glsl/common/srgb.glsl (IEC 61966-2-1, exact piecewise form): for
-//! filtering display values (supersampling) and for the report's tone mapper.
+//! The sRGB transfer function on the CPU, the mirror of glsl/common/srgb.glsl (IEC 61966-2-1, exact piecewise
+//! form): for filtering display values (supersampling) and for the report's tone mapper.
 
 /// sRGB-encoded [0, 1] to linear.
 pub fn srgb_to_linear(c: f32) -> f32 {

@@ -1,10 +1,7 @@
-//! The supersampled reference (`--supersample K`): the frame rendered at
-//! K·W × K·H — K×K samples per pixel on a regular grid, through the same
-//! camera — and filtered down to W × H on the CPU, so anti-aliasing can be
-//! measured against it. The samples are the anti-aliasing: the large frame
-//! runs with `--aa none`, and its exposure is the `RenderSettings` input
-//! of the frame it is compared with (frozen, never re-measured on the
-//! larger image), so reference and test share one tone curve.
+//! The supersampled reference (`--supersample K`): the frame rendered at K·W × K·H (K×K samples per pixel on
+//! a regular grid, same camera) and filtered down to W × H on the CPU, to measure anti-aliasing against. The
+//! large frame runs with `--aa none`, and its exposure is the compared frame's `RenderSettings` input
+//! (frozen, never re-measured on the larger image), so both share one tone curve.
 
 use anyhow::{Context as _, Result};
 use ash::vk;
@@ -40,8 +37,7 @@ pub const MAX_FACTOR: u32 = 16;
 const GAUSSIAN_SIGMA: f64 = 0.5;
 const GAUSSIAN_RADIUS: f64 = 1.5;
 
-/// The large frame's size; an error naming `--supersample` when the device
-/// cannot allocate it.
+/// The large frame's size; an error naming `--supersample` when the device cannot allocate it.
 pub fn large_extent(ctx: &Context, extent: vk::Extent2D, ss: &Supersample) -> Result<vk::Extent2D> {
     let k = ss.factor;
     let too_big = || {
@@ -89,9 +85,8 @@ pub fn render_supersampled(
     Ok(downsample(&frame?, ss))
 }
 
-/// Filters a frame rendered at K·W × K·H down to W × H: the radiance as it
-/// is, the 8-bit image as linear display values (decoded from sRGB,
-/// filtered, encoded and rounded), as a display would blend sub-pixel
+/// Filters a frame rendered at K·W × K·H down to W × H: the radiance as it is, the 8-bit image as linear
+/// display values (decoded from sRGB, filtered, encoded and rounded), as a display blends sub-pixel
 /// coverage. Timings and counters are the large frame's.
 pub fn downsample(large: &FrameOutput, ss: &Supersample) -> FrameOutput {
     let k = ss.factor.max(1);
@@ -143,8 +138,7 @@ fn taps(n: u32, k: u32, filter: SampleFilter) -> Vec<Vec<(usize, f32)>> {
         .collect()
 }
 
-/// RGBA `src` (rows of `width` pixels) filtered by `tx` along rows, then
-/// `ty` along columns.
+/// RGBA `src` (rows of `width` pixels) filtered by `tx` along rows, then `ty` along columns.
 fn separable(src: &[f32], width: usize, tx: &[Vec<(usize, f32)>], ty: &[Vec<(usize, f32)>]) -> Vec<f32> {
     let rows = src.len() / (4 * width);
     let w = tx.len();

@@ -1,7 +1,6 @@
-//! Per-resolution render targets. Each is described once (`TargetDesc`,
-//! next to the pass that writes it); the frame allocates exactly the
-//! targets its recorded passes use, with the usage flags their declared
-//! accesses need.
+//! Per-resolution render targets. Each is described once (`TargetDesc`, next to the pass that writes
+//! it); the frame allocates exactly the targets its recorded passes use, with the usage flags their
+//! declared accesses need.
 
 use anyhow::Result;
 use ash::vk;
@@ -14,8 +13,7 @@ use crate::vk::{built, Context, Image};
 pub struct Target {
     pub desc: &'static TargetDesc,
     pub image: Image,
-    /// A recorded frame has laid it out (GENERAL): a `kept` target's
-    /// contents are defined from then on.
+    /// A recorded frame has laid it out (GENERAL): a `kept` target's contents are defined from then on.
     pub laid_out: std::cell::Cell<bool>,
 }
 

@@ -1,8 +1,6 @@
-//! Tone-mapping settings: the operator, how the exposure is found (fixed,
-//! log-average luminance or a log-luminance histogram) and how it adapts
-//! over time. The passes are render/passes/luminance.rs (measures and
-//! adapts) and render/passes/tonemap.rs (applies); the curves themselves are
-//! glsl/common/tonemap.glsl, the adaptation glsl/common/exposure.glsl.
+//! Tone-mapping settings: the operator, how the exposure is found (fixed, log-average luminance or a
+//! log-luminance histogram) and how it adapts. Passes: render/passes/luminance.rs (measures, adapts) and
+//! render/passes/tonemap.rs (applies); curves in glsl/common/tonemap.glsl, adaptation in exposure.glsl.
 
 use crate::gpu::shared::{
     AUTO_EXPOSURE_HISTOGRAM, AUTO_EXPOSURE_LOG_AVERAGE, AUTO_EXPOSURE_OFF, TONEMAP_ACES, TONEMAP_NONE,
@@ -83,16 +81,16 @@ pub struct ToneSettings {
     /// Histogram: the darkest and brightest fractions of pixels left out.
     pub histogram_low: f32,
     pub histogram_high: f32,
-    /// Histogram: adaptation speed in EV per second when the image gets
-    /// brighter (the scene got darker) and when it gets darker.
+    /// Histogram: adaptation speed in EV per second when the image gets brighter (the scene got darker)
+    /// and when it gets darker.
     pub speed_brighten: f32,
     pub speed_darken: f32,
 }
 
 impl Default for ToneSettings {
     fn default() -> Self {
-        // The histogram defaults are the ones Bevy and Unreal users know:
-        // 10% / 90% percentiles, 3 EV/s brightening, 1 EV/s darkening.
+        // The histogram defaults Bevy and Unreal users know: 10% / 90% percentiles, 3 EV/s brightening,
+        // 1 EV/s darkening.
         ToneSettings {
             operator: ToneOperator::Reinhard,
             auto_exposure: AutoExposure::Off,

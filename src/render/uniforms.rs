@@ -1,6 +1,5 @@
-//! The frame uniform (`GpuFrame`): camera, environment, ambient (SH /
-//! PRT), tone mapping, flags and the accumulation's frame count, assembled
-//! from what `Renderer::prepare` decided for the frame.
+//! The frame uniform (`GpuFrame`): camera, environment, ambient (SH / PRT), tone mapping, flags and the
+//! accumulation's frame count, assembled from what `Renderer::prepare` decided for the frame.
 
 use ash::vk;
 use glam::Mat4;

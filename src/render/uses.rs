@@ -1,7 +1,6 @@
-//! What a pass declares: the render targets (`TargetDesc`) and shared
-//! buffers it uses and how (`Access`). `frame.rs` derives barriers from
-//! these and `targets.rs` allocates from them; both import this file, which
-//! imports neither.
+//! What a pass declares: the render targets (`TargetDesc`) and shared buffers it uses and how
+//! (`Access`). `frame.rs` derives barriers from these and `targets.rs` allocates from them; both import
+//! this file, which imports neither.
 
 use ash::vk;
 use vk::AccessFlags2 as A;
@@ -12,9 +11,8 @@ use vk::PipelineStageFlags2 as S;
 pub struct TargetDesc {
     pub name: &'static str,
     pub format: vk::Format,
-    /// Its contents carry over from frame to frame (an accumulation):
-    /// after its first use a frame starts from the last layout, not from
-    /// undefined contents.
+    /// Its contents carry over from frame to frame (an accumulation): after its first use a frame starts
+    /// from the last layout, not from undefined contents.
     pub kept: bool,
 }
 
@@ -92,9 +90,8 @@ pub enum Resource {
 pub struct Use {
     pub resource: Resource,
     pub access: Access,
-    /// The pass also samples the image in between its own barriers (the
-    /// G-buffer pass's occlusion pyramid reads its depth): the target is
-    /// allocated with SAMPLED usage too, only where a pass says so.
+    /// The pass also samples the image between its own barriers (the G-buffer pass's occlusion pyramid
+    /// reads its depth): only then is the target allocated with SAMPLED usage too.
     pub sampled_within: bool,
 }
 

@@ -1,29 +1,16 @@
-//! `--primary-visibility auto`: the hybrid frame's primary hits come from
-//! the raster visibility buffer (pass `gbuffer`) or from camera rays (pass
-//! `visibility_trace`), whichever the GPU timestamps say is cheaper for the
-//! current view. Neither always wins: on lavapipe the aa_edges scene's few
-//! large triangles rasterize cheaper than they trace, while Sponza's raster
-//! (+ resolve) costs ~1.6x its camera rays and the armadillo's 345k small
-//! triangles ~3x (bench/results/lavapipe-2core-vm-raster.md); on an H200
-//! the raster costs ~2x the camera rays on Sponza (bench/results/
-//! h200-1080p.md). Both passes write the same hit ids, so everything after
-//! them is the same either way.
+//! `--primary-visibility auto`: the hybrid frame's primary hits come from the raster visibility buffer
+//! (pass `gbuffer`) or camera rays (pass `visibility_trace`), whichever GPU timestamps say is cheaper
+//! for the view. Neither always wins: on lavapipe the aa_edges scene's few large triangles rasterize
+//! cheaper, while Sponza's raster (+ resolve) costs ~1.6x its camera rays and the armadillo's 345k small
+//! triangles ~3x (bench/results/lavapipe-2core-vm-raster.md); on an H200 the raster costs ~2x on Sponza
+//! (bench/results/h200-1080p.md). Both passes write the same hit ids.
 //!
-//! How: with nothing measured for the view, probe frames each record one
-//! technique, as any frame does, and its GPU timestamps give that pass's
-//! cost: first `PROBE_SAMPLES` frames of the technique in use (frames it
-//! would have rendered anyway), then as many of the other; each pass's cost
-//! is its least over its samples. So a probe costs no frame both passes,
-//! only `PROBE_SAMPLES` frames of the other technique (an earlier version
-//! recorded both passes in each probe frame, which cost the slower pass's
-//! time on top in every probe frame). A pass's first frame after it was
-//! created is not counted (a software device compiles its shaders there).
-//! Then the cheaper is kept and the decision logged with both times. The
-//! view is measured again when the camera has turned or moved a lot since
-//! the last probe (unless one pass cost `STABLE_MARGIN` times the other),
-//! and every `REPROBE_FRAMES` frames. The technique a sample
-//! belongs to is read off the frame's own timings (which pass ran), since
-//! the viewer's timings arrive frames after the frame was prepared.
+//! A probe records `PROBE_SAMPLES` frames of the technique in use (frames it renders anyway), then as
+//! many of the other; a pass's cost is its least sample. So no frame pays for both passes (an earlier
+//! version did, adding the slower pass to every probe frame). A pass's first frame is not counted (a
+//! software device compiles its shaders there). The view is probed again after a large turn or move
+//! (unless one pass cost `STABLE_MARGIN` times the other) and every `REPROBE_FRAMES` frames. A sample's
+//! technique is read off the frame's own timings: the viewer's arrive frames late.
 
 use glam::Vec3;
 
@@ -38,32 +25,23 @@ pub const REPROBE_FRAMES: u32 = 300;
 /// A probe costs frames of the slower technique: at most one probe in this
 /// many frames, however fast the camera moves.
 pub const MIN_PROBE_INTERVAL: u32 = 30;
-/// Probe frames per decision. One probe frame is one noisy sample (on a
-/// shared 2-core lavapipe machine Sponza's raster probe read 27-73 ms
-/// across runs against ~30 ms in steady frames); other work on the cores
-/// only ever adds time, so the least of a few samples is the steadier
-/// estimate of a pass's cost.
+/// Probe frames per decision. One frame is a noisy sample (shared 2-core lavapipe: Sponza's raster probe
+/// read 27-73 ms against ~30 ms steady); other load only adds time, so the least of a few is steadier.
 pub const PROBE_SAMPLES: u32 = 3;
-/// The technique in use (raster before any decision) is kept unless the
-/// other costs less than this fraction of it, so near-equal costs do not
-/// flip the choice.
+/// The technique in use (raster before any decision) is kept unless the other costs less than this
+/// fraction of it, so near-equal costs do not flip the choice.
 pub const SWITCH_BELOW: f64 = 0.8;
-/// A decision where one pass cost at least this many times the other is
-/// not measured again when the view changes, only every REPROBE_FRAMES
-/// frames: a view change rarely turns such a margin around, and each probe
-/// costs frames of the slower pass (on lavapipe, Sponza's raster at 2.5x
-/// its camera rays re-probed every 30 frames along its camera path).
+/// A decision where one pass cost this many times the other is re-measured only every REPROBE_FRAMES
+/// frames, not on view changes: such a margin rarely turns, and each probe costs slower-pass frames
+/// (on lavapipe, Sponza's raster at 2.5x its camera rays re-probed every 30 frames along its path).
 pub const STABLE_MARGIN: f64 = 2.0;
-/// The camera turned more than this (radians, ~20 degrees) since the
-/// measurement: measure again.
+/// A camera turn since the measurement (radians, ~20 degrees) that triggers a new one.
 const REPROBE_TURN: f32 = 0.35;
-/// The camera moved more than this fraction of the scene's bounding-box
-/// diagonal since the measurement: measure again.
+/// A camera move since the measurement (fraction of the scene's box diagonal) that triggers a new one.
 const REPROBE_MOVE: f32 = 0.1;
 
-/// `settings` as a renderer that does (`measure`) or does not measure
-/// sees them: without measuring, auto is raster, so `render`, tests and
-/// golden images never depend on timing.
+/// `settings` as a renderer that does (`measure`) or does not measure sees them: without measuring auto
+/// is raster, so `render`, tests and golden images never depend on timing.
 pub fn effective(settings: &RenderSettings, measure: bool) -> RenderSettings {
     match settings.primary_visibility {
         PrimaryVisibility::Auto if !measure => {
@@ -73,8 +51,7 @@ pub fn effective(settings: &RenderSettings, measure: bool) -> RenderSettings {
     }
 }
 
-/// What a frame records under auto: one technique, as a sample of a probe
-/// or as the one chosen.
+/// What a frame records under auto: one technique, as a probe sample or as the one chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Recording {
     Probe(Technique),
@@ -92,25 +69,21 @@ impl Recording {
 /// The per-view choice under auto (unused otherwise).
 #[derive(Debug, Default)]
 pub struct Chooser {
-    /// Auto measures and chooses only when set (the viewer, `bench`);
-    /// otherwise auto is raster (`effective`).
+    /// Auto measures only when set (the viewer, `bench`); otherwise it is raster (`effective`).
     pub measure: bool,
     /// Whether the frame's configuration chooses at all (hybrid, auto).
     active: bool,
-    /// Each technique's pass has run once since it was created (shaders
-    /// compiled), by Technique::index.
+    /// By Technique::index: the pass has run once since it was created (shaders compiled).
     warm: [bool; 2],
     /// What the prepared frame records (None: not choosing).
     recording: Option<Recording>,
-    /// The technique kept and the probe's times (raster, traced) it was
-    /// chosen by (None: the view is being probed).
+    /// The technique kept and the probe times (raster, traced) that chose it (None: probing).
     chosen: Option<(Technique, f64, f64)>,
     /// The last decision, kept across probes (for `bench`).
     last: Option<(Technique, f64, f64)>,
     /// Frames since the last decision.
     frames: u32,
-    /// The probe under way: per technique (Technique::index) the warm
-    /// samples taken and the least time so far.
+    /// The probe under way, by Technique::index: warm samples taken and the least time so far.
     samples: [(u32, f64); 2],
     /// Camera position and forward direction of the last probe.
     view: Option<(Vec3, Vec3)>,
@@ -124,8 +97,8 @@ impl Chooser {
         self.samples = Default::default();
     }
 
-    /// Before a frame of `config` seen by `camera` in a scene within
-    /// `bounds`: whether it rasterizes (needs the G-buffer draw list).
+    /// Before a frame of `config` seen by `camera` in a scene within `bounds`: whether it rasterizes
+    /// (needs the G-buffer draw list).
     pub fn before_frame(&mut self, camera: &Camera, bounds: &Aabb, config: Option<ShadingConfig>) -> bool {
         let size = (bounds.max - bounds.min).length();
         let choice = self.choose(camera.position(), camera.forward(), size);
@@ -172,8 +145,7 @@ impl Chooser {
         self.recording.map(Recording::technique)
     }
 
-    /// After a frame completed, with its GPU pass times (which may be a
-    /// frame before the last one prepared).
+    /// After a frame completed, with its GPU pass times (possibly from a frame before the last prepared).
     pub fn after_frame(&mut self, timings: &[(&'static str, f64)]) {
         if self.recording.is_none() {
             return;
@@ -216,8 +188,7 @@ impl Chooser {
         self.frames = 0;
     }
 
-    /// For `bench`: what the last frame recorded and the last probe's
-    /// times. None when not choosing.
+    /// For `bench`: what the last frame recorded and the last probe's times (None when not choosing).
     pub fn describe(&self) -> Option<String> {
         let what = match self.recording? {
             Recording::Probe(t) => format!("{} (a probe)", t.name()),
@@ -271,7 +242,6 @@ mod tests {
     /// 1-ms resolve), the traced pass `traced` ms.
     fn frame(c: &mut Chooser, pos: Vec3, raster: f64, traced: f64) -> Recording {
         let r = c.choose(pos, Vec3::NEG_Z, 10.0).unwrap();
-        // The resolve pass takes 1 ms (part of the raster's cost).
         let mut t = Vec::new();
         let state = FrameState { visibility: c.technique(), ..Default::default() };
         let passes = [
@@ -311,8 +281,7 @@ mod tests {
         let seq: Vec<_> = (0..2 * k + 4).map(|_| frame(&mut c, o, 8.0, 5.0)).collect();
         assert_eq!(seq, [probe(Raster, k + 1), probe(Traced, k + 1), vec![One(Traced); 2]].concat());
         assert_eq!(c.last, Some((Traced, 8.0, 5.0)));
-        // A small move keeps the choice; so does a large one within
-        // MIN_PROBE_INTERVAL frames of the probe.
+        // A small move keeps the choice; so does a large one within MIN_PROBE_INTERVAL frames of the probe.
         assert_eq!(frame(&mut c, Vec3::new(0.5, 0.0, 0.0), 2.0, 5.0), One(Traced));
         while c.frames < MIN_PROBE_INTERVAL {
             assert_eq!(frame(&mut c, Vec3::new(5.0, 0.0, 0.0), 2.0, 5.0), One(Traced));
@@ -362,8 +331,7 @@ mod tests {
         c.passes_rebuilt(&hybrid_auto());
         let raster = [("gbuffer", 4.0), ("gbuffer resolve", 1.0)];
         let traced = [("visibility trace", 20.0)];
-        // Frames prepared: raster x (k + 1), traced x (k + 1); the timings
-        // of each arrive two frames later.
+        // Frames prepared: raster x (k + 1), traced x (k + 1); the timings of each arrive two frames later.
         let mut pending = std::collections::VecDeque::new();
         for i in 0..2 * (PROBE_SAMPLES + 1) + 2 {
             let r = c.choose(Vec3::ZERO, Vec3::NEG_Z, 10.0).unwrap();
@@ -383,9 +351,8 @@ mod tests {
         assert_eq!(c.last, Some((Technique::Raster, 5.0, 20.0)));
     }
 
-    /// Each pass's cost is its least time over the probe's frames: frames
-    /// where the raster read high (other work on the cores) do not switch
-    /// a view whose raster is cheaper to camera rays (its first, last or
+    /// Each pass's cost is its least time over the probe's frames: frames where the raster read high (other
+    /// work on the cores) do not switch a view whose raster is cheaper to camera rays (its first, last or
     /// mean sample would).
     #[test]
     fn slow_probe_frames_do_not_flip_the_choice() {

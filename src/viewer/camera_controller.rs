@@ -1,15 +1,13 @@
 //! Fly / orbit camera for the viewer.
 //!
-//! Fly: WASD moves along the view direction and sideways, Q/E down/up, mouse
-//! look while a mouse button (right or left) is held; Shift is 4x faster, the
-//! wheel scales the speed. Orbit (O): the camera circles the scene-bounds
-//! centre; dragging rotates around it, W/S dolly, A/D and Q/E orbit.
+//! Fly: WASD moves along the view direction and sideways, Q/E down/up, mouse look while a mouse button
+//! (right or left) is held; Shift is 4x faster, the wheel scales the speed. Orbit (O): the camera
+//! circles the scene-bounds centre; dragging rotates around it, W/S dolly, A/D and Q/E orbit.
 //! C / Shift+C cycle the scene's cameras, Ctrl+1..9 pick one, R resets.
 //!
-//! Speeds scale with the scene bounds so a 1 m and a 100 m scene take the
-//! same time to cross. Until the user moves, [`CameraController::camera`]
-//! returns the starting camera unchanged (no yaw/pitch round trip), so a
-//! still viewer shows exactly what a headless render of that camera shows.
+//! Speeds scale with the scene bounds so a 1 m and a 100 m scene take the same time to cross. Until the
+//! user moves, [`CameraController::camera`] returns the starting camera unchanged (no yaw/pitch round
+//! trip), so a still viewer shows exactly what a headless render of that camera shows.
 
 use glam::Vec3;
 use winit::keyboard::KeyCode;
@@ -321,8 +319,7 @@ impl CameraController {
         self.select_camera(next as usize);
     }
 
-    /// Applies the input gathered since the last frame over `dt` seconds.
-    /// Returns whether the camera changed.
+    /// Applies the input gathered since the last frame over `dt` seconds; whether the camera changed.
     pub fn update(&mut self, dt: f32) -> bool {
         let dt = if dt.is_finite() { dt.clamp(0.0, 0.25) } else { 0.0 };
         let (dx, dy) = std::mem::take(&mut self.look);

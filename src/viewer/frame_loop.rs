@@ -1,7 +1,6 @@
-//! The per-frame loop: pacing between events (`about_to_wait`), one frame
-//! from fence wait to present (`frame`), its command recording with the
-//! present blit (`record`), the `--frames` end condition, GPU pass times and
-//! screenshot readback.
+//! The per-frame loop: pacing between events (`about_to_wait`), one frame from fence wait to present
+//! (`frame`), its recording with the present blit (`record`), the `--frames` end condition, GPU pass
+//! times and screenshot readback.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -59,10 +58,9 @@ impl Viewer {
         Ok(Flow::Continue)
     }
 
-    /// The host's reads of frame slot `s`'s last frame (its fence is done;
-    /// with two frames in flight it is two frames old): GPU pass times (with
-    /// its scene update's), bad pixels, its screenshot. Empty when the slot
-    /// held no frame.
+    /// The host's reads of frame slot `s`'s last frame (its fence is done; with two frames in flight it is
+    /// two frames old): GPU pass times (with its scene update's), bad pixels, its screenshot. Empty when the
+    /// slot held no frame.
     fn finish_slot(&mut self, s: usize) -> Result<Finished> {
         let done = self.renderer.finish_frame(s)?;
         if !done.timings.is_empty() {
@@ -160,9 +158,8 @@ impl Viewer {
         let dev = &self.ctx.device;
         let s = self.slot;
         let FrameSlot { fence, image_available, .. } = self.slots[s];
-        // This slot's previous frame (two ago) must be done with its command
-        // buffer, image-available semaphore and ring slot. The other frame
-        // may still run: nothing below waits for it.
+        // This slot's previous frame (two ago) must be done with its command buffer, image-available
+        // semaphore and ring slot. The other frame may still run: nothing below waits for it.
         unsafe { dev.wait_for_fences(&[fence], true, u64::MAX) }
             .context("waiting for a frame (device lost?)")?;
         let index = match self.presenter.acquire(image_available)? {
@@ -175,19 +172,16 @@ impl Viewer {
                 index
             }
         };
-        // The renderer's host writes for this frame go through ring slot s
-        // (copied at the start of its command buffer), its reads come from
-        // slot s's last frame: the frame in flight is never touched.
+        // Host writes for this frame go through ring slot s (copied at its command buffer's start), reads
+        // come from slot s's last frame: the frame in flight is never touched.
         let done = self.finish_slot(s)?;
-        // The budget selects this frame's objects from that frame's
-        // statistics (two frames old; the camera may have moved since, the
-        // selection follows a frame later).
+        // The budget selects this frame's objects from that frame's statistics (two frames old; after a
+        // camera move the selection follows a frame later).
         let camera = self.controller.camera();
         self.renderer.finish_budget(&self.scene, &camera, &self.settings, &done)?;
         self.renderer.choices.visibility.after_frame(&done.timings);
 
-        // --capture-frame N or F9: this frame, from its uniforms to its
-        // present, in a RenderDoc capture.
+        // --capture-frame N or F9: this frame, from its uniforms to its present, in a RenderDoc capture.
         let capture = self.ctx.wants_capture(self.presented) || std::mem::take(&mut self.capture_request);
         let what = format!("viewer frame {}", self.presented);
         if capture {
@@ -295,9 +289,8 @@ impl Viewer {
         Ok(last)
     }
 
-    /// The frame's commands: the scene update when `update`, the renderer's
-    /// passes, then the blit of the tone-mapped image into swapchain image
-    /// `index` (and the readback of a screenshot), ending in PRESENT_SRC.
+    /// The frame's commands: the scene update when `update`, the renderer's passes, then the blit of the
+    /// tone-mapped image into swapchain image `index` (and a screenshot's readback), ending in PRESENT_SRC.
     fn record(
         &mut self,
         cmd: vk::CommandBuffer,
@@ -318,9 +311,8 @@ impl Viewer {
             [Use::image(final_ldr, Access::TransferRead), Use::image(&SWAPCHAIN, Access::TransferWrite)];
         self.renderer.record_with(ctx, cmd, |rec, t| {
             let ldr = t.get(final_ldr).context("no displayable output")?;
-            // The swapchain image is imported: its barriers are derived
-            // like a target's (the first waits for the acquire semaphore's
-            // stage, the last hands it to presentation).
+            // Imported, so its barriers are derived like a target's (the first waits for the acquire
+            // semaphore's stage, the last hands it to presentation).
             rec.import(&SWAPCHAIN, image, vk::ImageAspectFlags::COLOR);
             rec.pass("present blit", vk::PipelineStageFlags2::NONE, &uses, |cmd| {
                 let src = t.extent;

@@ -1,7 +1,6 @@
-//! Window events and keys: camera input goes to the controller, viewer keys
-//! change the render settings (debug view, exposure, tone mapping, effects,
-//! the ray-tracing budget, mode, AA), the animation clock or request a
-//! screenshot; the window title shows them.
+//! Window events and keys: camera input goes to the controller; viewer keys change the render settings
+//! (debug view, exposure, tone mapping, effects, the ray-tracing budget, mode, AA), the animation clock
+//! or request a screenshot; the window title shows them.
 
 use std::path::PathBuf;
 
@@ -139,10 +138,8 @@ impl Viewer {
             KeyCode::F6 => toggle("reflections", &mut self.settings.effects.reflections),
             KeyCode::F7 => toggle("refractions", &mut self.settings.effects.refractions),
             KeyCode::F8 => {
-                // Off -> effects mode -> paper mode -> off, each starting at
-                // every visible object; [ and ] then halve / double it. The
-                // stickiness and fallback carry over (from the command line
-                // at first).
+                // Off -> effects mode -> paper mode -> off, each starting at every visible object; [ and ]
+                // then halve / double it. Stickiness and fallback carry over (the command line's at first).
                 if let Some(b) = self.settings.budget {
                     self.budget_keys = b;
                 }
@@ -318,9 +315,8 @@ fn budget_text(b: &BudgetSettings) -> String {
     }
 }
 
-/// [ (halve) or ] (double) on budget `t`; from "everything" (infinite) the
-/// step starts at what tracing everything cost in the last frame, and is
-/// not taken (None) before a frame has measured it.
+/// [ (halve) or ] (double) on budget `t`; from "everything" (infinite) the step starts at what tracing
+/// everything cost in the last frame, and is not taken (None) before a frame has measured it.
 fn step_budget(t: f64, everything: Option<f64>, up: bool) -> Option<f64> {
     let base = if t.is_finite() { t } else { everything.filter(|e| *e > 0.0)? };
     Some(if up { base * 2.0 } else { base * 0.5 })

@@ -1,16 +1,12 @@
-//! Interactive viewer (`hybrid-rt view`): a winit window whose frames go
-//! through exactly the headless frame path (`Renderer::prepare` +
-//! `Renderer::record`), then blit the tone-mapped `targets.ldr` into the
-//! swapchain image and present it.
+//! Interactive viewer (`hybrid-rt view`): a winit window whose frames go through exactly the headless
+//! frame path (`Renderer::prepare` + `Renderer::record`), then blit the final LDR image
+//! (`Renderer::output_ldr`) into the swapchain image and present it.
 //!
-//! Frames in flight: two slots, each with its own command buffer, fence and
-//! image-available semaphore; render-finished semaphores are per swapchain
-//! image (see `swapchain.rs`). The renderer stages every host write of a
-//! frame in the slot's frame ring slot (copied at the start of the frame's
-//! command buffer) and reads its results back through the same slot, so a
-//! frame waits only for its own slot's fence (two frames ago) and is
-//! prepared and recorded while the previous one runs. The results it reads
-//! (GPU times, bad pixels, the budget's statistics) are that older frame's.
+//! Frames in flight: two slots, each with its own command buffer, fence and image-available semaphore;
+//! render-finished semaphores are per swapchain image (`swapchain.rs`). The renderer stages a frame's
+//! host writes in its frame ring slot and reads results back through the same slot, so a frame waits
+//! only for its own slot's fence (two frames ago) and is recorded while the previous one runs; the
+//! results it reads (GPU times, bad pixels, budget statistics) are that older frame's.
 //!
 //! Keys: see README "Viewer".
 
@@ -59,8 +55,8 @@ pub struct ViewerOptions {
     pub present_mode: PresentMode,
     /// Exit after presenting this many frames.
     pub frames: Option<u64>,
-    /// Advance the animation by 1 / fps per frame instead of by wall-clock
-    /// time: frame i shows time + i / fps, like `render` and `bench`.
+    /// Advance the animation by 1 / fps per frame instead of wall-clock time: frame i shows time + i / fps,
+    /// like `render` and `bench`.
     pub fixed_fps: Option<f32>,
     /// With `frames`: PNG of the last frame. Without: where P / F12 write.
     pub screenshot: Option<PathBuf>,
@@ -74,8 +70,7 @@ pub struct ViewerOptions {
 #[error("cannot open a window: {0}")]
 pub struct NoDisplay(pub String);
 
-/// Connects to the window system, or says why it cannot. Call once per
-/// process (winit allows one event loop).
+/// Connects to the window system, or says why it cannot. Call once per process (winit allows one event loop).
 pub fn open_display() -> Result<EventLoop<()>, NoDisplay> {
     let set = |v: &str| std::env::var_os(v).is_some_and(|s| !s.is_empty());
     if !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
@@ -90,10 +85,8 @@ pub fn open_display() -> Result<EventLoop<()>, NoDisplay> {
     })
 }
 
-/// Runs the viewer until the window closes (or `frames` are presented).
-/// Everything is destroyed before returning; the validation layer's error
-/// count (leaks included, reported at device/instance destruction) makes it
-/// fail.
+/// Runs the viewer until the window closes (or `frames` are presented). Everything is destroyed before
+/// returning; a validation error (leaks included, reported at device/instance destruction) fails it.
 pub fn run(event_loop: EventLoop<()>, opts: ViewerOptions) -> Result<()> {
     let mut app = App { opts, viewer: None, error: None };
     let loop_result = event_loop.run_app(&mut app);

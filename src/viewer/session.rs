@@ -1,6 +1,5 @@
-//! The viewer's state (`Viewer`) and its lifetime: building it (scene,
-//! window, Vulkan context, renderer, presenter, frame slots), recreating the
-//! swapchain when the window changes size, and tearing it down in order.
+//! The viewer's state (`Viewer`) and its lifetime: building it (scene, window, Vulkan context, renderer,
+//! presenter, frame slots), recreating the swapchain on resize, and tearing it down in order.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -43,8 +42,7 @@ pub(super) struct Viewer {
     pub(super) scene_dirty: bool,
     pub(super) controller: CameraController,
     pub(super) settings: RenderSettings,
-    /// The stickiness and fallback F8 turns the budget on with: the
-    /// command line's, then whatever the keys last set.
+    /// The stickiness and fallback F8 turns the budget on with: the command line's, then the keys' last.
     pub(super) budget_keys: BudgetSettings,
     pub(super) stats: FrameStats,
     pub(super) needs_recreate: bool,

@@ -1,6 +1,5 @@
-//! Frame statistics: frames per second and per-pass GPU milliseconds (from
-//! the renderer's timestamp queries), averaged over short windows. The
-//! window title shows a 0.5 s average; the log gets a 2 s average.
+//! Frame statistics: frames per second and per-pass GPU milliseconds (from the renderer's timestamp
+//! queries), averaged over short windows: 0.5 s for the window title, 2 s for the log.
 
 use std::time::{Duration, Instant};
 

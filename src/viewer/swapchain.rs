@@ -1,10 +1,8 @@
-//! The window's surface and its swapchain: creation, recreation on resize /
-//! `ERROR_OUT_OF_DATE_KHR` / `SUBOPTIMAL_KHR`, and the per-image
-//! render-finished semaphores presentation waits on.
+//! The window's surface and its swapchain: creation, recreation on resize / `ERROR_OUT_OF_DATE_KHR` /
+//! `SUBOPTIMAL_KHR`, and the per-image render-finished semaphores presentation waits on.
 //!
-//! A zero-sized surface (a minimized window) has no swapchain extent:
-//! [`Presenter::recreate`] then keeps the old swapchain and reports "paused",
-//! and the viewer stops rendering until the window has an area again.
+//! A zero-sized surface (a minimized window) has no swapchain extent: [`Presenter::recreate`] then keeps
+//! the old swapchain and reports "paused", and the viewer stops rendering until the window has an area.
 
 use anyhow::{bail, Context as _, Result};
 use ash::{khr, vk};
@@ -71,9 +69,8 @@ pub fn choose_format(formats: &[vk::SurfaceFormatKHR]) -> Result<vk::SurfaceForm
     Ok(f)
 }
 
-/// The swapchain extent for a surface: its current extent when it has one,
-/// else the window size clamped to what the surface allows. Zero when the
-/// window has no area (minimized).
+/// The swapchain extent for a surface: its current extent when it has one, else the window size clamped to
+/// what the surface allows. Zero when the window has no area (minimized).
 pub fn choose_extent(caps: &vk::SurfaceCapabilitiesKHR, window: vk::Extent2D) -> vk::Extent2D {
     if caps.current_extent.width != u32::MAX {
         return caps.current_extent;
@@ -106,10 +103,9 @@ pub struct Presenter {
     pub extent: vk::Extent2D,
     pub present_mode: vk::PresentModeKHR,
     wanted_mode: PresentMode,
-    /// One per swapchain image, signalled by the submit that renders into it
-    /// and waited on by its present. Per image (not per frame in flight): an
-    /// image's semaphore is only reused once that image is acquired again, so
-    /// the presentation engine is done with it (validation's reuse check).
+    /// One per swapchain image, signalled by the submit rendering into it and waited on by its present.
+    /// Per image, not per frame in flight: an image's semaphore is reused only once that image is acquired
+    /// again, so the presentation engine is done with it (validation's reuse check).
     pub render_finished: Vec<vk::Semaphore>,
     generation: u32,
 }
@@ -168,10 +164,9 @@ impl Presenter {
         self.swapchain != vk::SwapchainKHR::null()
     }
 
-    /// (Re)creates the swapchain for the surface's current size. Returns
-    /// `false`, keeping the old swapchain, when the surface has no area
-    /// (minimized): the caller pauses. The caller has waited for the device
-    /// to be idle (nothing may still use the old images or semaphores).
+    /// (Re)creates the swapchain for the surface's current size. Returns `false`, keeping the old one, when
+    /// the surface has no area (minimized): the caller pauses. The caller has waited for the device to be
+    /// idle (nothing may still use the old images or semaphores).
     pub fn recreate(&mut self, ctx: &Context, window: vk::Extent2D) -> Result<bool> {
         let pd = ctx.physical_device;
         let (caps, formats, modes) = unsafe {

@@ -1,9 +1,7 @@
-//! Cleanup without hand-written unwinding. A type whose `destroy` accepts
-//! members that are still null (Vulkan ignores null handles, and this
-//! crate's wrappers do the same) is created empty and filled by [`built`]:
-//! when a step fails, what exists so far is destroyed and the error passed
-//! on, so a `create` reads straight through with `?`. The teardown leak
-//! checks (tests/render/error_paths.rs) see any object this misses.
+//! Cleanup without hand-written unwinding. A type whose `destroy` accepts still-null members (Vulkan
+//! ignores null handles, and this crate's wrappers do too) is created empty and filled by [`built`]:
+//! when a step fails, what exists is destroyed and the error passed on, so a `create` reads straight
+//! through with `?`. The teardown leak checks (tests/render/error_paths.rs) catch any object missed.
 
 use anyhow::Result;
 
@@ -14,8 +12,8 @@ pub trait Destroy {
     fn destroy(&mut self, ctx: &Context);
 }
 
-/// `value` after `fill`; if `fill` fails, `value` (with whatever `fill`
-/// made) is destroyed and the error returned.
+/// `value` after `fill`; if `fill` fails, `value` (with whatever `fill` made) is destroyed and the error
+/// returned.
 pub fn built<T: Destroy>(ctx: &Context, mut value: T, fill: impl FnOnce(&mut T) -> Result<()>) -> Result<T> {
     match fill(&mut value) {
         Ok(()) => Ok(value),

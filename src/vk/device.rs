@@ -34,9 +34,8 @@ pub struct Capabilities {
     pub trace_rays_indirect: bool,
     pub timestamp_period_ns: f32,
     pub timestamps: bool,
-    /// Subgroup ballot and broadcast operations in compute shaders:
-    /// the compute tracer's packet traversal (glsl/trace/compute_packet.glsl)
-    /// needs them.
+    /// Subgroup ballot and broadcast in compute shaders: the compute tracer's packet traversal
+    /// (glsl/trace/compute_packet.glsl) needs them.
     pub subgroup_ops: bool,
     /// multiDrawIndirect and drawIndirectFirstInstance: the occlusion-culled
     /// G-buffer (render/occlusion.rs) draws clusters that way.
@@ -101,8 +100,7 @@ fn has_ext(exts: &[vk::ExtensionProperties], name: &CStr) -> bool {
     exts.iter().any(|e| e.extension_name_as_c_str() == Ok(name))
 }
 
-/// What device `pd` offers when used through an instance of API version
-/// `instance_api`.
+/// What device `pd` offers when used through an instance of API version `instance_api`.
 pub fn query_capabilities(
     instance: &ash::Instance,
     pd: vk::PhysicalDevice,
@@ -173,9 +171,8 @@ pub fn query_capabilities(
         // gl_PrimitiveID in the G-buffer fragment shader needs it.
         unusable = Some("geometryShader feature required (fragment gl_PrimitiveID)".to_string());
     } else {
-        // Every Vulkan 1.2 feature create_device enables, except buffer
-        // device addresses: only acceleration structures and the SBT need
-        // those, and RenderDoc 1.24 hides them on lavapipe (no
+        // Every Vulkan 1.2 feature create_device enables, except buffer device addresses: only acceleration
+        // structures and the SBT need those, and RenderDoc 1.24 hides them on lavapipe (no
         // bufferDeviceAddressCaptureReplay), leaving the compute backend.
         let missing: Vec<&str> = [
             (v12.descriptor_indexing, "descriptorIndexing"),

@@ -1,9 +1,7 @@
-//! How the renderer reaches the Vulkan 1.3 features it uses: as core 1.3, or
-//! on a 1.2 device through the extensions 1.3 promoted. RenderDoc 1.24
-//! (Debian 12's package) shows lavapipe as a 1.2 device; without this path
-//! the one profiler packaged for the CI platform could not capture a frame.
-//! Call sites stay the same on both paths: the 1.3 entry points of the
-//! `ash::Device` are loaded under their extension names (see [`load_device`]).
+//! How the renderer reaches the Vulkan 1.3 features it uses: as core 1.3, or on a 1.2 device through the
+//! extensions 1.3 promoted. RenderDoc 1.24 (Debian 12's package) shows lavapipe as a 1.2 device; without
+//! this path the one profiler packaged for the CI platform could not capture a frame. Call sites are the
+//! same on both paths: the 1.3 entry points are loaded under their extension names ([`load_device`]).
 
 use std::ffi::{c_void, CStr, CString};
 
@@ -16,9 +14,8 @@ pub const REQUIRED_1_2: &[(&CStr, &str)] = &[
     (ext::extended_dynamic_state::NAME, "the per-draw cull mode of the G-buffer pass"),
 ];
 
-/// Enabled on a 1.2 device when offered, as the 1.3 path enables them; no
-/// shader or call relies on them (SPIR-V 1.5 has no demote unless a shader
-/// asks for it, and no maintenance4 entry point is called), so a 1.2 device
+/// Enabled on a 1.2 device when offered, as the 1.3 path enables them; nothing relies on them (SPIR-V
+/// 1.5 has no demote unless a shader asks, and no maintenance4 entry point is called), so a 1.2 device
 /// without them is still usable.
 pub const OPTIONAL_1_2: &[&CStr] = &[khr::maintenance4::NAME, ext::shader_demote_to_helper_invocation::NAME];
 
@@ -177,19 +174,16 @@ pub fn choose(
     Ok(FeaturePath::Extensions12(enabled))
 }
 
-/// The name 1.3 entry point `name` has on the 1.2 path, if an enabled
-/// extension provides it.
+/// The name 1.3 entry point `name` has on the 1.2 path, if an enabled extension provides it.
 fn alias(name: &CStr, path: &FeaturePath) -> Option<CString> {
     let s = name.to_str().ok()?;
     let (ext, suffix, _) = PROMOTED.iter().find(|(_, _, fns)| fns.contains(&s))?;
     path.has(ext).then(|| CString::new(format!("{s}{suffix}")).expect("no NUL in an entry point name"))
 }
 
-/// Loads the device's entry points. On the 1.2 path the 1.3 ones come from
-/// their extensions (`vkCmdPipelineBarrier2KHR` behind `cmd_pipeline_barrier2`,
-/// ...); a 1.3 entry point no enabled extension provides stays unloaded (ash
-/// panics if it is called) rather than a 1.3 function being called on a 1.2
-/// device.
+/// Loads the device's entry points. On the 1.2 path the 1.3 ones come from their extensions
+/// (`vkCmdPipelineBarrier2KHR` behind `cmd_pipeline_barrier2`, ...); a 1.3 entry point no enabled
+/// extension provides stays unloaded (ash panics if called) rather than call 1.3 on a 1.2 device.
 pub fn load_device(instance: &ash::Instance, device: vk::Device, path: &FeaturePath) -> ash::Device {
     let gdpa = instance.fp_v1_0().get_device_proc_addr;
     // SAFETY: a valid device and a NUL-terminated name.
@@ -218,8 +212,7 @@ mod tests {
             FeaturePath::Extensions12(vec![khr::synchronization2::NAME, ext::extended_dynamic_state::NAME]);
         assert_eq!(alias(c"vkCmdPipelineBarrier2", &path), Some(c"vkCmdPipelineBarrier2KHR".into()));
         assert_eq!(alias(c"vkCmdSetCullMode", &path), Some(c"vkCmdSetCullModeEXT".into()));
-        // Dynamic rendering not enabled, and a 1.3 entry point no extension
-        // here provides: neither is loaded.
+        // Dynamic rendering not enabled, and a 1.3 entry point no extension here provides: neither is loaded.
         assert_eq!(alias(c"vkCmdBeginRendering", &path), None);
         assert_eq!(alias(c"vkCmdCopyBuffer2", &path), None);
         assert_eq!(

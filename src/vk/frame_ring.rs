@@ -1,25 +1,16 @@
-//! Per-slot host staging for frames in flight.
+//! Per-slot host staging for frames in flight. With N in flight the host prepares frame N+1 while the
+//! GPU still runs frame N, so the host may not write in place what frame N reads, nor may frame N+1
+//! overwrite what the host has yet to read of frame N. The ring keeps the device buffers (and their
+//! descriptor sets) single and moves every host access to a per-slot staging range:
 //!
-//! With N frames in flight the host prepares frame N+1 while the GPU still
-//! runs frame N, so nothing the GPU of frame N reads may be written by the
-//! host in place, and nothing the host reads of frame N may be overwritten
-//! by frame N+1 before the host got to it. The ring keeps the device
-//! buffers (and their descriptor sets) single and moves every host access
-//! to a per-slot staging range:
+//! - uploads: staged into slot s; at the START of frame s's GPU work `record_uploads` copies them into
+//!   the device buffers, between a barrier ordering the copies after every earlier submission's reads
+//!   and writes (WAR / WAW on the single device buffers) and one making them visible to the frame.
+//! - downloads: at the END of frame s's GPU work `record_downloads` copies buffer ranges (or timestamp
+//!   query results) into slot s's readback range; the host reads them (`read`) after slot s's fence.
 //!
-//! - uploads: the host stages bytes for a device buffer into slot s; at the
-//!   START of frame s's GPU work `record_uploads` copies them into the
-//!   device buffers, between a barrier that orders the copies after every
-//!   earlier submission's reads and writes (write-after-read / -write on the
-//!   single device buffers) and one that makes them visible to the frame.
-//! - downloads: at the END of frame s's GPU work `record_downloads` copies
-//!   buffer ranges (or timestamp query results) into slot s's readback
-//!   range; the host reads them (`read`) after slot s's fence.
-//!
-//! Slot s is only touched by the host after its own previous frame's fence
-//! (N frames ago), which is what makes per-slot staging memory safe to
-//! rewrite and to grow. The ring knows nothing about what the bytes mean
-//! (a lower layer: no imports from render / app).
+//! The host touches slot s only after its previous frame's fence (N frames ago), which makes per-slot
+//! staging safe to rewrite and grow. The ring knows nothing of what the bytes mean.
 
 use anyhow::{ensure, Context as _, Result};
 use ash::vk;
@@ -46,8 +37,7 @@ impl Source {
     }
 }
 
-/// A download registered for a slot; `read` returns its bytes once the
-/// slot's fence has signalled.
+/// A download registered for a slot; `read` returns its bytes once the slot's fence has signalled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Download(usize);
 
@@ -86,8 +76,7 @@ fn align(n: u64) -> u64 {
 }
 
 impl FrameRing {
-    /// A ring of `slots` (>= 1) frames in flight; `name` prefixes the debug
-    /// names of its staging buffers.
+    /// A ring of `slots` (>= 1) frames in flight; `name` prefixes the debug names of its staging buffers.
     pub fn new(slots: usize, name: &str) -> Result<FrameRing> {
         ensure!(slots >= 1, "a frame ring needs at least one slot");
         Ok(FrameRing { slots: (0..slots).map(|_| Slot::default()).collect(), name: name.to_string() })
@@ -102,9 +91,8 @@ impl FrameRing {
         self.slots.get_mut(s).with_context(|| format!("frame ring slot {s} of {n}"))
     }
 
-    /// Starts a new frame in slot `s`: forgets its last frame's uploads and
-    /// downloads. Call after slot `s`'s previous fence has signalled (and
-    /// after reading its downloads).
+    /// Starts a new frame in slot `s`, forgetting its last frame's uploads and downloads. Call after slot
+    /// `s`'s previous fence has signalled (and its downloads were read).
     pub fn begin(&mut self, s: usize) -> Result<()> {
         let slot = self.slot(s)?;
         slot.bytes.clear();
@@ -115,9 +103,8 @@ impl FrameRing {
         Ok(())
     }
 
-    /// Stages `data` for `dst` (a device buffer with TRANSFER_DST usage) at
-    /// `offset`; the copy happens in `record_uploads` of the same slot.
-    /// A later upload to an overlapping range wins.
+    /// Stages `data` for `dst` (a device buffer with TRANSFER_DST usage) at `offset`, copied in
+    /// `record_uploads` of the same slot. A later upload to an overlapping range wins.
     pub fn upload(&mut self, s: usize, dst: &Buffer, offset: u64, data: &[u8]) -> Result<()> {
         ensure!(
             offset + data.len() as u64 <= dst.size,
@@ -144,10 +131,9 @@ impl FrameRing {
         let slot = self.slot(s)?;
         slot.uploads_recorded = true;
         ctx.begin_label(cmd, &name, super::timer::label_color("frame ring uploads"));
-        // The frame boundary, recorded even without uploads: every earlier
-        // submission (the previous frame, maybe still running) completes its
-        // reads and writes of the single device buffers and targets before
-        // this frame's copies and passes touch them.
+        // The frame boundary, recorded even without uploads: every earlier submission (the previous frame,
+        // maybe still running) finishes with the single device buffers and targets before this frame's
+        // copies and passes touch them.
         memory_barrier(
             ctx,
             cmd,
@@ -295,10 +281,8 @@ fn grow<'a>(
     buf.as_mut().context("frame ring staging")
 }
 
-/// One frame's host writes, staged into its ring slot: the frame's
-/// command buffer copies them into the device buffers at its start
-/// (`FrameRing::record_uploads`), so the host never writes memory a frame
-/// still in flight reads.
+/// One frame's host writes, staged into its ring slot and copied into the device buffers at the frame's
+/// start (`FrameRing::record_uploads`): the host never writes memory a frame in flight reads.
 pub struct Uploads<'a> {
     pub ring: &'a mut FrameRing,
     pub slot: usize,

@@ -10,9 +10,8 @@ use ash::{ext, vk};
 
 pub const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
-/// Counts of validation messages by severity; tests assert these stay zero.
-/// Shared through an `Arc` that outlives the instance: read them after the
-/// context is dropped to include teardown (leaked objects).
+/// Counts of validation messages by severity; tests assert these stay zero. The `Arc` outlives the
+/// instance: read them after the context is dropped to include teardown (leaked objects).
 #[derive(Debug, Default)]
 pub struct ValidationCounters {
     pub errors: AtomicU32,
@@ -35,9 +34,8 @@ pub struct InstanceOptions {
     pub sync_validation: bool,
     /// Surface extensions a window needs (from ash-window), empty when headless.
     pub surface_extensions: Vec<*const std::ffi::c_char>,
-    /// Ask for at most this Vulkan API version (`--vulkan-api 1.2`): the
-    /// device is then used as a 1.2 device whatever it supports, which is
-    /// how the extension path RenderDoc 1.24 needs is tested without it.
+    /// Ask for at most this Vulkan API version (`--vulkan-api 1.2`): the device is then used as 1.2, which
+    /// tests the extension path RenderDoc 1.24 needs without RenderDoc.
     pub max_api_version: Option<u32>,
 }
 
@@ -166,9 +164,8 @@ impl Instance {
         }
 
         let debug_utils = has_debug_utils.then(|| ext::debug_utils::Instance::new(&entry, &raw));
-        // Lives until Drop, so teardown's messages (leaked objects reported by
-        // vkDestroyDevice) are counted too; vkDestroyInstance's go to the
-        // create-info messenger chained above.
+        // Lives until Drop so teardown's messages (objects leaked at vkDestroyDevice) are counted too;
+        // vkDestroyInstance's go to the create-info messenger chained above.
         let messenger = match (&debug_utils, opts.validation) {
             (Some(du), true) => {
                 let info = vk::DebugUtilsMessengerCreateInfoEXT::default()

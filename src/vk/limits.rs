@@ -17,8 +17,8 @@ pub struct Limits {
 }
 
 impl Limits {
-    /// Reads the limits; `has_as`: VK_KHR_acceleration_structure is present
-    /// (its properties struct may only be chained then).
+    /// Reads the limits; `has_as`: VK_KHR_acceleration_structure is present (only then may its properties
+    /// struct be chained).
     pub fn query(instance: &ash::Instance, pd: vk::PhysicalDevice, has_as: bool) -> Limits {
         let mut asp = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default();
@@ -35,8 +35,7 @@ impl Limits {
         }
     }
 
-    /// Whether a `width` x `height` frame fits: its targets and its 8x8
-    /// compute dispatches.
+    /// Whether a `width` x `height` frame fits: its targets and its 8x8 compute dispatches.
     pub fn check_extent(&self, width: u32, height: u32) -> anyhow::Result<()> {
         let max = self.max_image_dimension_2d;
         if width > max || height > max {

@@ -42,8 +42,7 @@ pub struct ContextOptions {
     pub renderdoc: RenderDocUse,
 }
 
-/// The device options every command that touches the GPU takes (the
-/// command line's `GpuArgs` make them once).
+/// The device options every command that touches the GPU takes (the command line's `GpuArgs` make them once).
 #[derive(Clone, Debug, Default)]
 pub struct GpuOptions {
     pub validation: bool,
@@ -56,8 +55,7 @@ pub struct GpuOptions {
     pub disable_trace_rays_indirect: bool,
     /// `--vulkan-api 1.2`: use the device as a Vulkan 1.2 device.
     pub max_api_version: Option<u32>,
-    /// `--capture-frame N` (render, bench, view): capture frame N with
-    /// RenderDoc's in-application API.
+    /// `--capture-frame N` (render, bench, view): capture frame N with RenderDoc's in-application API.
     pub capture_frame: Option<u64>,
 }
 
@@ -96,9 +94,8 @@ pub struct Context {
     pub capture_frame: Option<u64>,
 }
 
-/// Makes the n-th buffer or image allocation from now fail, as running out
-/// of device memory would: tests walk every failure point of a code path
-/// and check, with validation on, that each error leaves nothing behind.
+/// Makes the n-th buffer or image allocation from now fail as running out of device memory would: tests
+/// walk every failure point of a code path and check, under validation, that each error leaks nothing.
 #[derive(Default)]
 pub struct AllocationFault(std::sync::atomic::AtomicU64);
 
@@ -216,9 +213,8 @@ impl Context {
         self.instance.counters.clone()
     }
 
-    /// Destroys the context, then fails if the validation layer reported any
-    /// error during its life or its teardown (objects leaked at
-    /// vkDestroyDevice / vkDestroyInstance).
+    /// Destroys the context, then fails if the validation layer reported any error during its life or
+    /// teardown (objects leaked at vkDestroyDevice / vkDestroyInstance).
     pub fn finish(self) -> Result<()> {
         let counters = self.validation_counters();
         drop(self);
@@ -336,8 +332,7 @@ impl Context {
         Ok(path)
     }
 
-    /// Runs `f` inside a capture when `frame` is the one asked for; the
-    /// capture is ended on `f`'s error too.
+    /// Runs `f` inside a capture when `frame` is the one asked for; the capture is ended on `f`'s error too.
     pub fn capture_frame_if<R>(&self, frame: u64, what: &str, f: impl FnOnce() -> Result<R>) -> Result<R> {
         if !self.wants_capture(frame) {
             return f();
@@ -411,8 +406,7 @@ pub fn copy_image_to_buffer(ctx: &Context, cmd: vk::CommandBuffer, image: &Image
     unsafe { ctx.device.cmd_copy_image_to_buffer(cmd, image.raw, src, buffer, &region) };
 }
 
-/// The copies recorded before it become visible to the host (read after
-/// the submission's fence).
+/// The copies recorded before it become visible to the host (read after the submission's fence).
 pub fn copy_to_host_barrier(ctx: &Context, cmd: vk::CommandBuffer) {
     memory_barrier(
         ctx,

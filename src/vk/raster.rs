@@ -1,6 +1,5 @@
-//! Graphics pipelines for the renderer's raster passes, which share their
-//! shape: vertex pulling (no vertex input), triangle lists, one dynamic
-//! viewport and scissor, one sample, depth test and write, dynamic
+//! Graphics pipelines for the raster passes, which share their shape: vertex pulling (no vertex input),
+//! triangle lists, one dynamic viewport and scissor, one sample, depth test and write, dynamic
 //! rendering. What differs between passes is in [`RasterPipeline`].
 
 use anyhow::{Context as _, Result};
@@ -19,8 +18,7 @@ pub struct RasterPipeline<'a> {
     pub color_formats: &'a [vk::Format],
     pub depth_format: vk::Format,
     pub depth_compare: vk::CompareOp,
-    /// Cull mode (with counter-clockwise front faces), or `None` for cull
-    /// mode and front face set per draw (dynamic state).
+    /// Cull mode (counter-clockwise front faces), or `None` for cull mode and front face set per draw.
     pub cull: Option<vk::CullModeFlags>,
     /// Slope-scaled depth bias (shadow maps).
     pub slope_bias: Option<f32>,
@@ -99,8 +97,8 @@ impl RasterPipeline<'_> {
     }
 }
 
-/// The shader modules of one pipeline: they are needed only until it is
-/// created, and go on every path out of `create`.
+/// The shader modules of one pipeline: needed only until it is created, and destroyed on every path out
+/// of `create`.
 struct Modules<'a> {
     ctx: &'a Context,
     list: Vec<vk::ShaderModule>,

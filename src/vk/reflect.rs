@@ -1,6 +1,5 @@
-//! Just enough SPIR-V reflection to check a shader against what its pass
-//! declares: the format qualifier of every storage image (set, binding).
-//! A qualifier that differs from the bound image's format is undefined
+//! Just enough SPIR-V reflection to check a shader against its pass's declarations: the format qualifier
+//! of every storage image (set, binding). One that differs from the bound image's format is undefined
 //! behaviour in Vulkan (it once read an RGBA32F target as rgba16f).
 
 use ash::vk;
@@ -52,8 +51,7 @@ pub fn storage_image_formats(words: &[u32]) -> Vec<(u32, u32, u32)> {
     out
 }
 
-/// The SPIR-V ImageFormat a storage image of `format` must be declared
-/// with (None: not one the renderer binds as storage).
+/// The SPIR-V ImageFormat a storage image of `format` must be declared with (None: not bound as storage).
 pub fn spirv_image_format(format: vk::Format) -> Option<u32> {
     Some(match format {
         vk::Format::R32G32B32A32_SFLOAT => 1,

@@ -1,12 +1,8 @@
-//! RenderDoc's in-application API: `--capture-frame N` captures frame N
-//! itself instead of asking the user to press a key at the right moment
-//! (headless `render`/`bench` have no window to press it in).
-//!
-//! Found as `RENDERDOC_GetAPI` in `librenderdoc.so`: already in the process
-//! under `renderdoccmd capture` (it preloads the library), else dlopen-ed.
-//! It must be loaded before the Vulkan instance exists: loading it makes
-//! RenderDoc enable its implicit Vulkan layer (`VK_LAYER_RENDERDOC_Capture`),
-//! which records the API calls a capture needs.
+//! RenderDoc's in-application API: `--capture-frame N` captures frame N itself (headless `render` /
+//! `bench` have no window to press a capture key in). Found as `RENDERDOC_GetAPI` in `librenderdoc.so`:
+//! already in the process under `renderdoccmd capture` (it preloads the library), else dlopen-ed. It
+//! must be loaded before the Vulkan instance exists: loading makes RenderDoc enable its implicit Vulkan
+//! layer (`VK_LAYER_RENDERDOC_Capture`), which records the API calls a capture needs.
 
 use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::path::PathBuf;
@@ -66,8 +62,7 @@ unsafe impl Send for RenderDoc {}
 unsafe impl Sync for RenderDoc {}
 
 impl RenderDoc {
-    /// The API of the RenderDoc this process runs under, if it does (the
-    /// library is not loaded otherwise).
+    /// The API of the RenderDoc this process runs under, if any (the library is not loaded otherwise).
     pub fn running() -> Option<Result<RenderDoc>> {
         let this = libloading::os::unix::Library::this();
         unsafe { this.get::<GetApiFn>(b"RENDERDOC_GetAPI\0") }.is_ok().then(RenderDoc::load)
@@ -149,8 +144,7 @@ impl RenderDoc {
         unsafe { (self.api().is_frame_capturing)() != 0 }
     }
 
-    /// Ends the capture started by [`RenderDoc::start`]; returns the file
-    /// it was written to.
+    /// Ends the capture started by [`RenderDoc::start`]; returns the file it was written to.
     pub fn end(&self, instance: vk::Instance) -> Result<PathBuf> {
         let ok = unsafe { (self.api().end_frame_capture)(Self::device_pointer(instance), std::ptr::null()) };
         if ok != 1 {

@@ -1,7 +1,6 @@
-//! Ray-tracing pipeline (VK_KHR_ray_tracing_pipeline): one ray-generation
-//! shader, the miss shaders and triangle hit groups its caller names, and a
-//! shader binding table laid out from the driver's handle size and
-//! alignments (regions in that order: raygen, miss, hit).
+//! Ray-tracing pipeline (VK_KHR_ray_tracing_pipeline): one ray-generation shader, the miss shaders and
+//! triangle hit groups its caller names, and a shader binding table laid out from the driver's handle
+//! size and alignments (regions raygen, miss, hit).
 
 use anyhow::{Context as _, Result};
 use ash::{khr, vk};
@@ -120,8 +119,8 @@ impl RtPipeline {
         group_count: usize,
         props: &vk::PhysicalDeviceRayTracingPipelinePropertiesKHR,
     ) -> Result<RtPipeline> {
-        // Shader binding table: each region starts at the base alignment,
-        // records are the handle size rounded up to the handle alignment.
+        // Each region starts at the base alignment; records are the handle size rounded up to the handle
+        // alignment.
         let handle = props.shader_group_handle_size as u64;
         let stride = align_up(handle, props.shader_group_handle_alignment as u64);
         let base = props.shader_group_base_alignment as u64;

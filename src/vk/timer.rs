@@ -1,5 +1,5 @@
-//! Per-pass GPU timing with timestamp queries (the pass layer,
-//! render/frame.rs, opens and closes a slot around every pass).
+//! Per-pass GPU timing with timestamp queries (the pass layer, render/frame.rs, opens and closes a slot
+//! around every pass).
 
 use anyhow::Result;
 use ash::vk;
@@ -68,9 +68,8 @@ impl GpuTimer {
         }
     }
 
-    /// Registers the frame's timestamps as a download of ring slot `slot`
-    /// (copied on the GPU at the frame's end: the host never reads the pool
-    /// a later frame resets); `Readback::ms` turns them into pass times.
+    /// Registers the frame's timestamps as a download of ring slot `slot`, copied on the GPU at the frame's
+    /// end (the host never reads the pool a later frame resets); `Readback::ms` turns them into times.
     pub fn download(&self, ring: &mut FrameRing, slot: usize) -> Result<Readback> {
         let count = self.names.len() as u32 * 2;
         let download = match self.enabled && count > 0 {
@@ -114,8 +113,7 @@ pub struct Readback {
 }
 
 impl Readback {
-    /// Milliseconds per pass, after the fence of the slot's frame (NaN
-    /// without timestamps).
+    /// Milliseconds per pass, after the fence of the slot's frame (NaN without timestamps).
     pub fn ms(&self, ring: &FrameRing, slot: usize) -> Result<Vec<(&'static str, f64)>> {
         let Some(d) = self.download else {
             return Ok(self.names.iter().map(|n| (*n, f64::NAN)).collect());
