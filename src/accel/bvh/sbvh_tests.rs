@@ -172,6 +172,8 @@ fn report(name: &str) -> [Quality; 3] {
 /// The quality report (issue 19 item 1). Asserted: full sweep within 2% of binning and SBVH within 0.5%
 /// of the full sweep (all greedy; SBVH is 0.03% worse on the default scene's procedural meshes), and
 /// SBVH strictly better on the two scanned/modelled scenes, whose long thin triangles need it.
+/// The binned builder (skinned BLASes, top levels) is held within 1.2% of the full sweep (issue 35
+/// item 11); measured binned / full-sweep SAH: Sponza 1.00371, armadillo 1.00792, default 1.00262.
 #[test]
 fn quality_report_binned_sweep_sbvh() {
     for scene in [
@@ -180,6 +182,8 @@ fn quality_report_binned_sweep_sbvh() {
         "assets/default.toml",
     ] {
         let [binned, sweep, sbvh] = report(scene);
+        eprintln!("bvh quality {scene}: binned / full-sweep SAH {:.5}", binned.sah / sweep.sah);
+        assert!(binned.sah <= sweep.sah * 1.012, "{scene}: binned {} vs sweep {}", binned.sah, sweep.sah);
         assert!(sweep.sah <= binned.sah * 1.02, "{scene}: sweep {} vs binned {}", sweep.sah, binned.sah);
         assert!(sbvh.sah <= sweep.sah * 1.005, "{scene}: SBVH {} vs sweep {}", sbvh.sah, sweep.sah);
         if !scene.ends_with("default.toml") {
