@@ -4,6 +4,7 @@
 
 pub mod probe;
 pub mod scenes;
+pub mod toml;
 
 use std::path::PathBuf;
 use std::sync::Arc;

@@ -4,6 +4,8 @@
 
 use glam::{EulerRot, Quat, Vec3};
 
+use super::toml::*;
+
 /// A similarity transform applied to a whole scene:
 /// x -> tilt(x * scale) + offset, `tilt_deg` in the scene files' convention
 /// (about world X, then Y, then Z).
@@ -12,6 +14,11 @@ pub struct Frame {
     pub scale: f32,
     pub offset: Vec3,
     pub tilt_deg: Vec3,
+}
+
+/// `[x, y, z]` with 10 significant digits.
+fn sci3(v: Vec3) -> Raw {
+    Raw(format!("[{:.9e}, {:.9e}, {:.9e}]", v.x, v.y, v.z))
 }
 
 impl Frame {
@@ -23,288 +30,100 @@ impl Frame {
         let r = self.tilt_deg * (std::f32::consts::PI / 180.0);
         Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
     }
-    fn p(&self, v: [f32; 3]) -> String {
-        let v = self.tilt() * (Vec3::from(v) * self.scale) + self.offset;
-        format!("[{:.9e}, {:.9e}, {:.9e}]", v.x, v.y, v.z)
+    fn p(&self, v: [f32; 3]) -> Raw {
+        sci3(self.tilt() * (Vec3::from(v) * self.scale) + self.offset)
     }
     /// An object rotation `deg` (scene-file convention) composed with the tilt.
-    fn r(&self, deg: [f32; 3]) -> String {
+    fn r(&self, deg: [f32; 3]) -> Raw {
         let d = Vec3::from(deg) * (std::f32::consts::PI / 180.0);
         let q = self.tilt() * Quat::from_euler(EulerRot::ZYX, d.z, d.y, d.x);
         let (z, y, x) = q.to_euler(EulerRot::ZYX);
-        format!("[{:.9e}, {:.9e}, {:.9e}]", x.to_degrees(), y.to_degrees(), z.to_degrees())
+        sci3(Vec3::new(x.to_degrees(), y.to_degrees(), z.to_degrees()))
     }
     /// A direction: tilted, not scaled or moved.
-    fn dir(&self, v: [f32; 3]) -> String {
-        let v = self.tilt() * Vec3::from(v);
-        format!("[{:.9e}, {:.9e}, {:.9e}]", v.x, v.y, v.z)
+    fn dir(&self, v: [f32; 3]) -> Raw {
+        sci3(self.tilt() * Vec3::from(v))
     }
-    fn s(&self, v: f32) -> String {
-        format!("{:.9e}", v * self.scale)
+    fn s(&self, v: f32) -> Raw {
+        Raw(format!("{:.9e}", v * self.scale))
     }
 }
 
 /// Ground plane, a point light at (0, 4, 0) and a 1 x 1 horizontal square
-/// at height 2 with material `occluder`: the shadow is the square
-/// [-1, 1] x [-1, 1] on the ground.
-pub fn shadow_scene(f: Frame, occluder: &str) -> String {
-    format!(
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = {cam}
-target = {target}
-up = {up}
-yfov_deg = 60
-znear = {znear}
-
-[[light]]
-type = "point"
-position = {light}
-intensity = {intensity:.9e}
-
-[[material]]
-name = "ground"
-base_color = [0.8, 0.8, 0.8]
-metallic = 0.0
-roughness = 1.0
-ior = 1.0
-
-{occluder}
-
-[[object]]
-name = "ground"
-primitive = "plane"
-size = [{g}, {g}]
-translation = {origin}
-rotation_deg = {flat}
-material = "ground"
-
-[[object]]
-name = "occluder"
-primitive = "plane"
-size = [{one}, {one}]
-translation = {occ}
-rotation_deg = {flat}
-material = "occluder"
-"#,
-        cam = f.p([2.5, 7.0, 2.5]),
-        target = f.p([0.0, 0.0, 0.0]),
-        up = f.dir([0.0, 1.0, 0.0]),
-        znear = f.s(0.05),
-        light = f.p([0.0, 4.0, 0.0]),
-        intensity = 50.0 * f.scale * f.scale,
-        g = f.s(40.0),
-        origin = f.p([0.0, 0.0, 0.0]),
-        one = f.s(1.0),
-        occ = f.p([0.0, 2.0, 0.0]),
-        flat = f.r([0.0, 0.0, 0.0]),
-    )
+/// at height 2 with material `occluder` (a material named "occluder"): the
+/// shadow is the square [-1, 1] x [-1, 1] on the ground.
+pub fn shadow_scene(f: Frame, occluder: Block) -> String {
+    let flat = f.r([0.0, 0.0, 0.0]);
+    scene_toml([
+        black_sky(),
+        camera(f.p([2.5, 7.0, 2.5]), f.p([0.0, 0.0, 0.0]))
+            .up(f.dir([0.0, 1.0, 0.0]))
+            .yfov(60)
+            .znear(f.s(0.05)),
+        point(f.p([0.0, 4.0, 0.0]), Raw(format!("{:.9e}", 50.0 * f.scale * f.scale))),
+        lambert("ground", [0.8, 0.8, 0.8]).metallic(0.0).ior(1.0),
+        occluder,
+        plane("ground", [f.s(40.0), f.s(40.0)]).at(f.p([0.0, 0.0, 0.0])).rot(flat.clone()).material("ground"),
+        plane("occluder", [f.s(1.0), f.s(1.0)]).at(f.p([0.0, 2.0, 0.0])).rot(flat).material("occluder"),
+    ])
 }
 
-pub const OPAQUE_OCCLUDER: &str = r#"
-[[material]]
-name = "occluder"
-base_color = [0.1, 0.1, 0.1]
-roughness = 1.0
-double_sided = true
-"#;
+/// A dark grey opaque square, as the shadow scene's occluder.
+pub fn opaque_occluder() -> Block {
+    lambert("occluder", [0.1, 0.1, 0.1]).double_sided()
+}
 
 /// A glass square (transmission 1) tinted `tint`, as the shadow scene's occluder.
-pub fn glass_occluder(tint: [f32; 3]) -> String {
-    format!(
-        r#"
-[[material]]
-name = "occluder"
-base_color = [{}, {}, {}]
-transmission = 1.0
-ior = 1.5
-roughness = 0.0
-double_sided = true
-"#,
-        tint[0], tint[1], tint[2]
-    )
+pub fn glass_occluder(tint: [f32; 3]) -> Block {
+    glass("occluder", 1.5).base(shown3(tint)).double_sided()
 }
 
 /// A metal mirror at z = 0 facing +z, an emissive wall at z = 6 facing it,
 /// the camera in between looking at the mirror.
 pub fn mirror_scene(f0: [f32; 3], wall: [f32; 3]) -> String {
-    format!(
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 40
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "mirror"
-base_color = [{}, {}, {}]
-metallic = 1.0
-roughness = 0.0
-
-[[material]]
-name = "wall"
-base_color = [0.0, 0.0, 0.0]
-emissive = [{}, {}, {}]
-roughness = 1.0
-
-[[object]]
-name = "mirror"
-primitive = "plane"
-size = [4.0, 4.0]
-rotation_deg = [90.0, 0.0, 0.0]
-material = "mirror"
-
-[[object]]
-name = "wall"
-primitive = "plane"
-size = [40.0, 40.0]
-translation = [0.0, 0.0, 6.0]
-rotation_deg = [-90.0, 0.0, 0.0]
-material = "wall"
-"#,
-        f0[0], f0[1], f0[2], wall[0], wall[1], wall[2]
-    )
+    scene_toml([
+        black_sky(),
+        camera([0.0, 0.0, 3.0], [0.0, 0.0, 0.0]).yfov(40),
+        no_light(),
+        mirror("mirror", shown3(f0)),
+        emitter("wall", shown3(wall)).roughness(1.0),
+        plane("mirror", [4.0, 4.0]).rot([90.0, 0.0, 0.0]).material("mirror"),
+        plane("wall", [40.0, 40.0]).at([0.0, 0.0, 6.0]).rot([-90.0, 0.0, 0.0]).material("wall"),
+    ])
 }
 
 /// Two mirrors facing each other with a ball between them.
-pub const FACING_MIRRORS: &str = r#"
-[environment]
-color = [0.3, 0.3, 0.3]
-
-[[camera]]
-position = [0.3, 0.2, 1.5]
-target = [0.0, 0.0, -2.0]
-yfov_deg = 60
-
-[[light]]
-type = "point"
-position = [0.0, 1.5, 0.0]
-intensity = 10.0
-
-[[material]]
-name = "mirror"
-base_color = [0.98, 0.98, 0.98]
-metallic = 1.0
-roughness = 0.0
-
-[[material]]
-name = "orange"
-base_color = [1.0, 0.4, 0.0]
-
-[[object]]
-name = "front"
-primitive = "plane"
-size = [10.0, 10.0]
-translation = [0.0, 0.0, -2.0]
-rotation_deg = [90.0, 0.0, 0.0]
-material = "mirror"
-
-[[object]]
-name = "back"
-primitive = "plane"
-size = [10.0, 10.0]
-translation = [0.0, 0.0, 2.0]
-rotation_deg = [-90.0, 0.0, 0.0]
-material = "mirror"
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 0.3
-translation = [0.0, -0.3, 0.0]
-material = "orange"
-"#;
+pub fn facing_mirrors() -> String {
+    scene_toml([
+        environment([0.3, 0.3, 0.3]),
+        camera([0.3, 0.2, 1.5], [0.0, 0.0, -2.0]).yfov(60),
+        point([0.0, 1.5, 0.0], 10.0),
+        mirror("mirror", [0.98, 0.98, 0.98]),
+        material("orange").base([1.0, 0.4, 0.0]),
+        plane("front", [10.0, 10.0]).at([0.0, 0.0, -2.0]).rot([90.0, 0.0, 0.0]).material("mirror"),
+        plane("back", [10.0, 10.0]).at([0.0, 0.0, 2.0]).rot([-90.0, 0.0, 0.0]).material("mirror"),
+        sphere("ball", 0.3).at([0.0, -0.3, 0.0]).material("orange"),
+    ])
+}
 
 /// Mirror ball, glass ball, box, ground; point, spot and directional lights.
-pub const AGREEMENT: &str = r#"
-[environment]
-color = [0.3, 0.4, 0.6]
-
-[[camera]]
-position = [0.0, 2.5, 6.0]
-target = [0.0, 0.5, 0.0]
-yfov_deg = 50
-
-[[light]]
-type = "point"
-position = [2.0, 5.0, 2.0]
-intensity = 60.0
-
-[[light]]
-type = "spot"
-position = [-3.0, 4.0, 1.0]
-direction = [0.6, -0.8, -0.2]
-intensity = 80.0
-outer_cone_deg = 35
-inner_cone_deg = 20
-
-[[light]]
-type = "directional"
-direction = [-0.3, -1.0, -0.5]
-intensity = 2.0
-
-[[material]]
-name = "mirror"
-base_color = [0.9, 0.9, 0.9]
-metallic = 1.0
-roughness = 0.0
-
-[[material]]
-name = "glass"
-base_color = [1.0, 1.0, 1.0]
-transmission = 1.0
-ior = 1.5
-roughness = 0.0
-
-[[material]]
-name = "red"
-base_color = [0.8, 0.1, 0.1]
-roughness = 0.7
-
-[[material]]
-name = "ground"
-base_color = [0.7, 0.7, 0.7]
-roughness = 0.8
-
-[[object]]
-name = "ground"
-primitive = "plane"
-size = [20.0, 20.0]
-material = "ground"
-
-[[object]]
-name = "mirror ball"
-primitive = "sphere"
-radius = 0.8
-translation = [-1.2, 0.8, 0.0]
-material = "mirror"
-
-[[object]]
-name = "glass ball"
-primitive = "sphere"
-radius = 0.8
-translation = [1.2, 0.8, 0.5]
-material = "glass"
-
-[[object]]
-name = "box"
-primitive = "cube"
-size = 1.0
-translation = [0.3, 0.5, -2.0]
-rotation_deg = [0.0, 30.0, 0.0]
-material = "red"
-"#;
+pub fn agreement() -> String {
+    scene_toml([
+        environment([0.3, 0.4, 0.6]),
+        camera([0.0, 2.5, 6.0], [0.0, 0.5, 0.0]).yfov(50),
+        point([2.0, 5.0, 2.0], 60.0),
+        spot([-3.0, 4.0, 1.0], [0.6, -0.8, -0.2], 80.0).cones(20, 35),
+        directional([-0.3, -1.0, -0.5], 2.0),
+        mirror("mirror", [0.9, 0.9, 0.9]),
+        glass("glass", 1.5),
+        material("red").base([0.8, 0.1, 0.1]).roughness(0.7),
+        material("ground").base([0.7, 0.7, 0.7]).roughness(0.8),
+        plane("ground", [20.0, 20.0]).material("ground"),
+        sphere("mirror ball", 0.8).at([-1.2, 0.8, 0.0]).material("mirror"),
+        sphere("glass ball", 0.8).at([1.2, 0.8, 0.5]).material("glass"),
+        cube("box", 1.0).at([0.3, 0.5, -2.0]).rot([0.0, 30.0, 0.0]).material("red"),
+    ])
+}
 
 /// A white 4x4 floor (4 vertices; tests/render/prt.rs subdivides it) under a
 /// sphere of radius 1 centred at height 2; the camera looks at the origin
@@ -313,37 +132,15 @@ material = "red"
 /// of a floor point at distance D from the centre is pi L (1 - r^2 d / D^3)
 /// (pi L (1 - (r/d)^2) below the centre); the sphere's underside sees the
 /// floor (tests/render/prt.rs, tests/report/prt_report.rs).
-pub const PLANE_UNDER_SPHERE: &str = r#"
-[[camera]]
-position = [3.0, 0.6, 0.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 60
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "white"
-base_color = [0.8, 0.8, 0.8]
-roughness = 1.0
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = [4.0, 4.0]
-material = "white"
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 1.0
-slices = 32
-stacks = 16
-translation = [0.0, 2.0, 0.0]
-material = "white"
-"#;
+pub fn plane_under_sphere() -> String {
+    scene_toml([
+        camera([3.0, 0.6, 0.0], [0.0, 0.0, 0.0]).yfov(60),
+        no_light(),
+        lambert("white", [0.8, 0.8, 0.8]),
+        plane("floor", [4.0, 4.0]).material("white"),
+        sphere("ball", 1.0).slices(32, 16).at([0.0, 2.0, 0.0]).material("white"),
+    ])
+}
 
 /// Writes a glTF file `file` (under the test tmpdir's `scenes/`) holding one
 /// double-sided quad of half-size `half` in the XY plane facing +Z, uv

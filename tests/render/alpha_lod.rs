@@ -7,6 +7,7 @@
 //! camera moves.
 use crate::common;
 
+use common::toml::*;
 use common::BACKENDS;
 use hybrid_rt::render::RenderSettings;
 
@@ -30,42 +31,14 @@ fn fence_gltf() -> std::path::PathBuf {
 /// the fence 35 or more units away by reflection: ~30 texels per pixel.
 fn scene() -> hybrid_rt::scene::Scene {
     let fence = fence_gltf();
-    let toml = format!(
-        r#"
-[environment]
-color = [0.1, 0.3, 1.0]
-
-[[camera]]
-position = [0.0, 0.0, 0.0]
-target = [0.0, 0.0, -1.0]
-yfov_deg = 60
-
-[[light]]
-type = "directional"
-direction = [0.2, -1.0, -0.3]
-intensity = 3.0
-
-[[material]]
-name = "mirror"
-base_color = [1.0, 1.0, 1.0]
-metallic = 1.0
-roughness = 0.0
-
-[[object]]
-name = "mirror"
-primitive = "plane"
-size = [40.0, 40.0]
-material = "mirror"
-translation = [0.0, 0.0, -5.0]
-rotation_deg = [90.0, 0.0, 0.0]
-
-[[object]]
-name = "fence"
-gltf = "{}"
-translation = [0.0, 0.0, 25.0]
-"#,
-        fence.display()
-    );
+    let toml = scene_toml([
+        environment([0.1, 0.3, 1.0]),
+        camera([0.0; 3], [0.0, 0.0, -1.0]).yfov(60),
+        directional([0.2, -1.0, -0.3], 3.0),
+        mirror("mirror", [1.0; 3]),
+        plane("mirror", [40.0, 40.0]).material("mirror").at([0.0, 0.0, -5.0]).rot([90.0, 0.0, 0.0]),
+        gltf("fence", fence.display()).at([0.0, 0.0, 25.0]),
+    ]);
     common::scene_from_toml("alpha_lod", &toml)
 }
 

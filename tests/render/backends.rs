@@ -70,11 +70,11 @@ fn assert_agree(name: &str, frames: &[(Backend, FrameOutput)], bound: Bound) {
 #[test]
 fn analytic_scenes_agree_across_backends() {
     let cases = [
-        ("agreement", AGREEMENT.to_string()),
-        ("shadow", shadow_scene(Frame::IDENTITY, OPAQUE_OCCLUDER)),
-        ("glass shadow", shadow_scene(Frame::IDENTITY, &glass_occluder([1.0, 0.3, 0.1]))),
+        ("agreement", agreement()),
+        ("shadow", shadow_scene(Frame::IDENTITY, opaque_occluder())),
+        ("glass shadow", shadow_scene(Frame::IDENTITY, glass_occluder([1.0, 0.3, 0.1]))),
         ("mirror", mirror_scene([0.9, 0.6, 0.3], [0.8, 0.5, 0.25])),
-        ("facing mirrors", FACING_MIRRORS.to_string()),
+        ("facing mirrors", facing_mirrors()),
     ];
     for (name, text) in cases {
         let scene = common::scene_from_toml(&format!("backends_{}", name.replace(' ', "_")), &text);
@@ -84,7 +84,7 @@ fn analytic_scenes_agree_across_backends() {
 
 #[test]
 fn pure_ray_tracing_agrees_across_backends() {
-    let scene = common::scene_from_toml("backends_rt", AGREEMENT);
+    let scene = common::scene_from_toml("backends_rt", &agreement());
     // Before anti-aliasing: where a camera ray meets an edge two triangles
     // share, query and compute may store different primitives (the same
     // shading), and the edge filter's coverage walk then differs at a few
@@ -110,13 +110,13 @@ fn alpha_mask_and_transmission_models_agree_across_backends() {
 }
 
 /// The pipeline backend's image on a context made with `opts` (checked by
-/// `check`) must be its image on the default context: renders `AGREEMENT`.
+/// `check`) must be its image on the default context: renders `agreement()`.
 fn pipeline_matches_default_context(
     name: &str,
     opts: GpuOptions,
     check: fn(&hybrid_rt::vk::Context) -> bool,
 ) {
-    let scene = common::scene_from_toml(name, AGREEMENT);
+    let scene = common::scene_from_toml(name, &agreement());
     let ctx = common::validated(opts.context().unwrap());
     assert!(check(&ctx) && ctx.rt.ray_tracing_pipeline);
     let settings = RenderSettings { backend: Backend::Pipeline, ..Default::default() };
@@ -156,7 +156,7 @@ fn the_pipeline_backend_runs_without_indirect_launches() {
 /// acceleration structure, and still produce the ray-traced image.
 #[test]
 fn without_ray_tracing_extensions_the_compute_backend_runs() {
-    let scene = common::scene_from_toml("backends_nort", AGREEMENT);
+    let scene = common::scene_from_toml("backends_nort", &agreement());
     let ctx = common::validated(
         GpuOptions { validation: true, disable_ray_tracing: true, ..Default::default() }.context().unwrap(),
     );

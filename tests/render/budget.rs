@@ -7,6 +7,7 @@
 //! selected; stickiness keeps the selection steady over a slow pan.
 use crate::common;
 
+use common::toml::*;
 use common::BACKENDS;
 use glam::Vec3;
 use hybrid_rt::gpu::shared::{
@@ -208,41 +209,19 @@ fn an_object_of_relevance_zero_is_never_selected() {
 /// Two equal mirror spheres side by side; the budget fits one. The camera
 /// sways left and right across the midpoint: by centrality the selection
 /// flips at every crossing, unless the selected sphere keeps its place.
-const TWO_SPHERES: &str = r#"
-[[camera]]
-position = [0.0, 0.0, 5.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 50
-
-[[light]]
-type = "directional"
-direction = [-0.3, -1.0, -0.4]
-intensity = 3.0
-
-[[material]]
-name = "mirror"
-base_color = [0.9, 0.9, 0.9]
-metallic = 1.0
-roughness = 0.05
-
-[[object]]
-name = "left"
-primitive = "sphere"
-radius = 0.5
-translation = [-1.0, 0.0, 0.0]
-material = "mirror"
-
-[[object]]
-name = "right"
-primitive = "sphere"
-radius = 0.5
-translation = [1.0, 0.0, 0.0]
-material = "mirror"
-"#;
+fn two_spheres() -> String {
+    scene_toml([
+        camera([0.0, 0.0, 5.0], [0.0; 3]).yfov(50),
+        directional([-0.3, -1.0, -0.4], 3.0),
+        mirror("mirror", [0.9, 0.9, 0.9]).roughness(0.05),
+        sphere("left", 0.5).at([-1.0, 0.0, 0.0]).material("mirror"),
+        sphere("right", 0.5).at([1.0, 0.0, 0.0]).material("mirror"),
+    ])
+}
 
 #[test]
 fn stickiness_steadies_the_selection_over_a_slow_pan() {
-    let scene = common::scene_from_toml("budget_two_spheres", TWO_SPHERES);
+    let scene = common::scene_from_toml("budget_two_spheres", &two_spheres());
     let base = scene.cameras[0].clone();
     // 40 frames swaying the view +-0.4 units, period 10 frames.
     let pan = |i: usize| {

@@ -7,6 +7,8 @@
 //! off. With `none` nothing is reflected or shadowed.
 use crate::common;
 
+use common::toml::*;
+
 use hybrid_rt::image_diff::diff_stats;
 use hybrid_rt::render::budget::{BudgetSettings, Fallback};
 use hybrid_rt::render::shading::Effects;
@@ -27,35 +29,13 @@ fn mirror_sphere_scene() -> String {
     let map = common::write_hdr("fallback_sky", 32, 16, |x, y| {
         [0.2 + x as f32 / 16.0, 0.1 + y as f32 / 8.0, 0.6 - y as f32 / 40.0]
     });
-    format!(
-        r#"
-[environment]
-hdr = "{}"
-
-[[camera]]
-position = [0.0, 0.3, 3.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 45
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "mirror"
-base_color = [0.9, 0.8, 0.7]
-metallic = 1.0
-roughness = 0.0
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 0.8
-material = "mirror"
-"#,
-        map.display()
-    )
+    scene_toml([
+        environment_hdr(map.display()),
+        camera([0.0, 0.3, 3.0], [0.0; 3]).yfov(45),
+        no_light(),
+        mirror("mirror", [0.9, 0.8, 0.7]),
+        sphere("ball", 0.8).material("mirror"),
+    ])
 }
 
 #[test]
@@ -86,51 +66,23 @@ fn a_mirror_left_out_reflects_the_sky_as_the_traced_one_does_on_every_backend() 
     }
 }
 
-/// A sphere above a ground plane, lit by one light (`light`: its TOML
-/// lines); a dim grey sky so shadowed ground is near black.
-fn sphere_over_ground(light: &str) -> String {
-    format!(
-        r#"
-[environment]
-color = [0.05, 0.05, 0.05]
-
-[[camera]]
-position = [0.0, 4.0, 5.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 50
-
-[[light]]
-{light}
-
-[[material]]
-name = "ground"
-base_color = [0.8, 0.8, 0.8]
-roughness = 1.0
-
-[[material]]
-name = "red"
-base_color = [0.8, 0.1, 0.1]
-roughness = 1.0
-
-[[object]]
-name = "ground"
-primitive = "plane"
-size = [20.0, 20.0]
-material = "ground"
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 0.7
-translation = [0.0, 1.0, 0.0]
-material = "red"
-"#
-    )
+/// A sphere above a ground plane, lit by one light; a dim grey sky so
+/// shadowed ground is near black.
+fn sphere_over_ground(light: Block) -> String {
+    scene_toml([
+        environment([0.05, 0.05, 0.05]),
+        camera([0.0, 4.0, 5.0], [0.0; 3]).yfov(50),
+        light,
+        lambert("ground", [0.8, 0.8, 0.8]),
+        lambert("red", [0.8, 0.1, 0.1]),
+        plane("ground", [20.0, 20.0]).material("ground"),
+        sphere("ball", 0.7).at([0.0, 1.0, 0.0]).material("red"),
+    ])
 }
 
-const SUN: &str = r#"type = "directional"
-direction = [-0.4, -1.0, -0.3]
-intensity = 3.0"#;
+fn sun() -> Block {
+    directional([-0.4, -1.0, -0.3], 3.0)
+}
 
 const SW: u32 = 160;
 const SH: u32 = 90;
@@ -177,17 +129,14 @@ fn iou(a: &[bool], b: &[bool]) -> f64 {
 
 /// A spot light above and beside the sphere, its cone over the ground
 /// (the perspective shadow map).
-const SPOT: &str = r#"type = "spot"
-position = [1.0, 4.0, 0.8]
-direction = [-0.25, -1.0, -0.2]
-intensity = 40.0
-inner_cone_deg = 30.0
-outer_cone_deg = 40.0"#;
+fn spot_light() -> Block {
+    spot([1.0, 4.0, 0.8], [-0.25, -1.0, -0.2], 40.0).cones(30.0, 40.0)
+}
 
 #[test]
 fn a_shadow_left_out_falls_back_to_a_shadow_map_matching_the_traced_one() {
-    let sun = common::scene_from_toml("fallback_sun_shadow", &sphere_over_ground(SUN));
-    let spot = common::scene_from_toml("fallback_spot_shadow", &sphere_over_ground(SPOT));
+    let sun = common::scene_from_toml("fallback_sun_shadow", &sphere_over_ground(sun()));
+    let spot = common::scene_from_toml("fallback_spot_shadow", &sphere_over_ground(spot_light()));
     // The spot's map on one backend: the maps do not depend on it.
     let cases =
         common::BACKENDS.map(|b| (b, &sun, "sun")).into_iter().chain([(common::BACKENDS[2], &spot, "spot")]);
@@ -223,9 +172,7 @@ fn a_shadow_left_out_falls_back_to_a_shadow_map_matching_the_traced_one() {
 
 #[test]
 fn point_lights_stay_unshadowed_in_the_fallback() {
-    let lamp = r#"type = "point"
-position = [0.5, 3.0, 0.5]
-intensity = 30.0"#;
+    let lamp = point([0.5, 3.0, 0.5], 30.0);
     let scene = common::scene_from_toml("fallback_point_shadow", &sphere_over_ground(lamp));
     let full = RenderSettings { backend: common::BACKENDS[2], ..Default::default() };
     let with_raster =
@@ -249,7 +196,7 @@ intensity = 30.0"#;
 
 #[test]
 fn the_shadow_map_pass_records_only_when_a_shadow_bit_is_off() {
-    let scene = common::scene_from_toml("fallback_sun_shadow", &sphere_over_ground(SUN));
+    let scene = common::scene_from_toml("fallback_sun_shadow", &sphere_over_ground(sun()));
     let backend = common::BACKENDS[2];
     // Under synchronization validation: the pass's own layout transitions
     // and the lookups in `direct` are ordered.

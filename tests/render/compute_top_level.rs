@@ -22,6 +22,8 @@
 //! of the pixels differ from the CPU-skinned reference (tolerance 0.2%).
 use crate::common;
 
+use common::toml::*;
+
 use ash::vk;
 use hybrid_rt::accel::bvh::{Bvh, BvhNode};
 use hybrid_rt::accel::compute_bvh::ComputeBvh;
@@ -50,37 +52,13 @@ fn scene() -> (Scene, usize) {
     let bender = bender.display();
     let scene = common::scene_from_toml(
         "compute_top_level",
-        &format!(
-            r#"
-[[camera]]
-position = [0.0, 1.0, 2.7]
-target = [0.0, 0.55, 0.0]
-yfov_deg = 45
-
-[[object]]
-name = "bender"
-gltf = "{bender}"
-translation = [-0.7, 0.7, 0.0]
-scale = 0.15
-
-[[object]]
-name = "stander"
-gltf = "{man}"
-translation = [0.7, 0.0, 0.0]
-rotation_deg = [0.0, 40.0, 0.0]
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 0.25
-translation = [0.0, 0.25, 0.9]
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = [3.0, 3.0]
-"#
-        ),
+        &scene_toml([
+            camera([0.0, 1.0, 2.7], [0.0, 0.55, 0.0]).yfov(45),
+            gltf("bender", bender).at([-0.7, 0.7, 0.0]).scale(0.15),
+            gltf("stander", man).at([0.7, 0.0, 0.0]).rot([0.0, 40.0, 0.0]),
+            sphere("ball", 0.25).at([0.0, 0.25, 0.9]),
+            plane("floor", [3.0, 3.0]),
+        ]),
     );
     // The first animation is the bender's own (the stander stays put).
     let anim = find_animation(&scene, "0").unwrap();

@@ -5,6 +5,8 @@
 //! nothing) there too.
 use crate::common;
 
+use common::toml::*;
+
 use hybrid_rt::render::shading::{AaMode, Backend, Mode};
 use hybrid_rt::render::{DebugView, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
@@ -16,29 +18,16 @@ fn settings() -> RenderSettings {
     RenderSettings { backend: Backend::Compute, aa: AaMode::None, ..Default::default() }
 }
 
-const HEADER: &str = r#"
-[[camera]]
-position = [0.0, 1.0, 5.0]
-target = [0.0, 0.0, 0.0]
-
-[[light]]
-type = "directional"
-direction = [-0.3, -1.0, -0.5]
-intensity = 3.0
-casts_shadows = false
-
-[[material]]
-name = "clay"
-base_color = [0.7, 0.6, 0.5]
-roughness = 0.8
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = 10.0
-translation = [0.0, -1.0, 0.0]
-material = "clay"
-"#;
+/// A camera, an unshadowed sun and a clay floor, then `objects`.
+fn floor_and<const N: usize>(objects: [Block; N]) -> String {
+    let header = [
+        camera([0.0, 1.0, 5.0], [0.0, 0.0, 0.0]),
+        directional([-0.3, -1.0, -0.5], 3.0).no_shadows(),
+        clay(),
+        plane("floor", 10.0).at([0.0, -1.0, 0.0]).material("clay"),
+    ];
+    scene_toml(header.into_iter().chain(objects))
+}
 
 /// Renders one hybrid frame; returns the draws recorded and culled.
 fn raster_draws(scene: &Scene) -> (usize, u32) {
@@ -56,27 +45,11 @@ fn raster_draws(scene: &Scene) -> (usize, u32) {
 /// the ball in view and the floor (which the view crosses) are drawn.
 #[test]
 fn an_instance_outside_the_frustum_is_not_drawn() {
-    let toml = format!(
-        "{HEADER}{}",
-        r#"
-[[object]]
-name = "in view"
-primitive = "sphere"
-material = "clay"
-
-[[object]]
-name = "behind the camera"
-primitive = "sphere"
-translation = [0.0, 1.0, 9.0]
-material = "clay"
-
-[[object]]
-name = "far to the left"
-primitive = "sphere"
-translation = [-40.0, 0.0, 0.0]
-material = "clay"
-"#
-    );
+    let toml = floor_and([
+        primitive("in view", "sphere").material("clay"),
+        primitive("behind the camera", "sphere").at([0.0, 1.0, 9.0]).material("clay"),
+        primitive("far to the left", "sphere").at([-40.0, 0.0, 0.0]).material("clay"),
+    ]);
     let scene = common::scene_from_toml("cull_outside", &toml);
     assert_eq!(scene.instances.len(), 4);
     assert_eq!(raster_draws(&scene), (2, 2), "(recorded, culled): floor and the ball in view");
@@ -89,26 +62,18 @@ material = "clay"
 /// the raster would cull the boxes' outsides and show their insides.
 #[test]
 fn a_mirrored_single_sided_object_still_renders() {
-    let toml = format!(
-        "{HEADER}{}",
-        r#"
-[[object]]
-name = "mirrored x"
-primitive = "cube"
-translation = [-1.2, 0.0, 0.0]
-rotation_deg = [0.0, 30.0, 0.0]
-scale = [-1.0, 1.0, 1.0]
-material = "clay"
-
-[[object]]
-name = "mirrored xyz"
-primitive = "cube"
-translation = [1.2, 0.0, 0.0]
-rotation_deg = [20.0, -30.0, 0.0]
-scale = [-0.8, -0.8, -0.8]
-material = "clay"
-"#
-    );
+    let toml = floor_and([
+        primitive("mirrored x", "cube")
+            .at([-1.2, 0.0, 0.0])
+            .rot([0.0, 30.0, 0.0])
+            .scale([-1.0, 1.0, 1.0])
+            .material("clay"),
+        primitive("mirrored xyz", "cube")
+            .at([1.2, 0.0, 0.0])
+            .rot([20.0, -30.0, 0.0])
+            .scale([-0.8, -0.8, -0.8])
+            .material("clay"),
+    ]);
     let scene = common::scene_from_toml("cull_mirrored", &toml);
     assert!(scene.materials.iter().all(|m| !m.double_sided), "single-sided materials");
     let hybrid = common::render_scene(&scene, W, H, &settings());

@@ -3,6 +3,8 @@
 //! half-float range. Frames stay finite and both modes agree.
 use crate::common;
 
+use common::toml::*;
+
 use std::path::PathBuf;
 
 use hybrid_rt::render::shading::Mode;
@@ -17,34 +19,13 @@ fn hdr_map(name: &str, w: u32, h: u32, f: impl Fn(u32, u32) -> f32) -> PathBuf {
 }
 
 fn sky_scene(map: &std::path::Path) -> String {
-    format!(
-        r#"
-[environment]
-hdr = "{}"
-
-[[camera]]
-position = [0.0, 1.0, 4.0]
-target = [0.0, 1.5, 0.0]
-yfov_deg = 60
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "ground"
-base_color = [0.5, 0.5, 0.5]
-roughness = 1.0
-
-[[object]]
-name = "ground"
-primitive = "plane"
-size = [40.0, 40.0]
-material = "ground"
-"#,
-        map.display()
-    )
+    scene_toml([
+        environment_hdr(map.display()),
+        camera([0.0, 1.0, 4.0], [0.0, 1.5, 0.0]).yfov(60),
+        no_light(),
+        lambert("ground", [0.5, 0.5, 0.5]),
+        plane("ground", [40.0, 40.0]).material("ground"),
+    ])
 }
 
 /// Texels of 1.7e38 (near the RGBE maximum): their sin-weighted sum
@@ -82,44 +63,15 @@ fn environment_beyond_half_range_is_not_clamped() {
 fn emission_beyond_half_range_is_clamped_alike_in_both_modes() {
     let scene = common::scene_from_toml(
         "emissive_1e6",
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = [0.0, 1.0, 4.0]
-target = [0.0, 0.5, 0.0]
-yfov_deg = 60
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "blinding"
-base_color = [0.0, 0.0, 0.0]
-emissive = [1e6, 1e6, 1e6]
-
-[[material]]
-name = "mirror"
-base_color = [0.9, 0.9, 0.9]
-metallic = 1.0
-roughness = 0.0
-
-[[object]]
-name = "lamp"
-primitive = "cube"
-size = 0.6
-translation = [0.0, 1.0, 0.0]
-material = "blinding"
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = [20.0, 20.0]
-material = "mirror"
-"#,
+        &scene_toml([
+            black_sky(),
+            camera([0.0, 1.0, 4.0], [0.0, 0.5, 0.0]).yfov(60),
+            no_light(),
+            emitter("blinding", [1e6, 1e6, 1e6]),
+            mirror("mirror", [0.9, 0.9, 0.9]),
+            cube("lamp", 0.6).at([0.0, 1.0, 0.0]).material("blinding"),
+            plane("floor", [20.0, 20.0]).material("mirror"),
+        ]),
     );
     let hybrid = common::render_scene(&scene, W, H, &RenderSettings::default());
     let rt = common::render_scene(&scene, W, H, &RenderSettings { mode: Mode::Rt, ..Default::default() });

@@ -9,6 +9,7 @@ use hybrid_rt::render::shading::{AaMode, Backend, Mode};
 use hybrid_rt::render::{DebugView, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
 
+use common::toml::*;
 use common::BACKENDS;
 
 /// A frame's recorded passes (with the timings' names) and allocated targets.
@@ -79,34 +80,13 @@ fn passes_and_targets_a_scene_does_not_need_are_left_out() {
     // Rough, opaque materials and no shadow-casting light: nothing to trace.
     let plain = common::scene_from_toml(
         "frame_plain",
-        r#"
-[[camera]]
-position = [0.0, 2.0, 5.0]
-target = [0.0, 0.0, 0.0]
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, -0.3]
-intensity = 2.0
-casts_shadows = false
-
-[[material]]
-name = "clay"
-base_color = [0.7, 0.6, 0.5]
-roughness = 0.9
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-material = "clay"
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = 10.0
-translation = [0.0, -1.0, 0.0]
-material = "clay"
-"#,
+        &scene_toml([
+            camera([0.0, 2.0, 5.0], [0.0; 3]),
+            directional([0.0, -1.0, -0.3], 2.0).no_shadows(),
+            clay().roughness(0.9),
+            primitive("ball", "sphere").material("clay"),
+            plane("floor", 10.0).at([0.0, -1.0, 0.0]).material("clay"),
+        ]),
     );
     let (passes, targets) = frame_of(&ctx, &plain, &RenderSettings::default());
     assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap", "edge aa"]);

@@ -13,6 +13,8 @@
 //!   the frames they light are non-negative and finite.
 use crate::common;
 
+use common::toml::*;
+
 use std::path::Path;
 
 use ash::vk::Extent2D;
@@ -30,69 +32,24 @@ const H: u32 = 54;
 /// Four walls facing the centre (normals +X, -X, +Z, -Z), a sphere in the
 /// middle, camera 0 at +Z looking at -Z and camera 1 the other way. No
 /// light: the frame is the ambient term alone.
-const BOX: &str = r#"
-[[camera]]
-position = [0.0, 0.0, 1.5]
-target = [0.0, 0.0, -2.0]
-yfov_deg = 90
-
-[[camera]]
-position = [0.0, 0.0, -1.5]
-target = [0.0, 0.0, 2.0]
-yfov_deg = 90
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "white"
-base_color = [0.8, 0.8, 0.8]
-roughness = 1.0
-
-[[object]]
-name = "faces +X"
-primitive = "plane"
-size = [4.0, 4.0]
-translation = [-2.0, 0.0, 0.0]
-rotation_deg = [0.0, 0.0, -90.0]
-material = "white"
-
-[[object]]
-name = "faces -X"
-primitive = "plane"
-size = [4.0, 4.0]
-translation = [2.0, 0.0, 0.0]
-rotation_deg = [0.0, 0.0, 90.0]
-material = "white"
-
-[[object]]
-name = "faces +Z"
-primitive = "plane"
-size = [4.0, 4.0]
-translation = [0.0, 0.0, -2.0]
-rotation_deg = [90.0, 0.0, 0.0]
-material = "white"
-
-[[object]]
-name = "faces -Z"
-primitive = "plane"
-size = [4.0, 4.0]
-translation = [0.0, 0.0, 2.0]
-rotation_deg = [-90.0, 0.0, 0.0]
-material = "white"
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 0.4
-material = "white"
-"#;
+fn box_toml() -> String {
+    let wall = |name, at, rot| plane(name, [4.0, 4.0]).at(at).rot(rot).material("white");
+    scene_toml([
+        camera([0.0, 0.0, 1.5], [0.0, 0.0, -2.0]).yfov(90),
+        camera([0.0, 0.0, -1.5], [0.0, 0.0, 2.0]).yfov(90),
+        no_light(),
+        lambert("white", [0.8, 0.8, 0.8]),
+        wall("faces +X", [-2.0, 0.0, 0.0], [0.0, 0.0, -90.0]),
+        wall("faces -X", [2.0, 0.0, 0.0], [0.0, 0.0, 90.0]),
+        wall("faces +Z", [0.0, 0.0, -2.0], [90.0, 0.0, 0.0]),
+        wall("faces -Z", [0.0, 0.0, 2.0], [-90.0, 0.0, 0.0]),
+        sphere("ball", 0.4).material("white"),
+    ])
+}
 
 /// The box scene lit by the map at `map` (an equirect .hdr).
 fn box_scene(name: &str, map: &Path) -> Scene {
-    let mut scene = common::scene_from_toml(name, BOX);
+    let mut scene = common::scene_from_toml(name, &box_toml());
     EnvOverrides { map: Some((map.to_path_buf(), EnvLayout::Equirect)), ..Default::default() }
         .apply(&mut scene)
         .unwrap();

@@ -6,6 +6,8 @@
 //! triangles are drawn than the frustum-culled draws hold.
 use crate::common;
 
+use common::toml::*;
+
 use glam::Vec3;
 use hybrid_rt::render::output::FrameOutput;
 use hybrid_rt::render::settings::PrimaryVisibility;
@@ -27,58 +29,19 @@ fn settings(occlusion_culling: bool) -> RenderSettings {
 }
 
 /// A wall with spheres and a cube behind it, on a floor.
-const WALL_SCENE: &str = r#"
-[[camera]]
-position = [0.0, 1.0, 6.0]
-target = [0.0, 0.5, 0.0]
-
-[[light]]
-type = "directional"
-direction = [-0.3, -1.0, -0.5]
-intensity = 3.0
-
-[[material]]
-name = "clay"
-base_color = [0.7, 0.6, 0.5]
-roughness = 0.8
-
-[[material]]
-name = "red"
-base_color = [0.8, 0.1, 0.1]
-roughness = 0.4
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = 20.0
-translation = [0.0, -1.0, 0.0]
-material = "clay"
-
-[[object]]
-name = "wall"
-primitive = "cube"
-scale = [3.0, 2.5, 0.2]
-translation = [0.0, 0.25, 2.0]
-material = "clay"
-
-[[object]]
-name = "hidden sphere"
-primitive = "sphere"
-translation = [0.0, 0.0, -1.0]
-material = "red"
-
-[[object]]
-name = "hidden sphere left"
-primitive = "sphere"
-translation = [-1.5, 0.0, -2.0]
-material = "red"
-
-[[object]]
-name = "hidden cube right"
-primitive = "cube"
-translation = [1.5, 0.0, -2.0]
-material = "red"
-"#;
+fn wall_scene() -> String {
+    scene_toml([
+        camera([0.0, 1.0, 6.0], [0.0, 0.5, 0.0]),
+        directional([-0.3, -1.0, -0.5], 3.0),
+        clay(),
+        material("red").base([0.8, 0.1, 0.1]).roughness(0.4),
+        plane("floor", 20.0).at([0.0, -1.0, 0.0]).material("clay"),
+        primitive("wall", "cube").scale([3.0, 2.5, 0.2]).at([0.0, 0.25, 2.0]).material("clay"),
+        primitive("hidden sphere", "sphere").at([0.0, 0.0, -1.0]).material("red"),
+        primitive("hidden sphere left", "sphere").at([-1.5, 0.0, -2.0]).material("red"),
+        primitive("hidden cube right", "cube").at([1.5, 0.0, -2.0]).material("red"),
+    ])
+}
 
 /// Cameras still for three frames behind the wall's middle, then sliding
 /// past its right end: the hidden objects come into view (disocclusion).
@@ -156,7 +119,7 @@ fn assert_same_images(
 /// culled while the wall hides them.
 #[test]
 fn occlusion_culling_keeps_the_image_while_the_camera_uncovers_objects() {
-    let scene = common::scene_from_toml("occlusion_wall", WALL_SCENE);
+    let scene = common::scene_from_toml("occlusion_wall", &wall_scene());
     let cameras = sliding_cameras();
     let on = render_path(&scene, &cameras, W, H, true);
     let off = render_path(&scene, &cameras, W, H, false);

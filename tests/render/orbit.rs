@@ -10,6 +10,8 @@
 //! Also the golden image of the shipped animated Sponza scene.
 use crate::common;
 
+use common::toml::*;
+
 use glam::{Quat, Vec2, Vec3};
 use hybrid_rt::render::shading::{AaMode, Backend};
 use hybrid_rt::render::{FrameOutput, RenderSettings, Renderer};
@@ -35,64 +37,19 @@ const FLOOR_LIT: f32 = 0.8 * 3.0 / std::f32::consts::PI;
 const TOLERANCE_PX: f32 = 1.5;
 
 fn scene_text() -> String {
-    format!(
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = [2.4, 1.0, 4.2]
-target = [0.0, -0.1, 0.2]
-yfov_deg = 50
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 3.0
-
-[[material]]
-name = "mirror"
-base_color = [0.9, 0.9, 0.9]
-metallic = 1.0
-roughness = 0.0
-
-[[material]]
-name = "red"
-base_color = [0.0, 0.0, 0.0]
-emissive = [1.0, 0.0, 0.0]
-emissive_strength = 4.0
-roughness = 1.0
-
-[[material]]
-name = "floor"
-base_color = [0.8, 0.8, 0.8]
-roughness = 1.0
-
-[[object]]
-name = "mirror"
-primitive = "plane"
-size = [4.0, 3.0]
-rotation_deg = [90.0, 0.0, 0.0]
-translation = [0.0, 0.3, 0.0]
-material = "mirror"
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = [8.0, 8.0]
-translation = [0.0, {FLOOR_Y}, 4.0]
-material = "floor"
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = {BALL_RADIUS}
-translation = [{}, {}, {}]
-material = "red"
-orbit = {{ center = [{}, {}, {}], axis = [0.0, 0.0, 1.0], period = {PERIOD} }}
-"#,
-        START.x, START.y, START.z, CENTER.x, CENTER.y, CENTER.z
-    )
+    let orbit =
+        format!("{{ center = {}, axis = [0.0, 0.0, 1.0], period = {PERIOD} }}", shown3(CENTER.into()).toml());
+    scene_toml([
+        black_sky(),
+        camera([2.4, 1.0, 4.2], [0.0, -0.1, 0.2]).yfov(50),
+        directional([0.0, -1.0, 0.0], 3.0),
+        mirror("mirror", [0.9, 0.9, 0.9]),
+        emitter("red", [1.0, 0.0, 0.0]).set("emissive_strength", 4.0).roughness(1.0),
+        lambert("floor", [0.8, 0.8, 0.8]),
+        plane("mirror", [4.0, 3.0]).rot([90.0, 0.0, 0.0]).at([0.0, 0.3, 0.0]).material("mirror"),
+        plane("floor", [8.0, 8.0]).at([0.0, FLOOR_Y, 4.0]).material("floor"),
+        sphere("ball", BALL_RADIUS).at(shown3(START.into())).material("red").set("orbit", Raw(orbit)),
+    ])
 }
 
 /// Where the ball's centre is at time `t`, in closed form.

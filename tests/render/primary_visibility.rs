@@ -10,6 +10,7 @@
 //! and auto is raster in a renderer that does not measure (deterministic).
 use crate::common;
 
+use common::toml::*;
 use common::BACKENDS;
 use hybrid_rt::render::settings::PrimaryVisibility;
 use hybrid_rt::render::shading::{AaMode, Backend};
@@ -139,40 +140,13 @@ fn fence_scene() -> Scene {
         image::Rgba([230, 20, 20, a])
     });
     let path = common::scenes::masked_quad_gltf("primary_visibility_fence.gltf", 2.0, 2.0, &img);
-    let toml = format!(
-        r#"
-[environment]
-color = [0.1, 0.3, 1.0]
-
-[[camera]]
-position = [0.3, 0.2, 5.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 50
-
-[[light]]
-type = "directional"
-direction = [0.2, -1.0, -0.6]
-intensity = 3.0
-
-[[material]]
-name = "clay"
-base_color = [0.7, 0.6, 0.5]
-roughness = 0.8
-
-[[object]]
-name = "wall"
-primitive = "plane"
-size = [20.0, 20.0]
-material = "clay"
-translation = [0.0, 0.0, -2.0]
-rotation_deg = [90.0, 0.0, 0.0]
-
-[[object]]
-name = "fence"
-gltf = "{}"
-rotation_deg = [0.0, 20.0, 0.0]
-"#,
-        path.display()
-    );
+    let toml = scene_toml([
+        environment([0.1, 0.3, 1.0]),
+        camera([0.3, 0.2, 5.0], [0.0; 3]).yfov(50),
+        directional([0.2, -1.0, -0.6], 3.0),
+        clay(),
+        plane("wall", [20.0, 20.0]).material("clay").at([0.0, 0.0, -2.0]).rot([90.0, 0.0, 0.0]),
+        gltf("fence", path.display()).rot([0.0, 20.0, 0.0]),
+    ]);
     common::scene_from_toml("primary_visibility_fence", &toml)
 }

@@ -10,6 +10,9 @@
 //! - bad flags are named in the error.
 use crate::common;
 
+use common::scenes::plane_under_sphere;
+use common::toml::environment;
+
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -26,20 +29,17 @@ const R: f32 = 1.0;
 const D: f32 = 2.0;
 const SAMPLES: u32 = 64;
 
-/// The plane under a sphere (tests/common/scenes.rs), its floor replaced
-/// by a 21×21 vertex grid below.
-const SCENE: &str = common::scenes::PLANE_UNDER_SPHERE;
-
 fn cache_dir() -> PathBuf {
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("prt-cache");
     std::env::set_var(prt::CACHE_DIR_ENV, &d);
     d
 }
 
-/// The scene, its floor subdivided so the origin is a vertex, lit by a
-/// constant map of radiance 1.
+/// The plane under a sphere (tests/common/scenes.rs), its floor subdivided
+/// into a 21×21 vertex grid so the origin is a vertex, lit by a constant
+/// map of radiance 1.
 fn scene() -> Scene {
-    let mut scene = common::scene_from_toml("prt_plane_sphere", SCENE);
+    let mut scene = common::scene_from_toml("prt_plane_sphere", &plane_under_sphere());
     let floor =
         scene.meshes.iter_mut().flat_map(|m| &mut m.primitives).find(|p| p.vertices.len() == 4).unwrap();
     let v0 = floor.vertices[0];
@@ -299,8 +299,7 @@ fn scene_file_selects_the_ambient_mode() {
     assert_eq!(explicit.hdr, from_scene.hdr);
     assert_ne!(explicit.hdr, cli_sh.hdr);
 
-    let toml = SCENE
-        .replace("[[camera]]", "[environment]\ncolor = [1.0, 1.0, 1.0]\nambient = \"prt-foo\"\n\n[[camera]]");
+    let toml = environment([1.0, 1.0, 1.0]).set("ambient", "prt-foo").to_string() + &plane_under_sphere();
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("prt_bad_ambient.toml");

@@ -5,55 +5,28 @@
 //! minutes or silently dropping branches.
 use crate::common;
 
+use common::toml::*;
 use common::BACKENDS;
 use hybrid_rt::render::shading::Effects;
 use hybrid_rt::render::RenderSettings;
 
-const SLABS: &str = r#"
-[environment]
-color = [0.5, 0.6, 0.8]
-
-[[camera]]
-position = [0.3, 0.2, 3.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 40
-
-[[light]]
-type = "directional"
-direction = [-0.3, -1.0, -0.4]
-intensity = 2.0
-
-[[material]]
-name = "glass"
-roughness = 0.0
-transmission = 1.0
-ior = 1.5
-
-[[object]]
-name = "slab a"
-primitive = "cube"
-scale = [2.0, 2.0, 0.1]
-translation = [0.0, 0.0, 0.6]
-material = "glass"
-
-[[object]]
-name = "slab b"
-primitive = "cube"
-scale = [2.0, 2.0, 0.1]
-translation = [0.0, 0.0, 0.0]
-material = "glass"
-
-[[object]]
-name = "slab c"
-primitive = "cube"
-scale = [2.0, 2.0, 0.1]
-translation = [0.0, 0.0, -0.6]
-material = "glass"
-"#;
+/// Three glass slabs one behind the other.
+fn slabs() -> String {
+    let slab = |name, z| primitive(name, "cube").scale([2.0, 2.0, 0.1]).at([0.0, 0.0, z]).material("glass");
+    scene_toml([
+        environment([0.5, 0.6, 0.8]),
+        camera([0.3, 0.2, 3.0], [0.0; 3]).yfov(40),
+        directional([-0.3, -1.0, -0.4], 2.0),
+        material("glass").roughness(0.0).transmission(1.0).ior(1.5),
+        slab("slab a", 0.6),
+        slab("slab b", 0.0),
+        slab("slab c", -0.6),
+    ])
+}
 
 #[test]
 fn deep_glass_trees_are_cut_at_the_ray_budget_and_counted_on_every_backend() {
-    let scene = common::scene_from_toml("ray_budget_slabs", SLABS);
+    let scene = common::scene_from_toml("ray_budget_slabs", &slabs());
     for backend in BACKENDS {
         let deep = RenderSettings {
             backend,

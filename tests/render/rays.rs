@@ -13,6 +13,7 @@
 use crate::common;
 
 use common::scenes::{glass_occluder, shadow_scene, Frame};
+use common::toml::material;
 use hybrid_rt::app::{RayBench, RenderJob};
 use hybrid_rt::render::rays::sets::RayKind;
 use hybrid_rt::render::rays::Traversal;
@@ -114,7 +115,7 @@ fn assert_some_shadow_ray_tinted(reports: &[hybrid_rt::app::KindReport]) {
 
 #[test]
 fn compute_and_query_agree_through_glass() {
-    let toml = shadow_scene(Frame::IDENTITY, &glass_occluder([0.9, 0.5, 0.2]));
+    let toml = shadow_scene(Frame::IDENTITY, glass_occluder([0.9, 0.5, 0.2]));
     let scene = common::scene_from_toml("rays_glass", &toml);
     for traversal in [Traversal::Lane, Traversal::Packet] {
         let reports = agree(&scene, 32, 18, traversal);
@@ -131,7 +132,7 @@ fn compute_and_query_agree_through_glass() {
 fn compute_and_pipeline_agree() {
     let scene = Scene::load(&common::repo_path("assets/default.toml")).unwrap();
     agree_where(&scene, 64, 36, Traversal::Lane, Backend::Pipeline, true);
-    let toml = shadow_scene(Frame::IDENTITY, &glass_occluder([0.9, 0.5, 0.2]));
+    let toml = shadow_scene(Frame::IDENTITY, glass_occluder([0.9, 0.5, 0.2]));
     let scene = common::scene_from_toml("rays_glass_pipeline", &toml);
     let reports = agree_where(&scene, 32, 18, Traversal::Lane, Backend::Pipeline, true);
     assert_some_shadow_ray_tinted(&reports);
@@ -145,13 +146,7 @@ fn compute_and_pipeline_agree() {
 /// this fails with mismatches.)
 #[test]
 fn shadow_rays_pass_an_occluder_that_casts_no_shadow() {
-    let occluder = "
-[[material]]
-name = \"occluder\"
-base_color = [0.9, 0.2, 0.2]
-casts_shadows = false
-double_sided = true
-";
+    let occluder = material("occluder").base([0.9, 0.2, 0.2]).no_shadows().double_sided();
     let scene = common::scene_from_toml("rays_no_shadow", &shadow_scene(Frame::IDENTITY, occluder));
     for traversal in [Traversal::Lane, Traversal::Packet] {
         let reports = agree_where(&scene, 32, 18, traversal, Backend::Query, false);

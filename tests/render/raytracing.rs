@@ -4,6 +4,7 @@
 use crate::common;
 
 use common::scenes::*;
+use common::toml::*;
 
 use glam::Vec3;
 use hybrid_rt::render::shading::{AaMode, Effects, Mode};
@@ -98,7 +99,7 @@ fn check_square_shadow(frame: &FrameOutput, pred: &[Option<(Vec3, bool)>], what:
 
 #[test]
 fn square_occluder_casts_its_projected_shadow() {
-    let scene = common::scene_from_toml("shadow", &shadow_scene(Frame::IDENTITY, OPAQUE_OCCLUDER));
+    let scene = common::scene_from_toml("shadow", &shadow_scene(Frame::IDENTITY, opaque_occluder()));
     let pred = shadow_prediction(&scene);
     let frame = common::render_scene(&scene, W, H, &settings());
     let n = check_square_shadow(&frame, &pred, "origin");
@@ -122,7 +123,7 @@ fn square_occluder_casts_its_projected_shadow() {
 /// Shadow acne shows up as lit pixels off by > 2%, leaks as umbra light.
 #[test]
 fn shadow_is_robust_far_from_origin_tilted_and_at_extreme_scales_on_every_backend() {
-    let base = common::scene_from_toml("shadow_base", &shadow_scene(Frame::IDENTITY, OPAQUE_OCCLUDER));
+    let base = common::scene_from_toml("shadow_base", &shadow_scene(Frame::IDENTITY, opaque_occluder()));
     let pred = shadow_prediction(&base);
     let tilt = Vec3::new(23.0, 41.0, -17.0);
     let frames = [
@@ -137,7 +138,7 @@ fn shadow_is_robust_far_from_origin_tilted_and_at_extreme_scales_on_every_backen
     ];
     for backend in common::BACKENDS {
         for f in frames {
-            let scene = common::scene_from_toml("shadow_far", &shadow_scene(f, OPAQUE_OCCLUDER));
+            let scene = common::scene_from_toml("shadow_far", &shadow_scene(f, opaque_occluder()));
             let frame = common::render_scene(&scene, W, H, &RenderSettings { backend, ..settings() });
             check_square_shadow(&frame, &pred, &format!("{backend:?} {f:?}"));
         }
@@ -148,7 +149,7 @@ fn shadow_is_robust_far_from_origin_tilted_and_at_extreme_scales_on_every_backen
 fn colored_glass_pane_casts_a_colored_shadow() {
     let tint = [1.0f32, 0.3, 0.1];
     let glass = glass_occluder(tint);
-    let scene = common::scene_from_toml("glass_shadow", &shadow_scene(Frame::IDENTITY, &glass));
+    let scene = common::scene_from_toml("glass_shadow", &shadow_scene(Frame::IDENTITY, glass));
     let pred = shadow_prediction(&scene);
     let frame = common::render_scene(&scene, W, H, &settings());
     let mut checked = 0;
@@ -201,98 +202,46 @@ fn mirror_shows_the_wall_times_f0() {
     assert!(off.radiance(W / 2, H / 2)[0] < 0.01);
 }
 
+/// A red cube and a green ball, both glowing, under a blue sky, no light;
+/// a glass material of index `ior` for `extra` (more blocks) to use.
+fn backdrop(ior: f32, extra: impl IntoIterator<Item = Block>) -> String {
+    let blocks = [
+        environment([0.2, 0.3, 0.5]),
+        camera([0.0, 1.0, 5.0], [0.0, 1.0, 0.0]).yfov(50),
+        no_light(),
+        emitter("red", [1.0, 0.1, 0.1]),
+        emitter("green", [0.1, 1.0, 0.2]),
+        glass("glass", ior),
+        cube("a", 1.0).at([-1.0, 1.0, -2.0]).rot([20.0, 30.0, 0.0]).material("red"),
+        sphere("b", 0.7).at([1.0, 1.3, -2.5]).material("green"),
+    ];
+    scene_toml(blocks.into_iter().chain(extra))
+}
+
 /// Glass with IOR 1 bends nothing and reflects nothing: the image behind a
 /// slab of it, smooth or rough, is unchanged. A glass sphere of IOR 1.5 exercises total
 /// internal reflection at grazing angles; nothing may become NaN.
 #[test]
 fn ior_one_slab_is_invisible_and_glass_sphere_stays_finite() {
-    let backdrop = r#"
-[environment]
-color = [0.2, 0.3, 0.5]
-
-[[camera]]
-position = [0.0, 1.0, 5.0]
-target = [0.0, 1.0, 0.0]
-yfov_deg = 50
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "red"
-emissive = [1.0, 0.1, 0.1]
-base_color = [0.0, 0.0, 0.0]
-
-[[material]]
-name = "green"
-emissive = [0.1, 1.0, 0.2]
-base_color = [0.0, 0.0, 0.0]
-
-[[material]]
-name = "glass"
-base_color = [1.0, 1.0, 1.0]
-transmission = 1.0
-roughness = 0.0
-ior = IOR
-
-[[object]]
-name = "a"
-primitive = "cube"
-size = 1.0
-translation = [-1.0, 1.0, -2.0]
-rotation_deg = [20.0, 30.0, 0.0]
-material = "red"
-
-[[object]]
-name = "b"
-primitive = "sphere"
-radius = 0.7
-translation = [1.0, 1.3, -2.5]
-material = "green"
-"#;
-    let without = common::scene_from_toml("backdrop", &backdrop.replace("IOR", "1.0"));
+    let without = common::scene_from_toml("backdrop", &backdrop(1.0, []));
     // Smooth, and rough past MIRROR_ROUGHNESS ("frosted": no reflection
     // branch, the refraction alone carries what is behind it).
-    let slab = r#"
-[[material]]
-name = "frosted"
-base_color = [1.0, 1.0, 1.0]
-transmission = 1.0
-roughness = 0.6
-ior = 1.0
-
-[[object]]
-name = "slab"
-primitive = "cube"
-size = 1.0
-scale = [3.0, 2.0, 0.2]
-translation = [0.0, 1.0, 1.0]
-material = "MATERIAL"
-"#;
+    let slab = |material| {
+        [
+            glass("frosted", 1.0).roughness(0.6),
+            cube("slab", 1.0).scale([3.0, 2.0, 0.2]).at([0.0, 1.0, 1.0]).material(material),
+        ]
+    };
     let a = common::render_scene(&without, W, H, &settings());
     for material in ["glass", "frosted"] {
-        let with = common::scene_from_toml(
-            "slab",
-            &(backdrop.replace("IOR", "1.0") + &slab.replace("MATERIAL", material)),
-        );
+        let with = common::scene_from_toml("slab", &backdrop(1.0, slab(material)));
         let b = common::render_scene(&with, W, H, &settings());
         let psnr = hybrid_rt::image_diff::psnr_rgb8(&a.ldr, &b.ldr, 4, None);
         eprintln!("IOR-1 {material} slab: PSNR {psnr:.1} dB against the scene without it");
         assert!(psnr >= 40.0, "IOR-1 {material} slab changed the image: PSNR {psnr:.1} dB");
     }
 
-    let sphere = r#"
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 1.0
-slices = 48
-stacks = 24
-translation = [0.0, 1.0, 1.0]
-material = "glass"
-"#;
+    let ball = sphere("ball", 1.0).slices(48, 24).at([0.0, 1.0, 1.0]).material("glass");
     // An IOR-1 sphere, seen edge-on at its silhouette too, where the angle
     // of incidence is grazing: no Fresnel reflection, no bending, no total
     // internal reflection (which rounding used to report there), no
@@ -300,23 +249,13 @@ material = "glass"
     // backend.
     // A glowing wall behind everything: a ray wrongly reflected at the
     // silhouette sees the (different) environment instead.
-    let wall = r#"
-[[material]]
-name = "wall"
-emissive = [0.9, 0.8, 0.1]
-base_color = [0.0, 0.0, 0.0]
-
-[[object]]
-name = "wall"
-primitive = "plane"
-size = [40.0, 40.0]
-translation = [0.0, 0.0, -6.0]
-rotation_deg = [90.0, 0.0, 0.0]
-material = "wall"
-"#;
-    let walled = backdrop.replace("IOR", "1.0") + wall;
-    let without_ball = common::scene_from_toml("ior1_backdrop", &walled);
-    let invisible = common::scene_from_toml("ior1_ball", &(walled + sphere));
+    let wall = [
+        emitter("wall", [0.9, 0.8, 0.1]),
+        plane("wall", [40.0, 40.0]).at([0.0, 0.0, -6.0]).rot([90.0, 0.0, 0.0]).material("wall"),
+    ];
+    let without_ball = common::scene_from_toml("ior1_backdrop", &backdrop(1.0, wall.clone()));
+    let invisible =
+        common::scene_from_toml("ior1_ball", &backdrop(1.0, wall.into_iter().chain([ball.clone()])));
     for backend in common::BACKENDS {
         let s = RenderSettings { backend, ..settings() };
         let a = common::render_scene(&without_ball, W, H, &s);
@@ -326,7 +265,7 @@ material = "wall"
         assert!(max <= 2 && changed == 0.0, "{backend:?}: the IOR-1 sphere is visible: max {max}/255");
     }
 
-    let glass = common::scene_from_toml("glass_ball", &(backdrop.replace("IOR", "1.5") + sphere));
+    let glass = common::scene_from_toml("glass_ball", &backdrop(1.5, [ball]));
     let g = common::render_scene(&glass, W, H, &settings());
     let (max, changed) = hybrid_rt::image_diff::diff_stats(&a.ldr, &g.ldr, 4, 8);
     assert!(max > 30 && changed > 0.01, "the glass ball refracts nothing ({max}, {changed})");
@@ -334,7 +273,7 @@ material = "wall"
 
 #[test]
 fn facing_mirrors_terminate_at_max_depth() {
-    let scene = common::scene_from_toml("mirrors", FACING_MIRRORS);
+    let scene = common::scene_from_toml("mirrors", &facing_mirrors());
     let mut images = Vec::new();
     for depth in [2u32, 8, 64] {
         let t = std::time::Instant::now();
@@ -370,7 +309,7 @@ fn edge_mask(ids: &FrameOutput) -> Vec<bool> {
 
 #[test]
 fn hybrid_matches_pure_ray_tracing() {
-    let scene = common::scene_from_toml("agreement", AGREEMENT);
+    let scene = common::scene_from_toml("agreement", &agreement());
     let hybrid = common::render_scene(&scene, W, H, &settings());
     let rt = common::render_scene(&scene, W, H, &RenderSettings { mode: Mode::Rt, ..settings() });
     let ids =
@@ -394,47 +333,15 @@ fn hybrid_matches_pure_ray_tracing() {
 fn total_internal_reflection_outside_the_critical_angle() {
     let scene = common::scene_from_toml(
         "snell_window",
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = [0.0, 0.0, 0.0]
-target = [0.0, 1.0, 0.0]
-yfov_deg = 120
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "glass"
-base_color = [1.0, 1.0, 1.0]
-transmission = 1.0
-roughness = 0.0
-ior = 1.5
-double_sided = true
-
-[[material]]
-name = "ceiling"
-base_color = [0.0, 0.0, 0.0]
-emissive = [1.0, 1.0, 1.0]
-
-[[object]]
-name = "block"
-primitive = "cube"
-size = 20.0
-material = "glass"
-
-[[object]]
-name = "ceiling"
-primitive = "plane"
-size = [400.0, 400.0]
-translation = [0.0, 11.0, 0.0]
-rotation_deg = [180.0, 0.0, 0.0]
-material = "ceiling"
-"#,
+        &scene_toml([
+            black_sky(),
+            camera([0.0; 3], [0.0, 1.0, 0.0]).yfov(120),
+            no_light(),
+            glass("glass", 1.5).double_sided(),
+            emitter("ceiling", [1.0; 3]),
+            cube("block", 20.0).material("glass"),
+            plane("ceiling", [400.0, 400.0]).at([0.0, 11.0, 0.0]).rot([180.0, 0.0, 0.0]).material("ceiling"),
+        ]),
     );
     let frame = common::render_scene(&scene, W, H, &settings());
     let critical = (1.0f32 / 1.5).asin().to_degrees();

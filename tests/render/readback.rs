@@ -3,40 +3,28 @@
 //! shears the edge from row to row, padding changes the buffer length.
 use crate::common;
 
+use common::toml::*;
+
 use hybrid_rt::render::RenderSettings;
 
-const SCENE: &str = r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = [0.013, 0.0, 5.0]
-target = [0.013, 0.0, 0.0]
-yfov_deg = 40
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "glow"
-base_color = [0.0, 0.0, 0.0]
-emissive = [1.0, 1.0, 1.0]
-
-# Covers x < 0 of the plane z = 0 (the plane primitive lies in XZ, facing +Y).
-[[object]]
-name = "left half"
-primitive = "plane"
-size = [20000.0, 20000.0]
-translation = [-10000.0, 0.0, 0.0]
-rotation_deg = [90.0, 0.0, 0.0]
-material = "glow"
-"#;
+/// Glowing white on black: a plane covering x < 0 of z = 0.
+fn half_plane() -> String {
+    scene_toml([
+        black_sky(),
+        camera([0.013, 0.0, 5.0], [0.013, 0.0, 0.0]).yfov(40),
+        no_light(),
+        emitter("glow", [1.0; 3]),
+        // The plane primitive lies in XZ, facing +Y: turned to face +Z.
+        plane("left half", [20000.0, 20000.0])
+            .at([-10000.0, 0.0, 0.0])
+            .rot([90.0, 0.0, 0.0])
+            .material("glow"),
+    ])
+}
 
 #[test]
 fn odd_sizes_read_back_without_padding_or_shear() {
-    let scene = common::scene_from_toml("half_plane", SCENE);
+    let scene = common::scene_from_toml("half_plane", &half_plane());
     for (w, h) in [(161u32, 91u32), (37, 23), (257, 3), (1, 1)] {
         let frame = common::render_scene(&scene, w, h, &RenderSettings::default());
         assert_eq!(frame.ldr.len(), (w * h * 4) as usize, "{w}x{h}: LDR buffer size");

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 
 use ash::vk;
 use common::probe::{self, Case};
+use common::toml::*;
 use hybrid_rt::gpu::shared::{
     HIST_BINS, HIST_MAX_LOG2, HIST_MIN_LOG2, LOG_AVERAGE_DELTA, TONEMAP_ACES, TONEMAP_NONE, TONEMAP_REINHARD,
     TONEMAP_REINHARD_WHITE,
@@ -133,22 +134,9 @@ fn random_hdr(name: &str, w: u32, h: u32) -> PathBuf {
     })
 }
 
-/// A scene that is only its environment (`env`: a TOML `[environment]` body).
-fn sky(name: &str, env: &str) -> Scene {
-    common::scene_from_toml(
-        name,
-        &format!(
-            r#"
-[environment]
-{env}
-
-[[camera]]
-position = [0.0, 0.0, 0.0]
-target = [0.0, 0.3, -1.0]
-yfov_deg = 100
-"#
-        ),
-    )
+/// A scene that is only its environment `env`.
+fn sky(name: &str, env: Block) -> Scene {
+    common::scene_from_toml(name, &scene_toml([env, camera([0.0; 3], [0.0, 0.3, -1.0]).yfov(100)]))
 }
 
 /// Auto exposure `mode`, no anti-aliasing (the checks read exact pixels).
@@ -171,7 +159,7 @@ fn state(frame: &FrameOutput) -> ExposureState {
 #[test]
 fn log_average_and_histogram_match_a_cpu_computation_on_the_same_pixels() {
     let map = random_hdr("tonemap_random", 256, 128);
-    let scene = sky("tonemap_random", &format!("hdr = \"{}\"", map.display()));
+    let scene = sky("tonemap_random", environment_hdr(map.display()));
     let (w, h) = (203, 117);
     let frame = common::render_scene(&scene, w, h, &auto(AutoExposure::LogAverage));
     let s = state(&frame);
@@ -224,29 +212,13 @@ fn eye_adaptation_through_the_renderer_is_frame_rate_independent() {
     // over one second at 30 and at 120 fps and must land on the same value.
     let scene = common::scene_from_toml(
         "tonemap_adapt",
-        r#"
-[environment]
-color = [2.0, 2.0, 2.0]
-
-[[camera]]
-position = [0.0, 1.0, 0.0]
-target = [0.0, 2.0, -1.0]
-
-[[camera]]
-position = [0.0, 1.0, 0.0]
-target = [0.0, 0.0, -0.2]
-
-[[material]]
-name = "floor"
-base_color = [0.05, 0.05, 0.05]
-roughness = 1.0
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = [100.0, 100.0]
-material = "floor"
-"#,
+        &scene_toml([
+            environment([2.0, 2.0, 2.0]),
+            camera([0.0, 1.0, 0.0], [0.0, 2.0, -1.0]),
+            camera([0.0, 1.0, 0.0], [0.0, 0.0, -0.2]),
+            lambert("floor", [0.05, 0.05, 0.05]),
+            plane("floor", [100.0, 100.0]).material("floor"),
+        ]),
     );
     let run = |fps: u32| -> Vec<ExposureState> {
         let ctx = common::validated_context();
@@ -321,37 +293,14 @@ fn ldr(f: &FrameOutput, x: u32, y: u32) -> [u8; 4] {
 /// A mirror sphere under a sky of radiance `sky` and a sun of `sun`: the
 /// reflections are traced, so the backend matters.
 fn mirror_under(name: &str, sky: f32, sun: f32) -> Scene {
-    common::scene_from_toml(
-        name,
-        &format!(
-            r#"
-[environment]
-color = [{sky:e}, {sky:e}, {sky:e}]
-
-[[camera]]
-position = [0.0, 0.0, 4.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 50
-
-[[light]]
-type = "directional"
-direction = [0.3, -1.0, -0.2]
-intensity = {sun:e}
-
-[[material]]
-name = "mirror"
-base_color = [0.9, 0.9, 0.9]
-metallic = 1.0
-roughness = 0.0
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 1.0
-material = "mirror"
-"#
-        ),
-    )
+    let toml = scene_toml([
+        environment([sky, sky, sky]),
+        camera([0.0, 0.0, 4.0], [0.0; 3]).yfov(50),
+        directional([0.3, -1.0, -0.2], sun),
+        mirror("mirror", [0.9, 0.9, 0.9]),
+        sphere("ball", 1.0).material("mirror"),
+    ]);
+    common::scene_from_toml(name, &toml)
 }
 
 #[test]

@@ -3,6 +3,8 @@
 //! shared vertices and edges; grazing and axis-aligned rays produce no NaN.
 use crate::common;
 
+use common::toml::*;
+
 use glam::Vec3;
 use hybrid_rt::render::shading::{Backend, Mode};
 use hybrid_rt::render::RenderSettings;
@@ -11,34 +13,20 @@ use hybrid_rt::render::RenderSettings;
 const W: u32 = 161;
 const H: u32 = 91;
 
-fn scene(object: &str, camera: [f32; 3]) -> String {
-    format!(
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
+/// `object` (named "closed mesh"), glowing white on black, seen from
+/// `camera_at` (written with `{}`: 3.0 as `3`) looking at the origin.
+fn scene(object: Block, camera_at: [f32; 3]) -> String {
+    scene_toml([
+        black_sky(),
+        camera(shown3(camera_at), [0.0; 3]).yfov(40),
+        no_light(),
+        emitter("glow", [1.0; 3]),
+        object.material("glow"),
+    ])
+}
 
-[[camera]]
-position = [{}, {}, {}]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 40
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "glow"
-base_color = [0.0, 0.0, 0.0]
-emissive = [1.0, 1.0, 1.0]
-
-[[object]]
-name = "closed mesh"
-material = "glow"
-{object}
-"#,
-        camera[0], camera[1], camera[2]
-    )
+fn unit_cube() -> Block {
+    cube("closed mesh", 1.0)
 }
 
 fn rt(backend: Backend) -> RenderSettings {
@@ -78,8 +66,7 @@ fn hits_sphere(o: Vec3, d: Vec3, r: f32) -> bool {
 fn rays_through_shared_vertices_and_edges_of_a_cube_hit() {
     // Looking straight at a corner: the centre ray passes through the shared
     // vertex, and the three shared edges run through the image centre.
-    let s =
-        common::scene_from_toml("cube_corner", &scene("primitive = \"cube\"\nsize = 1.0", [3.0, 3.0, 3.0]));
+    let s = common::scene_from_toml("cube_corner", &scene(unit_cube(), [3.0, 3.0, 3.0]));
     let cam = &s.cameras[0];
     for backend in [Backend::Compute, Backend::Query] {
         let f = common::render_scene(&s, W, H, &rt(backend));
@@ -97,10 +84,7 @@ fn a_tessellated_sphere_has_no_cracks() {
     let (slices, stacks) = (24u32, 12u32);
     let s = common::scene_from_toml(
         "sphere_cracks",
-        &scene(
-            &format!("primitive = \"sphere\"\nradius = 1.0\nslices = {slices}\nstacks = {stacks}"),
-            [0.0, 0.3, 4.0],
-        ),
+        &scene(sphere("closed mesh", 1.0).slices(slices, stacks), [0.0, 0.3, 4.0]),
     );
     let f = common::render_scene(&s, W, H, &rt(Backend::Compute));
     // The polyhedron contains the sphere of radius cos(pi/slices) * cos(pi/stacks).
@@ -116,7 +100,7 @@ fn a_tessellated_sphere_has_no_cracks() {
 fn axis_aligned_and_grazing_rays_stay_finite() {
     // Camera on the x axis looking down -x at an axis-aligned box: rays with
     // zero y/z components at the centre, and rays grazing the box faces.
-    let s = common::scene_from_toml("axis_box", &scene("primitive = \"cube\"\nsize = 1.0", [4.0, 0.0, 0.0]));
+    let s = common::scene_from_toml("axis_box", &scene(unit_cube(), [4.0, 0.0, 0.0]));
     for backend in [Backend::Compute, Backend::Query, Backend::Pipeline] {
         let f = common::render_scene(&s, W, H, &rt(backend));
         assert!(f.radiance(W / 2, H / 2)[0] > 0.5, "{backend:?}: axis-aligned centre ray missed the box");
@@ -137,8 +121,7 @@ fn axis_parallel_rays_in_the_face_planes_of_a_cube_hit() {
     use hybrid_rt::render::rays::{BenchRay, Traversal};
     use hybrid_rt::render::shading::Backend;
 
-    let s =
-        common::scene_from_toml("cube_planes", &scene("primitive = \"cube\"\nsize = 1.0", [4.0, 0.0, 0.0]));
+    let s = common::scene_from_toml("cube_planes", &scene(unit_cube(), [4.0, 0.0, 0.0]));
     let ctx = common::validated_context();
     let bench =
         RayBench::with_traversal(&ctx, &s, Traversal::Lane, Backend::Query).expect("set up both tracers");

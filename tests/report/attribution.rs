@@ -25,6 +25,8 @@
 //!   debug view.
 use crate::common;
 
+use common::toml::*;
+
 use common::Bench;
 use glam::Vec3;
 use hybrid_rt::app::EnvOverrides;
@@ -39,51 +41,15 @@ const L: f32 = 0.5;
 /// A floor and a sphere of radius 0.5 centred 1.0 above the origin, seen
 /// from above and aside; `sun` a directional light straight down.
 fn scene(name: &str, sphere_material: &str, sun: f32, sky: f32) -> Scene {
-    let toml = format!(
-        r#"
-[[camera]]
-position = [0.0, 1.6, 2.4]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 40
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = {sun}
-
-[[material]]
-name = "floor"
-base_color = [0.8, 0.8, 0.8]
-roughness = 1.0
-ior = 1.0
-
-[[material]]
-name = "black"
-base_color = [0.0, 0.0, 0.0]
-roughness = 1.0
-ior = 1.0
-
-[[material]]
-name = "glass"
-base_color = [1.0, 1.0, 1.0]
-roughness = 0.0
-transmission = 1.0
-ior = 1.5
-
-[[object]]
-name = "ground"
-primitive = "plane"
-size = [40.0, 40.0]
-material = "floor"
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 0.5
-translation = [0.0, 1.0, 0.0]
-material = "{sphere_material}"
-"#
-    );
+    let toml = scene_toml([
+        camera([0.0, 1.6, 2.4], [0.0; 3]).yfov(40),
+        directional([0.0, -1.0, 0.0], shown(sun)),
+        lambert("floor", [0.8; 3]).ior(1.0),
+        lambert("black", [0.0; 3]).ior(1.0),
+        glass("glass", 1.5),
+        plane("ground", [40.0, 40.0]).material("floor"),
+        sphere("ball", 0.5).at([0.0, 1.0, 0.0]).material(sphere_material),
+    ]);
     let map = common::write_hdr(&format!("{name}_sky"), 32, 16, |_, _| [sky; 3]);
     let mut scene = common::scene_from_toml(name, &toml);
     EnvOverrides { map: Some((map, EnvLayout::Equirect)), ..Default::default() }.apply(&mut scene).unwrap();

@@ -34,6 +34,8 @@
 //!   values differ by over 1% (lavapipe: 3e-7, none).
 use crate::common;
 
+use common::toml::*;
+
 use ash::vk::Extent2D;
 use hybrid_rt::app::EnvOverrides;
 use hybrid_rt::render::shading::{AaMode, Backend, Mode};
@@ -83,67 +85,20 @@ fn mean(f: &FrameOutput, c: usize, keep: impl Fn(u32, u32) -> bool) -> f64 {
     s / n as f64
 }
 
-const NO_LIGHT: &str = r#"
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-"#;
-
 #[test]
 fn white_furnace_objects_vanish_in_a_constant_sky() {
     let l = 0.5f32;
-    let toml = format!(
-        r#"
-[environment]
-color = [{l}, {l}, {l}]
-{NO_LIGHT}
-[[camera]]
-position = [0.0, 0.0, 6.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 30
-
-[[material]]
-name = "lambert"
-base_color = [1.0, 1.0, 1.0]
-roughness = 1.0
-ior = 1.0
-
-[[material]]
-name = "mirror"
-base_color = [1.0, 1.0, 1.0]
-metallic = 1.0
-roughness = 0.0
-
-[[material]]
-name = "glass"
-base_color = [1.0, 1.0, 1.0]
-roughness = 0.0
-transmission = 1.0
-ior = 1.5
-
-[[object]]
-name = "lambert"
-primitive = "sphere"
-radius = 0.7
-translation = [-1.6, 0.0, 0.0]
-material = "lambert"
-
-[[object]]
-name = "mirror"
-primitive = "sphere"
-radius = 0.7
-translation = [0.0, 0.0, 0.0]
-material = "mirror"
-
-[[object]]
-name = "glass"
-primitive = "sphere"
-radius = 0.7
-translation = [1.6, 0.0, 0.0]
-material = "glass"
-"#
-    );
+    let toml = scene_toml([
+        environment([l, l, l]),
+        no_light(),
+        camera([0.0, 0.0, 6.0], [0.0; 3]).yfov(30),
+        lambert("lambert", [1.0; 3]).ior(1.0),
+        mirror("mirror", [1.0; 3]),
+        glass("glass", 1.5),
+        sphere("lambert", 0.7).at([-1.6, 0.0, 0.0]).material("lambert"),
+        sphere("mirror", 0.7).at([0.0; 3]).material("mirror"),
+        sphere("glass", 0.7).at([1.6, 0.0, 0.0]).material("glass"),
+    ]);
     let scene = common::scene_from_toml("path_white_furnace", &toml);
     let f = &converged(&scene, W, H, &[path(256, Backend::Compute)])[0];
     let cam = &scene.cameras[0];
@@ -167,30 +122,13 @@ material = "glass"
 
 /// A closed shell (the camera inside a sphere) of albedo `A` emitting `E`.
 fn shell() -> Scene {
-    let toml = format!(
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-{NO_LIGHT}
-[[camera]]
-position = [0.3, 0.2, 0.5]
-target = [-1.0, -0.3, -2.0]
-yfov_deg = 70
-
-[[material]]
-name = "shell"
-base_color = [0.5, 0.5, 0.5]
-roughness = 1.0
-ior = 1.0
-emissive = [1.0, 1.0, 1.0]
-
-[[object]]
-name = "shell"
-primitive = "sphere"
-radius = 3.0
-material = "shell"
-"#
-    );
+    let toml = scene_toml([
+        black_sky(),
+        no_light(),
+        camera([0.3, 0.2, 0.5], [-1.0, -0.3, -2.0]).yfov(70),
+        lambert("shell", [0.5; 3]).ior(1.0).emissive([1.0; 3]),
+        sphere("shell", 3.0).material("shell"),
+    ]);
     common::scene_from_toml("path_closed_furnace", &toml)
 }
 
@@ -228,51 +166,25 @@ fn srgb_byte(byte: u8) -> f32 {
     }
 }
 
-/// A plane of `material` (its keys; `BASE` for an exactly stored base
-/// colour) lit by a sun, a point light and a spot under a black sky, seen
+/// A plane of a material (`finish` of one whose base colour is stored
+/// exactly) lit by a sun, a point light and a spot under a black sky, seen
 /// from above: one bounce, nothing else.
-fn lit_plane(material: &str) -> Scene {
+fn lit_plane(finish: fn(Block) -> Block) -> Scene {
     let base = [204, 180, 160].map(srgb_byte);
-    let toml = r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = [0.0, 3.0, 2.5]
-target = [0.0, 0.0, -0.3]
-yfov_deg = 45
-
-[[light]]
-type = "directional"
-direction = [-0.3, -1.0, -0.5]
-intensity = 1.5
-
-[[light]]
-type = "point"
-position = [0.8, 1.2, 0.2]
-color = [1.0, 0.6, 0.3]
-intensity = 3.0
-
-[[light]]
-type = "spot"
-position = [-1.0, 2.0, 0.5]
-target = [-0.5, 0.0, -0.5]
-inner_cone_deg = 10
-outer_cone_deg = 35
-color = [0.3, 0.5, 1.0]
-intensity = 20.0
-
-[[material]]
-name = "glossy"
-MATERIAL
-
-[[object]]
-name = "ground"
-primitive = "plane"
-size = [40.0, 40.0]
-material = "glossy"
-"#;
-    let toml = toml.replace("MATERIAL", material).replace("BASE", &format!("{base:?}"));
+    let toml = scene_toml([
+        black_sky(),
+        camera([0.0, 3.0, 2.5], [0.0, 0.0, -0.3]).yfov(45),
+        directional([-0.3, -1.0, -0.5], 1.5),
+        point([0.8, 1.2, 0.2], 3.0).color([1.0, 0.6, 0.3]),
+        light("spot")
+            .set("position", [-1.0, 2.0, 0.5])
+            .set("target", [-0.5, 0.0, -0.5])
+            .cones(10, 35)
+            .color([0.3, 0.5, 1.0])
+            .intensity(20.0),
+        finish(material("glossy").base(base)),
+        plane("ground", [40.0, 40.0]).material("glossy"),
+    ]);
     common::scene_from_toml("path_lit_plane", &toml)
 }
 
@@ -280,13 +192,8 @@ material = "glossy"
 fn next_event_estimation_matches_the_exact_direct_light_of_the_hybrid_frame() {
     // A glossy dielectric (GGX over Lambert), and a rough metal where the
     // GGX lobe is all there is (its shadowing term matters most).
-    let materials = [
-        ("glossy dielectric", "base_color = BASE\nroughness = 0.5"),
-        ("rough metal", "base_color = BASE\nmetallic = 1.0\nroughness = 0.8"),
-    ];
-    for (what, material) in materials {
-        direct_light_agrees(&lit_plane(material), what);
-    }
+    direct_light_agrees(&lit_plane(|m| m.roughness(0.5)), "glossy dielectric");
+    direct_light_agrees(&lit_plane(|m| m.metallic(1.0).roughness(0.8)), "rough metal");
 }
 
 fn direct_light_agrees(scene: &Scene, what: &str) {
@@ -327,28 +234,12 @@ fn direct_light_agrees(scene: &Scene, what: &str) {
 fn environment_importance_sampling_agrees_with_the_cosine_sampled_reference() {
     // A white Lambert sphere filling the frame under a rotated HDR map: the
     // ambient reference (cosine samples, visibility) is exact there too.
-    let toml = format!(
-        r#"{NO_LIGHT}
-[[camera]]
-position = [0.0, 0.0, 2.2]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 30
-
-[[material]]
-name = "white"
-base_color = [0.8, 0.8, 0.8]
-roughness = 1.0
-ior = 1.0
-
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 1.0
-slices = 128
-stacks = 64
-material = "white"
-"#
-    );
+    let toml = scene_toml([
+        no_light(),
+        camera([0.0, 0.0, 2.2], [0.0; 3]).yfov(30),
+        lambert("white", [0.8; 3]).ior(1.0),
+        sphere("ball", 1.0).slices(128, 64).material("white"),
+    ]);
     let mut scene = common::scene_from_toml("path_env_sampling", &toml);
     let map = common::repo_path("assets/potsdamer_platz_512.hdr");
     EnvOverrides { map: Some((map, EnvLayout::Equirect)), rotation_deg: Some(57.0), intensity: Some(1.0) }
@@ -380,54 +271,20 @@ material = "white"
 }
 
 /// A floor, a clear glass sphere above it and a sun straight down, black sky.
-fn glass_over_floor(extra: &str) -> Scene {
-    let toml = format!(
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-
-[[camera]]
-position = [0.0, 3.5, 3.5]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 40
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 2.0
-
-[[material]]
-name = "floor"
-base_color = [0.7, 0.7, 0.7]
-roughness = 1.0
-ior = 1.0
-
-[[material]]
-name = "glass"
-base_color = [1.0, 1.0, 1.0]
-roughness = 0.0
-transmission = 1.0
-ior = 1.5
-
-[[material]]
-name = "metal"
-base_color = [0.9, 0.7, 0.4]
-metallic = 1.0
-roughness = 0.4
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = [40.0, 40.0]
-material = "floor"
-
-[[object]]
-name = "glass"
-primitive = "sphere"
-radius = 0.6
-translation = [0.0, 1.0, 0.0]
-material = "glass"
-{extra}"#
+fn glass_over_floor(extra: Option<Block>) -> Scene {
+    let toml = scene_toml(
+        [
+            black_sky(),
+            camera([0.0, 3.5, 3.5], [0.0; 3]).yfov(40),
+            directional([0.0, -1.0, 0.0], 2.0),
+            lambert("floor", [0.7; 3]).ior(1.0),
+            glass("glass", 1.5),
+            mirror("metal", [0.9, 0.7, 0.4]).roughness(0.4),
+            plane("floor", [40.0, 40.0]).material("floor"),
+            sphere("glass", 0.6).at([0.0, 1.0, 0.0]).material("glass"),
+        ]
+        .into_iter()
+        .chain(extra),
     );
     common::scene_from_toml("path_glass_floor", &toml)
 }
@@ -450,7 +307,7 @@ fn pixel_of(scene: &Scene, p: glam::Vec3) -> (u32, u32) {
 
 #[test]
 fn glass_casts_a_dark_shadow_in_path_mode() {
-    let scene = glass_over_floor("");
+    let scene = glass_over_floor(None);
     let hybrid = RenderSettings { aa: AaMode::None, backend: Backend::Compute, ..Default::default() };
     let frames = converged(&scene, W, H, &[hybrid, path(16, Backend::Compute)]);
     // Inside the shadow (a disc of radius 0.6 under the sphere), on its
@@ -472,15 +329,8 @@ fn glass_casts_a_dark_shadow_in_path_mode() {
 
 #[test]
 fn backends_trace_the_same_paths() {
-    let metal = r#"
-[[object]]
-name = "metal"
-primitive = "sphere"
-radius = 0.5
-translation = [1.3, 0.5, 0.3]
-material = "metal"
-"#;
-    let mut scene = glass_over_floor(metal);
+    let metal = sphere("metal", 0.5).at([1.3, 0.5, 0.3]).material("metal");
+    let mut scene = glass_over_floor(Some(metal));
     let map = common::repo_path("assets/potsdamer_platz_512.hdr");
     EnvOverrides { map: Some((map, EnvLayout::Equirect)), ..Default::default() }.apply(&mut scene).unwrap();
     let runs: Vec<RenderSettings> = common::BACKENDS.iter().map(|&b| path(8, b)).collect();
@@ -546,42 +396,15 @@ fn path_mode_usage_errors_name_the_flag() {
 /// covers a quarter of the cosine lobe: per path sd/mean ~ 1.8).
 #[test]
 fn emissive_surfaces_are_sampled_as_lights() {
-    let toml = format!(
-        r#"
-[environment]
-color = [0.0, 0.0, 0.0]
-{NO_LIGHT}
-[[camera]]
-position = [0.0, 0.5, 0.0]
-target = [0.0, 0.0, 0.0]
-up = [0.0, 0.0, -1.0]
-yfov_deg = 8
-
-[[material]]
-name = "floor"
-base_color = [0.5, 0.5, 0.5]
-roughness = 1.0
-ior = 1.0
-
-[[material]]
-name = "lamp"
-base_color = [0.0, 0.0, 0.0]
-emissive = [2.0, 2.0, 2.0]
-
-[[object]]
-name = "floor"
-primitive = "plane"
-size = [40.0, 40.0]
-material = "floor"
-
-[[object]]
-name = "lamp"
-primitive = "plane"
-size = [1.0, 1.0]
-translation = [0.0, 1.0, 0.0]
-material = "lamp"
-"#
-    );
+    let toml = scene_toml([
+        black_sky(),
+        no_light(),
+        camera([0.0, 0.5, 0.0], [0.0; 3]).up([0.0, 0.0, -1.0]).yfov(8),
+        lambert("floor", [0.5; 3]).ior(1.0),
+        emitter("lamp", [2.0; 3]),
+        plane("floor", [40.0, 40.0]).material("floor"),
+        plane("lamp", [1.0, 1.0]).at([0.0, 1.0, 0.0]).material("lamp"),
+    ]);
     let scene = common::scene_from_toml("path_emissive_square", &toml);
     let frames = converged(&scene, W, H, &[path(16, Backend::Compute), path(256, Backend::Compute)]);
     let (x, y) = (0.5f64, 0.5f64);
@@ -607,33 +430,13 @@ material = "lamp"
 fn volume_attenuation_follows_beer_lambert_in_both_modes() {
     let l = 0.5f32;
     let c = [0.5f32, 0.8, 1.0];
-    let toml = format!(
-        r#"
-[environment]
-color = [{l}, {l}, {l}]
-{NO_LIGHT}
-[[camera]]
-position = [0.0, 0.0, 4.0]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 30
-
-[[material]]
-name = "tinted"
-base_color = [1.0, 1.0, 1.0]
-roughness = 0.0
-transmission = 1.0
-ior = 1.0
-attenuation_color = [{}, {}, {}]
-attenuation_distance = 1.0
-
-[[object]]
-name = "cube"
-primitive = "cube"
-size = 1.0
-material = "tinted"
-"#,
-        c[0], c[1], c[2]
-    );
+    let toml = scene_toml([
+        environment([l, l, l]),
+        no_light(),
+        camera([0.0, 0.0, 4.0], [0.0; 3]).yfov(30),
+        glass("tinted", 1.0).set("attenuation_color", shown3(c)).set("attenuation_distance", 1.0),
+        cube("cube", 1.0).material("tinted"),
+    ]);
     let scene = common::scene_from_toml("path_volume", &toml);
     let cam = &scene.cameras[0];
     let hybrid = RenderSettings { aa: AaMode::None, ..Default::default() };

@@ -20,7 +20,7 @@ fn prt_report_rows_and_shadowed_beats_unshadowed() {
     std::env::set_var(hybrid_rt::prt::CACHE_DIR_ENV, tmp.join("prt-report-cache"));
     let scene = tmp.join("scenes").join("prt_report_plane_sphere.toml");
     std::fs::create_dir_all(scene.parent().unwrap()).unwrap();
-    std::fs::write(&scene, common::scenes::PLANE_UNDER_SPHERE).unwrap();
+    std::fs::write(&scene, common::scenes::plane_under_sphere()).unwrap();
     let map = common::write_hdr("prt_report_constant", 32, 16, |_, _| [1.0; 3]);
     let job = RenderJob {
         env: EnvOverrides { map: Some((map, EnvLayout::Equirect)), ..Default::default() },

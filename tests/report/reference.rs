@@ -27,6 +27,7 @@
 use crate::common;
 
 use ash::vk::Extent2D;
+use common::toml::*;
 use common::Bench;
 use glam::Vec3;
 use hybrid_rt::app::EnvOverrides;
@@ -37,56 +38,24 @@ use hybrid_rt::scene::{Camera, EnvLayout, Scene};
 const L: [f32; 3] = [0.6, 0.45, 0.3];
 
 /// A ground plane, a sphere of radius 0.5 centred 1.0 above the origin
-/// (`{sphere}` empty: no sphere), a camera looking down at the origin, no
+/// (`sphere` false: no sphere), a camera looking down at the origin, no
 /// light: the frame is emission-free ambient alone.
-fn scene_toml(sphere: bool) -> String {
-    let ball = if sphere {
-        r#"
-[[object]]
-name = "ball"
-primitive = "sphere"
-radius = 0.5
-translation = [0.0, 1.0, 0.0]
-material = "white"
-"#
-    } else {
-        ""
-    };
-    format!(
-        r#"
-[[camera]]
-position = [0.0, 1.6, 2.4]
-target = [0.0, 0.0, 0.0]
-yfov_deg = 40
-
-[[camera]]
-position = [1.8, 1.2, 1.8]
-target = [0.0, 0.3, 0.0]
-yfov_deg = 50
-
-[[light]]
-type = "directional"
-direction = [0.0, -1.0, 0.0]
-intensity = 0.0
-
-[[material]]
-name = "white"
-base_color = [0.8, 0.8, 0.8]
-roughness = 1.0
-
-[[object]]
-name = "ground"
-primitive = "plane"
-size = [40.0, 40.0]
-material = "white"
-{ball}"#
-    )
+fn plane_toml(sphere: bool) -> String {
+    let ball = sphere.then(|| common::toml::sphere("ball", 0.5).at([0.0, 1.0, 0.0]).material("white"));
+    let blocks = [
+        camera([0.0, 1.6, 2.4], [0.0; 3]).yfov(40),
+        camera([1.8, 1.2, 1.8], [0.0, 0.3, 0.0]).yfov(50),
+        no_light(),
+        lambert("white", [0.8; 3]),
+        plane("ground", [40.0, 40.0]).material("white"),
+    ];
+    scene_toml(blocks.into_iter().chain(ball))
 }
 
 /// The scene lit by a constant map of radiance `L`.
 fn scene(name: &str, sphere: bool) -> Scene {
     let map = common::write_hdr("reference_constant", 32, 16, |_, _| L);
-    let mut scene = common::scene_from_toml(name, &scene_toml(sphere));
+    let mut scene = common::scene_from_toml(name, &plane_toml(sphere));
     EnvOverrides { map: Some((map, EnvLayout::Equirect)), ..Default::default() }.apply(&mut scene).unwrap();
     scene
 }
