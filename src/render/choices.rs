@@ -151,7 +151,10 @@ impl FrameChoices {
     /// After a completed frame (`done`): the budget's selection for the
     /// next one (nothing without a budget, or when the frame measured
     /// nothing). With frames in flight the statistics are one frame older
-    /// than the frame the selection applies to.
+    /// than the frame the selection applies to. A frame that traced no rays
+    /// although its selection said so (`traced_rays` false: a debug view)
+    /// selects from its coverage but teaches the cost model nothing: its
+    /// rays and times are not those of the lit frame.
     pub(super) fn finish_budget(
         &mut self,
         scene: &Scene,
@@ -159,10 +162,14 @@ impl FrameChoices {
         settings: &RenderSettings,
         done: &Finished,
         screen: budget::Screen,
+        traced_rays: bool,
     ) -> Result<()> {
         let Some(b) = &settings.budget else { return Ok(()) };
         let Some((words, traced)) = &done.budget else { return Ok(()) };
-        let timings = (!done.cold).then_some(&done.timings[..]);
+        let (traced, timings) = match traced_rays {
+            true => (&traced[..], (!done.cold).then_some(&done.timings[..])),
+            false => (&[][..], None),
+        };
         self.budget.after_frame(words, traced, scene, camera, screen, b, timings)
     }
 

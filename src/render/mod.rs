@@ -329,12 +329,15 @@ impl Renderer {
     ) -> Result<FrameOutput> {
         // (A budget the frame leaves out, with nothing traced, needs none.)
         let measures = self.frame.config.is_none_or(|c| c.budget);
+        // A debug view traces no rays: the budget measures and selects on
+        // lit frames, and the view shows the selection they would trace.
+        let lit = RenderSettings { debug_view: DebugView::None, ..*settings };
         // (Up to two calibration frames, and one per cold pass set.)
         for _ in 0..4 {
             if !(measures && settings.budget.is_some_and(|b| !self.choices.budget_ready(&b))) {
                 break;
             }
-            self.render_frame(ctx, scene, camera, settings)?;
+            self.render_frame(ctx, scene, camera, &lit)?;
         }
         self.render_frame(ctx, scene, camera, settings)
     }
@@ -405,11 +408,9 @@ impl Renderer {
         settings: &RenderSettings,
         done: &Finished,
     ) -> Result<()> {
-        if !self.frame.config.is_some_and(|c| c.budget) {
-            return Ok(());
-        }
+        let Some(config) = self.frame.config.filter(|c| c.budget) else { return Ok(()) };
         let screen = budget::Screen { width: self.frame.extent.width, height: self.frame.extent.height };
-        self.choices.finish_budget(scene, camera, settings, done, screen)
+        self.choices.finish_budget(scene, camera, settings, done, screen, !config.debug_view)
     }
 
     /// Makes the next frame under `budget` trace the effects `bits` (EFFECT_*

@@ -254,3 +254,44 @@ fn stickiness_steadies_the_selection_over_a_slow_pan() {
     assert!(loose >= 4, "without stickiness the selection should follow the sway ({loose} changes)");
     assert!(sticky * 4 <= loose, "stickiness does not steady the selection: {sticky} vs {loose} changes");
 }
+
+/// `--debug-view selection` shows the selection the lit frame traces: a
+/// debug view traces no rays, so its frames neither calibrate the cost
+/// model nor teach it that rays are free (issue 41 item 3: with budget 10
+/// the lit frame traced 0 of 5 objects and the view showed 5 of 5 red).
+#[test]
+fn the_selection_view_shows_what_the_lit_frame_traces() {
+    use hybrid_rt::render::DebugView;
+    let scene = default_scene();
+    let cam = scene.cameras[0].clone();
+    let extent = ash::vk::Extent2D { width: W, height: H };
+    let ctx = common::validated_context();
+    // 1 µs: far below what any ray costs, above what rays cost the model
+    // when a debug view teaches it (nothing).
+    for t in [1e-3, f64::INFINITY] {
+        let b = BudgetSettings::effects(t);
+        let view = RenderSettings { budget: Some(b), debug_view: DebugView::Selection, ..Default::default() };
+        let mut r = Renderer::new(&ctx, &scene, extent).unwrap();
+        let shown = r.render(&ctx, &scene, &cam, &view).unwrap();
+        let report = r.budget_report().expect("a budget report").clone();
+        r.destroy(&ctx);
+        let visible = report.objects.iter().filter(|o| o.pixels > 0).count();
+        let picked = report.selection.selected.len();
+        eprintln!("budget {t} ms, selection view: {}", report.summary());
+        assert!(visible >= 4, "{visible} visible objects");
+        let Some(predicted) = report.predicted_ms else { panic!("effects mode predicts ms") };
+        if t.is_finite() {
+            assert_eq!(picked, 0, "budget {t}: the view selects as if rays cost nothing: {}", report.summary());
+            assert!(predicted > 0.0, "the cost model learnt that rays are free: {}", report.summary());
+            // The view itself: exactly the image of an empty selection.
+            let mut r = Renderer::new(&ctx, &scene, extent).unwrap();
+            r.set_budget_selection(&b, vec![0; scene.objects.len()]);
+            let empty = r.render(&ctx, &scene, &cam, &view).unwrap();
+            r.destroy(&ctx);
+            let (max, _) = diff_stats(&empty.rgb8(), &shown.rgb8(), 3, 0);
+            assert_eq!(max, 0, "budget {t}: the selection view shows objects selected");
+        } else {
+            assert_eq!(picked, visible, "an unlimited budget selects every visible object: {}", report.summary());
+        }
+    }
+}

@@ -47,12 +47,16 @@ impl BudgetReport {
                         format!("{n} {}", effects::EFFECT_NAMES[e])
                     })
                     .collect();
+                // NaN: the frame measured nothing (its first, or a debug view).
+                let last = match self.measured_ms {
+                    m if m.is_nan() => "not measured".to_string(),
+                    m => format!("{m:.2} ms"),
+                };
                 format!(
                     "budget {} ms: {picked} of {visible} visible objects ray-traced ({}), ray stages predicted \
-                     {p:.2} ms (last frame {:.2} ms)",
+                     {p:.2} ms (last frame {last})",
                     self.settings.budget,
                     per_effect.join(", "),
-                    self.measured_ms
                 )
             }
             None => format!(
