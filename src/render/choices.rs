@@ -185,6 +185,11 @@ impl FrameChoices {
         self.budget.ready(b)
     }
 
+    /// Where the PRT transfer on the GPU came from (None: none there).
+    pub(super) fn prt_outcome(&self) -> Option<crate::prt::CacheOutcome> {
+        self.prt.outcome()
+    }
+
     /// The budget's last selection and what it was made from.
     pub(super) fn budget_report(&self) -> Option<&budget::BudgetReport> {
         self.budget.last()

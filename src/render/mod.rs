@@ -424,6 +424,12 @@ impl Renderer {
         self.choices.budget_report()
     }
 
+    /// Whether the diffuse PRT transfer the last frame shaded with was
+    /// loaded from the disk cache or computed (None: no transfer).
+    pub fn prt_outcome(&self) -> Option<crate::prt::CacheOutcome> {
+        self.choices.prt_outcome()
+    }
+
     /// Fault injection for tests: from the next frame on, these HDR pixels
     /// are overwritten after `composite` by the pass `inject`, which exists
     /// only while armed (empty: disarmed; the next frame rebuilds its passes).

@@ -13,7 +13,7 @@ use super::settings::EnvProjection;
 use super::RenderSettings;
 use crate::gpu::env_sh::SH_BANDS;
 use crate::gpu::scene::GpuScene;
-use crate::prt::{default_cache_dir, PrtCache, PrtSettings};
+use crate::prt::{default_cache_dir, CacheOutcome, PrtCache, PrtSettings};
 use crate::scene::sh::{project, Projection, ShCoeffs};
 use crate::scene::{HdrImage, Scene};
 use crate::vk::Context;
@@ -22,6 +22,8 @@ use crate::vk::Context;
 pub struct PrtState {
     /// What the GPU buffer holds (None: the placeholder).
     uploaded: Option<PrtSettings>,
+    /// Whether that transfer came from the disk cache or was computed.
+    outcome: Option<CacheOutcome>,
     /// The map's radiance coefficients at `uploaded`'s bands.
     radiance: Option<ShCoeffs>,
     /// The last projections other than the scene's exact 3-band one: a
@@ -49,14 +51,18 @@ impl PrtState {
             _ => None,
         };
         if want != self.uploaded {
-            match want {
-                None => gpu.set_prt(ctx, None)?,
+            self.outcome = match want {
+                None => {
+                    gpu.set_prt(ctx, None)?;
+                    None
+                }
                 Some(s) => {
                     let cache = PrtCache::new(default_cache_dir());
-                    let (transfer, _) = cache.get(scene, &s).context("PRT precompute")?;
+                    let (transfer, outcome) = cache.get(scene, &s).context("PRT precompute")?;
                     gpu.set_prt(ctx, Some(&crate::prt::pack(&transfer)))?;
+                    Some(outcome)
                 }
-            }
+            };
             self.uploaded = want;
         }
         self.radiance = match (want, &scene.environment.map) {
@@ -64,6 +70,11 @@ impl PrtState {
             _ => None,
         };
         Ok(())
+    }
+
+    /// Where the transfer on the GPU came from (None: no transfer).
+    pub fn outcome(&self) -> Option<CacheOutcome> {
+        self.outcome
     }
 
     /// The radiance coefficients while a transfer is on the GPU.
