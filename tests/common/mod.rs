@@ -29,9 +29,19 @@ impl std::ops::Deref for ValidatedContext {
     }
 }
 
+impl ValidatedContext {
+    /// Tears the context down now: an error when validation reported any,
+    /// teardown (leaked objects) included.
+    pub fn finish(mut self) -> anyhow::Result<()> {
+        self.ctx.take().expect("context alive until finish").finish()
+    }
+}
+
 impl Drop for ValidatedContext {
     fn drop(&mut self) {
-        drop(self.ctx.take());
+        // Already checked by `finish`.
+        let Some(ctx) = self.ctx.take() else { return };
+        drop(ctx);
         // A second panic while unwinding would abort and hide the first.
         if !std::thread::panicking() {
             let e = self.counters.errors();
@@ -226,12 +236,15 @@ pub fn pixel_ray(cam: &hybrid_rt::scene::Camera, w: u32, h: u32, x: u32, y: u32)
     (cam.position(), (rot * dv).normalize())
 }
 
-/// A context with validation and synchronization validation on.
-pub fn sync_validated_context() -> hybrid_rt::vk::Context {
+/// A context with validation and synchronization validation on; like
+/// [`validated_context`], its errors, teardown included, fail the test.
+pub fn sync_validated_context() -> ValidatedContext {
     let _ = env_logger::builder().is_test(true).try_init();
-    GpuOptions { validation: true, sync_validation: true, ..Default::default() }
-        .context()
-        .expect("create a Vulkan context with synchronization validation")
+    validated(
+        GpuOptions { validation: true, sync_validation: true, ..Default::default() }
+            .context()
+            .expect("create a Vulkan context with synchronization validation"),
+    )
 }
 
 /// Standard base64 with padding, for glTF `data:` URIs written by tests.

@@ -13,7 +13,7 @@ mod frames_in_flight;
 /// the hazards a frame ring must prevent are between one frame's submission
 /// and the next, which the validation layer here (1.3.239) checks only with
 /// this ALPHA check, read from the environment when the instance is created.
-fn sync_validated_across_submits() -> hybrid_rt::vk::Context {
+fn sync_validated_across_submits() -> common::ValidatedContext {
     std::env::set_var(
         "VK_LAYER_ENABLES",
         "VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT:\
