@@ -271,22 +271,38 @@ fn ior_one_slab_is_invisible_and_glass_sphere_stays_finite() {
     assert!(max > 30 && changed > 0.01, "the glass ball refracts nothing ({max}, {changed})");
 }
 
+/// Two facing mirrors: the recursion goes exactly as deep as `max_depth`
+/// says. Counted secondary rays grow with the depth asked for (a cap at 8
+/// whatever the flag says leaves 8 and 64 equal) and never pass one per
+/// pixel and level (a mirror-only scene branches nowhere); no pixel hits
+/// the per-pixel ray budget; each deeper image shows more inter-reflections.
 #[test]
 fn facing_mirrors_terminate_at_max_depth() {
     let scene = common::scene_from_toml("mirrors", &facing_mirrors());
-    let mut images = Vec::new();
+    let mut frames = Vec::new();
     for depth in [2u32, 8, 64] {
         let t = std::time::Instant::now();
         let s = RenderSettings {
-            effects: Effects { max_depth: depth, min_weight: 0.0, ..Effects::default() },
+            effects: Effects { max_depth: depth, min_weight: 0.0, count_rays: true, ..Effects::default() },
             ..settings()
         };
-        images.push(common::render_scene(&scene, W, H, &s));
-        eprintln!("facing mirrors, max depth {depth}: {:.2} s", t.elapsed().as_secs_f64());
+        let f = common::render_scene(&scene, W, H, &s);
+        let secondary = f.ray_counts[2] as u64;
+        eprintln!(
+            "facing mirrors, max depth {depth}: {secondary} secondary rays ({:.2} per pixel), {:.2} s",
+            secondary as f64 / (W * H) as f64,
+            t.elapsed().as_secs_f64()
+        );
+        assert!(secondary <= (W * H) as u64 * depth as u64, "depth {depth}: {secondary} secondary rays");
+        assert_eq!(f.truncated_pixels, 0, "depth {depth}: the per-pixel ray budget cut a mirror path");
+        frames.push((depth, secondary, f));
     }
-    // Deeper recursion shows more inter-reflections.
-    let (_, changed) = hybrid_rt::image_diff::diff_stats(&images[0].ldr, &images[1].ldr, 4, 2);
-    assert!(changed > 0.01, "depth 2 and 8 look the same ({changed})");
+    for pair in frames.windows(2) {
+        let ((d0, n0, a), (d1, n1, b)) = (&pair[0], &pair[1]);
+        assert!(n1 > n0, "max depth {d1} traced no more rays than {d0} ({n1} vs {n0})");
+        let (_, changed) = hybrid_rt::image_diff::diff_stats(&a.ldr, &b.ldr, 4, 2);
+        assert!(changed > 0.001, "depth {d0} and {d1} look the same ({changed})");
+    }
 }
 
 /// Pixels whose 3x3 neighbourhood sees more than one object (or background):
