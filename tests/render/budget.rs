@@ -281,7 +281,12 @@ fn the_selection_view_shows_what_the_lit_frame_traces() {
         assert!(visible >= 4, "{visible} visible objects");
         let Some(predicted) = report.predicted_ms else { panic!("effects mode predicts ms") };
         if t.is_finite() {
-            assert_eq!(picked, 0, "budget {t}: the view selects as if rays cost nothing: {}", report.summary());
+            assert_eq!(
+                picked,
+                0,
+                "budget {t}: the view selects as if rays cost nothing: {}",
+                report.summary()
+            );
             assert!(predicted > 0.0, "the cost model learnt that rays are free: {}", report.summary());
             // The view itself: exactly the image of an empty selection.
             let mut r = Renderer::new(&ctx, &scene, extent).unwrap();
@@ -291,7 +296,12 @@ fn the_selection_view_shows_what_the_lit_frame_traces() {
             let (max, _) = diff_stats(&empty.rgb8(), &shown.rgb8(), 3, 0);
             assert_eq!(max, 0, "budget {t}: the selection view shows objects selected");
         } else {
-            assert_eq!(picked, visible, "an unlimited budget selects every visible object: {}", report.summary());
+            assert_eq!(
+                picked,
+                visible,
+                "an unlimited budget selects every visible object: {}",
+                report.summary()
+            );
         }
     }
 }
