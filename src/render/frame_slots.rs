@@ -135,8 +135,13 @@ impl FrameSlots {
 
     /// The open frame's staging (`what` names the step that needs it).
     pub fn uploads(&mut self, what: &str) -> Result<Uploads<'_>> {
-        let (slot, _) = self.open.with_context(|| format!("begin_frame() must run before {what}"))?;
+        let slot = self.open_slot(what)?;
         Ok(Uploads { ring: &mut self.ring, slot })
+    }
+
+    /// The open frame's slot; an error naming `what` when none is open.
+    pub fn open_slot(&self, what: &str) -> Result<usize> {
+        self.open.map(|(slot, _)| slot).with_context(|| format!("begin_frame() must run before {what}"))
     }
 
     /// Records the open frame's staged copies into `cmd`, once, before its

@@ -267,7 +267,8 @@ impl Renderer {
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<()> {
-        self.slots.uploads("prepare()")?;
+        // Before any rebuild: a frame must be open to stage this one's writes.
+        self.slots.open_slot("prepare()")?;
         self.ensure_frame(ctx, scene, settings)?;
         let config = self.frame.config.context("no frame configuration")?;
         let up = &mut self.slots.uploads("prepare()")?;
