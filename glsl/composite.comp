@@ -70,15 +70,17 @@ void main() {
     }
 #else
     g_effects = budget_effects(p.instance, px);
+    vec3 v = -p.dir;
+    face_viewer(s, v);
 #ifdef REFERENCE
     // The ray-traced reference replaces the ambient radiance.
     vec4 acc = imageLoad(reference_in, px);
-    vec3 ambient = ambient_light_from(s, is_mirror(s, 0u), acc.rgb / max(acc.a, 1.0));
+    vec3 ambient = ambient_light_from(s, v, is_mirror(s, 0u), acc.rgb / max(acc.a, 1.0));
 #else
     // Diffuse PRT on static geometry (FRAME_AMBIENT_PRT), else SH/constant.
     vec3 prt_e;
     bool prt = prt_irradiance(p.instance, p.primitive, p.b, prt_e);
-    vec3 ambient = prt ? ambient_light_from(s, is_mirror(s, 0u), prt_e / PI) : ambient_light(s, is_mirror(s, 0u));
+    vec3 ambient = prt ? ambient_light_from(s, v, is_mirror(s, 0u), prt_e / PI) : ambient_light(s, v, is_mirror(s, 0u));
 #endif
     color = primary_emissive(px, p.instance, p.primitive, p.b) + imageLoad(direct_in, px).rgb + ambient;
 #ifdef HAS_SPECULAR

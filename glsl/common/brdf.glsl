@@ -32,10 +32,13 @@ float v_smith_ggx_correlated(float n_v, float n_l, float a2) {
 // Filament): 1 for every real material (f0 >= 0.02, IOR >= 1.33), falling
 // to 0 as f0 -> 0, so an IOR-1 interface (f0 = 0) reflects nothing even at
 // grazing angles, as the exact dielectric Fresnel says.
+float schlick_f90(vec3 f0) {
+    return clamp(dot(f0, vec3(50.0 / 3.0)), 0.0, 1.0);
+}
+
 vec3 f_schlick(vec3 f0, float v_h) {
     float f = pow(clamp(1.0 - v_h, 0.0, 1.0), 5.0);
-    float f90 = clamp(dot(f0, vec3(50.0 / 3.0)), 0.0, 1.0);
-    return f0 + (f90 - f0) * f;
+    return f0 + (schlick_f90(f0) - f0) * f;
 }
 
 vec3 surface_f0(Surface s) {
@@ -44,8 +47,9 @@ vec3 surface_f0(Surface s) {
 }
 
 // Outgoing radiance towards v for light arriving from l with irradiance
-// `e` measured perpendicular to l (so the cosine is applied here).
-vec3 brdf_eval(Surface s, vec3 v, vec3 l, vec3 e) {
+// `e` measured perpendicular to l (so the cosine is applied here); `ms` scales the specular lobe
+// (split_sum.glsl's multiple-scattering compensation; 1: single scattering).
+vec3 brdf_eval_ms(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
     vec3 n = s.normal;
     float n_l = dot(n, l);
     if (n_l <= 0.0) return vec3(0.0);
@@ -56,9 +60,13 @@ vec3 brdf_eval(Surface s, vec3 v, vec3 l, vec3 e) {
     float a = max(s.roughness * s.roughness, 1e-3);
     float a2 = a * a;
     vec3 f = f_schlick(surface_f0(s), v_h);
-    vec3 spec = f * d_ggx(n_h, a2) * v_smith_ggx_correlated(n_v, n_l, a2);
+    vec3 spec = ms * f * d_ggx(n_h, a2) * v_smith_ggx_correlated(n_v, n_l, a2);
     vec3 diffuse = (1.0 - f) * (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color / PI;
     return (diffuse + spec) * e * n_l;
+}
+
+vec3 brdf_eval(Surface s, vec3 v, vec3 l, vec3 e) {
+    return brdf_eval_ms(s, v, l, e, vec3(1.0));
 }
 
 #endif

@@ -5,6 +5,7 @@
 #include "scene.glsl"
 #include "env.glsl"
 #include "brdf.glsl"
+#include "split_sum.glsl"
 #include "fresnel.glsl"
 #include "lights.glsl"
 #include "offset.glsl"
@@ -68,10 +69,11 @@ bool effect_shaded(uint bit) {
 // the shadows out under the raster fallback. `gn`: unit geometric normal on the viewer's side.
 vec3 direct_light(Surface s, vec3 v, vec3 gn) {
     vec3 c = vec3(0.0);
+    vec3 ms = ms_compensation(surface_f0(s), max(dot(s.normal, v), 1e-4), s.roughness);
     for (uint i = 0u; i < frame.light_count; ++i) {
         Light light = lights[i];
         LightSample ls = sample_light(light, s.position);
-        vec3 contrib = brdf_eval(s, v, ls.l, ls.irradiance);
+        vec3 contrib = brdf_eval_ms(s, v, ls.l, ls.irradiance, ms);
         if (SHADOWS && effect_on(EFFECT_BIT_SHADOWS) && (light.flags & LIGHT_CASTS_SHADOWS) != 0u && max3(contrib) > 0.0) {
             bool light_side = dot(gn, ls.l) > 0.0;
             if (!light_side && s.transmission <= 0.0) {
@@ -158,16 +160,18 @@ bool spawns_branches(Surface s, uint depth) {
     return is_mirror(s, depth) || is_refracting(s, depth);
 }
 
-// `radiance`: what a Lambertian surface of albedo 1 exits (E / pi): SH irradiance, or PRT in composite.
-vec3 ambient_light_from(Surface s, bool mirror, vec3 radiance) {
-    vec3 f0 = surface_f0(s);
+// Diffuse: `radiance`, what a Lambertian surface of albedo 1 exits (E / pi: SH irradiance, or PRT or
+// the reference in composite). Specular: the split-sum environment (split_sum.glsl), except for a
+// mirror, whose reflection branch carries it. `v`: towards the viewer, n.v > 0 (face_viewer).
+vec3 ambient_light_from(Surface s, vec3 v, bool mirror, vec3 radiance) {
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
-    return radiance * s.occlusion * (diffuse * (1.0 - f0) + (mirror ? vec3(0.0) : f0));
+    vec3 c = radiance * diffuse * (1.0 - surface_f0(s));
+    if (!mirror) c += env_specular(s, v, max(dot(s.normal, v), 1e-4));
+    return c * s.occlusion;
 }
 
-// A mirror's specular share comes from its reflection branch instead.
-vec3 ambient_light(Surface s, bool mirror) {
-    return ambient_light_from(s, mirror, ambient_radiance(s.normal));
+vec3 ambient_light(Surface s, vec3 v, bool mirror) {
+    return ambient_light_from(s, v, mirror, ambient_radiance(s.normal));
 }
 
 // `nv` from face_viewer; `cone` is the ray cone at s.
@@ -204,7 +208,7 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
 // Secondary hits only: the primary hit is split over the direct, specular and composite passes.
 vec3 shade(Surface s, vec3 v, vec3 gn, bool back_face, vec3 w, uint depth, Cone cone) {
     float nv = face_viewer(s, v);
-    vec3 c = s.emissive + direct_light(s, v, gn) + ambient_light(s, is_mirror(s, depth));
+    vec3 c = s.emissive + direct_light(s, v, gn) + ambient_light(s, v, is_mirror(s, depth));
     push_branches(s, v, nv, gn, back_face, w, depth, cone);
     return w * c;
 }

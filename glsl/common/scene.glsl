@@ -10,6 +10,9 @@ layout(set = SET_SCENE, binding = SCENE_MATERIALS, scalar) readonly buffer Mater
 layout(set = SET_SCENE, binding = SCENE_INSTANCES, scalar) readonly buffer Instances { Instance instances[]; };
 layout(set = SET_SCENE, binding = SCENE_LIGHTS, scalar) readonly buffer Lights { Light lights[]; };
 layout(set = SET_SCENE, binding = SCENE_ENV_MAP) uniform sampler2D env_map;
+// The map prefiltered by GGX (mip k: roughness k / (ENV_SPECULAR_LEVELS - 1)) and the split-sum table.
+layout(set = SET_SCENE, binding = SCENE_ENV_SPECULAR) uniform sampler2D env_specular_map;
+layout(set = SET_SCENE, binding = SCENE_DFG) uniform sampler2D dfg_table;
 // Diffuse PRT transfer (layout: shared_values.rs SCENE_PRT; prt.glsl).
 layout(set = SET_SCENE, binding = SCENE_PRT, scalar) readonly buffer PrtData { uint prt_data[]; };
 layout(set = SET_SCENE, binding = SCENE_TEXTURES) uniform sampler2D textures[];  // bindless: last binding

@@ -2,7 +2,7 @@
 // light it carries to the primary hit minus what the hybrid shades for it, so `composite` (variant
 // TERMS) shows the hybrid with those terms from the path tracer. Each sample takes one lobe of
 // path/bsdf.glsl, chosen by albedo (diffuse cosine, or GGX visible normals, Heitz 2018); the hit decides:
-// - miss: TERM_ENV_SPECULAR via the specular lobe of a non-mirror (replaces the f0 x SH ambient),
+// - miss: TERM_ENV_SPECULAR via the specular lobe of a non-mirror (replaces the split-sum environment),
 //   TERM_VISIBILITY via the diffuse lobe (replaces the diffuse SH/PRT ambient).
 // - rough opaque surface: TERM_INDIRECT (one bounce, lit by punctual lights with glass opaque);
 //   its emission TERM_EMITTERS (the hybrid lights nothing with emissive surfaces).
@@ -63,7 +63,7 @@ vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out S
         float a2 = m.alpha * m.alpha, lv = ggx_lambda(max(v.z, 1e-4), a2);
         // f cos / pdf = F G2 / G1 (height-correlated Smith).
         float g = (1.0 + lv) / (1.0 + lv + ggx_lambda(l.z, a2));
-        w = m.spec_w * f_schlick(m.f0, max(dot(v, h), 0.0)) * g * ((pd + ps) / ps);
+        w = m.spec_w * m.ms * f_schlick(m.f0, max(dot(v, h), 0.0)) * g * ((pd + ps) / ps);
     }
     vec3 d = normalize(bsdf_world(m, l));
     if (dot(d, p.gn) <= 0.0) return vec3(0.0);  // below the geometry: occluded
@@ -103,16 +103,18 @@ vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out S
     return radiance;
 }
 
-// Composite's ambient, split by lobe.
+// Composite's ambient (ambient_light_from), split by lobe; p.s faces the viewer.
 vec3 hybrid_ambient_share(PrimaryHit p, bool mirror) {
     Surface s = p.s;
     vec3 prt_e;
     vec3 radiance = prt_irradiance(p.instance, p.primitive, p.b, prt_e) ? prt_e / PI : ambient_radiance(s.normal);
-    vec3 f0 = surface_f0(s);
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
     vec3 share = vec3(0.0);
-    if (term_on(TERM_VISIBILITY)) share += radiance * s.occlusion * diffuse * (1.0 - f0);
-    if (term_on(TERM_ENV_SPECULAR) && !mirror) share += radiance * s.occlusion * f0;
+    if (term_on(TERM_VISIBILITY)) share += radiance * s.occlusion * diffuse * (1.0 - surface_f0(s));
+    if (term_on(TERM_ENV_SPECULAR) && !mirror) {
+        vec3 v = -p.dir;
+        share += s.occlusion * env_specular(s, v, max(dot(s.normal, v), 1e-4));
+    }
     return share;
 }
 

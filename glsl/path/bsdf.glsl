@@ -6,6 +6,7 @@
 #ifndef PATH_BSDF_GLSL
 #define PATH_BSDF_GLSL
 #include "../common/brdf.glsl"
+#include "../common/split_sum.glsl"
 #include "../common/fresnel.glsl"
 #include "../common/sampling.glsl"
 
@@ -16,6 +17,7 @@ const float DELTA_ALPHA = 1e-3;
 struct Bsdf {
     vec3 t, b, n;
     vec3 f0;         // Schlick reflectance of the opaque part (surface_f0)
+    vec3 ms;         // its lobe's multiple-scattering compensation (split_sum.glsl), as the raster's
     float alpha;     // GGX alpha (roughness^2, at least DELTA_ALPHA)
     bool delta;      // perfect specular lobes
     float spec_w;    // weight of the opaque part's specular lobe: 1 - tm
@@ -41,6 +43,7 @@ Bsdf bsdf_at(Surface s, vec3 v, bool back_face) {
     m.delta = a < DELTA_ALPHA;
     m.alpha = max(a, DELTA_ALPHA);
     m.f0 = surface_f0(s);
+    m.ms = ms_compensation(m.f0, max(dot(m.n, v), 1e-4), s.roughness);
     m.tm = s.transmission * (1.0 - s.metallic);
     m.spec_w = 1.0 - m.tm;
     m.diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
@@ -120,7 +123,7 @@ vec3 bsdf_eval(Bsdf m, vec3 v, vec3 l, out float pdf) {
             float g1 = 1.0 / (1.0 + lv), g2 = 1.0 / (1.0 + lv + ggx_lambda(l.z, a2));
             float lobe = d * g2 / (4.0 * vz);
             float lobe_pdf = g1 * d / (4.0 * vz);
-            f += m.spec_w * fs * lobe;
+            f += m.spec_w * m.ms * fs * lobe;
             pdf += m.p_spec * lobe_pdf;
             if (has_interface) {
                 float fr = fresnel_dielectric(vh, m.eta);

@@ -6,27 +6,42 @@ use anyhow::Result;
 use ash::vk;
 use glam::Vec3;
 
+use super::env_prefilter::{prefilter, Prefiltered, SAMPLES};
 use super::env_sh::project_environment;
 use crate::scene::sh::ShCoeffs;
 use crate::scene::{HdrImage, Scene};
 use crate::vk::{Context, Image};
 
-/// Uploads the equirectangular map; returns its mean radiance and SH projection (None without a map).
-/// Texels beyond half's range (a 1e5 sun, RGBE up to ~1.7e38) go up as RGBA32F where the device
-/// filters it, so misses and the mean agree; else they are clamped to 65504 with a warning, the mean
-/// taken after clamping. Without a map a 1x1 black texture keeps the descriptor valid.
-pub(super) fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image, Vec3, Option<ShCoeffs>)> {
+/// What the shaders read of the environment (set 0).
+pub(super) struct UploadedEnvironment {
+    pub map: Image,
+    /// The GGX-prefiltered chain (gpu/env_prefilter.rs); 1x1 black without a map.
+    pub specular: Image,
+    pub mean: Vec3,
+    pub sh: Option<ShCoeffs>,
+}
+
+/// Uploads the equirectangular map and its prefiltered chain; returns them with the map's mean radiance
+/// and SH projection (None without a map). Texels beyond half's range (a 1e5 sun, RGBE up to ~1.7e38)
+/// go up as RGBA32F where the device filters it, so misses and the mean agree; else they are clamped to
+/// 65504 with a warning, the mean taken after clamping. Without a map 1x1 black textures keep the
+/// descriptors valid.
+pub(super) fn upload_environment(ctx: &Context, scene: &Scene) -> Result<UploadedEnvironment> {
     let env = &scene.environment;
     let Some(map) = &env.map else {
-        let img = Image::texture(
-            ctx,
-            "environment (none)",
-            vk::Format::R16G16B16A16_SFLOAT,
-            vk::Extent2D { width: 1, height: 1 },
-            &[0u8; 8],
-            false,
-        )?;
-        return Ok((img, env.color * env.intensity, None));
+        let black = |name| {
+            let extent = vk::Extent2D { width: 1, height: 1 };
+            Image::texture(ctx, name, vk::Format::R16G16B16A16_SFLOAT, extent, &[0u8; 8], false)
+        };
+        let mut map = black("environment (none)")?;
+        let specular = match black("environment specular (none)") {
+            Ok(s) => s,
+            Err(e) => {
+                map.destroy(ctx);
+                return Err(e);
+            }
+        };
+        return Ok(UploadedEnvironment { map, specular, mean: env.color * env.intensity, sh: None });
     };
     let sanitized = |v: f32| if v.is_finite() { v.max(0.0) } else { 0.0 };
     let over_half = map.rgb.iter().filter(|v| sanitized(**v) > HALF_MAX).count();
@@ -36,39 +51,68 @@ pub(super) fn upload_environment(ctx: &Context, scene: &Scene) -> Result<(Image,
             "environment map: {over_half} channel values above 65504 clamped (this device cannot filter RGBA32F)"
         );
     }
-    let (format, texel_bytes) =
-        if wide { (vk::Format::R32G32B32A32_SFLOAT, 16) } else { (vk::Format::R16G16B16A16_SFLOAT, 8) };
-    let mut texels = Vec::with_capacity(map.rgb.len() / 3 * texel_bytes);
-    let texels_of =
-        map.rgb.chunks_exact(3).map(|c| Vec3::new(sanitized(c[0]), sanitized(c[1]), sanitized(c[2])));
-    for c in texels_of.clone() {
-        for v in [c.x, c.y, c.z, 1.0] {
-            if wide {
-                texels.extend_from_slice(&v.to_le_bytes());
-            } else {
-                texels.extend_from_slice(&f32_to_f16(v).to_le_bytes());
-            }
-        }
-    }
-    let stored = |c: Vec3| if wide { c } else { c.min(Vec3::splat(HALF_MAX)) };
-    let mean = equirect_mean(texels_of.clone().map(stored), map.width, map.height) * env.intensity;
-    // Project what the shaders sample: a copy only when texels were changed.
-    let changed = (over_half > 0 && !wide) || map.rgb.iter().any(|v| sanitized(*v) != *v);
-    let sh = if changed {
-        let rgb = texels_of.flat_map(|c| stored(c).to_array()).collect();
-        project_environment(&HdrImage { width: map.width, height: map.height, rgb })?
+    let format = if wide { vk::Format::R32G32B32A32_SFLOAT } else { vk::Format::R16G16B16A16_SFLOAT };
+    // What the shaders sample: sanitized, clamped to half's range unless wide.
+    let stored = |v: f32| if wide { sanitized(v) } else { sanitized(v).min(HALF_MAX) };
+    let changed = map.rgb.iter().any(|v| stored(*v) != *v);
+    let copy;
+    let sampled = if changed {
+        copy = HdrImage {
+            width: map.width,
+            height: map.height,
+            rgb: map.rgb.iter().map(|v| stored(*v)).collect(),
+        };
+        &copy
     } else {
-        project_environment(map)?
+        map
     };
-    let img = Image::texture(
+    let texels_of =
+        |img: &HdrImage| img.rgb.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect::<Vec<_>>();
+    let mean = equirect_mean(texels_of(sampled).into_iter(), map.width, map.height) * env.intensity;
+    let sh = project_environment(sampled)?;
+    let t0 = std::time::Instant::now();
+    let Prefiltered { levels, hot_texels } = prefilter(sampled, SAMPLES)?;
+    log::info!(
+        "environment specular: GGX-prefiltered {} levels from {}x{} ({} lobe samples a texel at level 1, \
+         doubling per level; {hot_texels} hot texels summed exactly), {:.0} ms",
+        levels.len(),
+        levels[0].width,
+        levels[0].height,
+        SAMPLES,
+        t0.elapsed().as_secs_f64() * 1e3
+    );
+    let mut img = Image::texture(
         ctx,
         "environment map",
         format,
         vk::Extent2D { width: map.width, height: map.height },
-        &texels,
+        &rgba_bytes(texels_of(sampled), wide),
         false,
     )?;
-    Ok((img, mean, Some(sh)))
+    let extent = vk::Extent2D { width: levels[0].width, height: levels[0].height };
+    let bytes: Vec<Vec<u8>> = levels.iter().map(|l| rgba_bytes(texels_of(l), wide)).collect();
+    match Image::texture_levels(ctx, "environment specular", format, extent, &bytes) {
+        Ok(specular) => Ok(UploadedEnvironment { map: img, specular, mean, sh: Some(sh) }),
+        Err(e) => {
+            img.destroy(ctx);
+            Err(e)
+        }
+    }
+}
+
+/// RGBA texels, as f32 (`wide`) or half.
+fn rgba_bytes(texels: Vec<Vec3>, wide: bool) -> Vec<u8> {
+    let mut out = Vec::with_capacity(texels.len() * if wide { 16 } else { 8 });
+    for c in texels {
+        for v in [c.x, c.y, c.z, 1.0] {
+            if wide {
+                out.extend_from_slice(&v.to_le_bytes());
+            } else {
+                out.extend_from_slice(&f32_to_f16(v).to_le_bytes());
+            }
+        }
+    }
+    out
 }
 
 /// The largest finite half float.

@@ -6,6 +6,7 @@
 pub mod clusters;
 mod draw;
 pub mod emitters;
+pub mod env_prefilter;
 pub mod env_sampling;
 pub mod env_sh;
 pub mod environment;
@@ -14,6 +15,7 @@ pub mod prt_buffer;
 pub mod scene;
 pub mod shadow_map;
 pub mod shared;
+pub mod split_sum;
 pub mod types;
 
 pub use scene::{Draw, GpuScene, PrimitiveRange};

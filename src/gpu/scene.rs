@@ -13,10 +13,10 @@ use super::environment::{upload_environment, HALF_MAX};
 use super::origin::RenderOrigin;
 use super::shadow_map::ShadowMaps;
 use super::shared::{
-    BUDGET_STAT_WORDS, RAY_COUNTER_SLOTS, SCENE_BUDGET_MASK, SCENE_BUDGET_STATS, SCENE_EMITTERS,
-    SCENE_ENV_CDF, SCENE_ENV_MAP, SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES, SCENE_INSTANCES, SCENE_LIGHTS,
-    SCENE_MATERIALS, SCENE_PRT, SCENE_RAY_COUNTERS, SCENE_SHADOW_MAPS, SCENE_SHADOW_VIEWS, SCENE_TEXTURES,
-    SCENE_VERTICES,
+    BUDGET_STAT_WORDS, RAY_COUNTER_SLOTS, SCENE_BUDGET_MASK, SCENE_BUDGET_STATS, SCENE_DFG, SCENE_EMITTERS,
+    SCENE_ENV_CDF, SCENE_ENV_MAP, SCENE_ENV_SPECULAR, SCENE_EXPOSURE, SCENE_FRAME, SCENE_INDICES,
+    SCENE_INSTANCES, SCENE_LIGHTS, SCENE_MATERIALS, SCENE_PRT, SCENE_RAY_COUNTERS, SCENE_SHADOW_MAPS,
+    SCENE_SHADOW_VIEWS, SCENE_TEXTURES, SCENE_VERTICES,
 };
 use super::types::*;
 use crate::scene::tangents::bounds_of;
@@ -56,6 +56,12 @@ pub struct GpuScene {
     samplers: Vec<(SamplerDesc, vk::Sampler)>,
     pub env_map: Image,
     env_sampler: vk::Sampler,
+    /// The map prefiltered by GGX roughness (gpu/env_prefilter.rs) and its trilinear sampler.
+    pub env_specular: Image,
+    env_specular_sampler: vk::Sampler,
+    /// The split-sum table (gpu/split_sum.rs) and its clamped bilinear sampler.
+    pub dfg: Image,
+    dfg_sampler: vk::Sampler,
     /// The map's importance-sampling table for the path tracer
     /// (gpu/env_sampling.rs), or its header alone.
     pub env_cdf: Buffer,
@@ -118,6 +124,10 @@ impl GpuScene {
             textures: Vec::new(),
             samplers: Vec::new(),
             env_map: Image::null(),
+            env_specular: Image::null(),
+            env_specular_sampler: vk::Sampler::null(),
+            dfg: Image::null(),
+            dfg_sampler: vk::Sampler::null(),
             env_cdf: Buffer::null(),
             emitters: Buffer::null(),
             clusters: super::clusters::Clusters::null(),
@@ -229,7 +239,10 @@ impl GpuScene {
         self.prt = super::prt_buffer::placeholder(ctx)?;
         // No history yet (`valid` 0): the first measured frame converges at once.
         upload_now(ctx, "exposure state", |up| up.write(&self.exposure, 0, &[0u8; EXPOSURE_STATE_BYTES]))?;
-        (self.env_map, self.env_mean, self.env_sh) = upload_environment(ctx, scene)?;
+        let env = upload_environment(ctx, scene)?;
+        (self.env_map, self.env_specular, self.env_mean, self.env_sh) =
+            (env.map, env.specular, env.mean, env.sh);
+        self.dfg = super::split_sum::upload(ctx)?;
         self.env_cdf = super::env_sampling::upload(ctx, scene)?;
         self.emitters = super::emitters::upload(ctx, scene)?;
         self.shadow.create(ctx, scene)?;
@@ -240,6 +253,26 @@ impl GpuScene {
                 min_filter: Filter::Linear,
                 mipmaps: false,
                 wrap_u: Wrap::Repeat,
+                wrap_v: Wrap::ClampToEdge,
+            },
+        )?;
+        self.env_specular_sampler = create_sampler(
+            ctx,
+            &SamplerDesc {
+                mag_filter: Filter::Linear,
+                min_filter: Filter::Linear,
+                mipmaps: true,
+                wrap_u: Wrap::Repeat,
+                wrap_v: Wrap::ClampToEdge,
+            },
+        )?;
+        self.dfg_sampler = create_sampler(
+            ctx,
+            &SamplerDesc {
+                mag_filter: Filter::Linear,
+                min_filter: Filter::Linear,
+                mipmaps: false,
+                wrap_u: Wrap::ClampToEdge,
                 wrap_v: Wrap::ClampToEdge,
             },
         )?;
@@ -264,6 +297,8 @@ impl GpuScene {
             (SCENE_PRT, Binding::one(storage)),
             (SCENE_ENV_CDF, Binding::one(storage)),
             (SCENE_EMITTERS, Binding::one(storage)),
+            (SCENE_ENV_SPECULAR, Binding::one(sampled)),
+            (SCENE_DFG, Binding::one(sampled)),
             // Bindless textures: variable-count, so the last binding.
             (
                 SCENE_TEXTURES,
@@ -290,6 +325,8 @@ impl GpuScene {
         set.write_buffer(ctx, SCENE_EMITTERS, self.emitters.raw);
         let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         set.write_image(ctx, SCENE_ENV_MAP, 0, self.env_map.view, self.env_sampler, read);
+        set.write_image(ctx, SCENE_ENV_SPECULAR, 0, self.env_specular.view, self.env_specular_sampler, read);
+        set.write_image(ctx, SCENE_DFG, 0, self.dfg.view, self.dfg_sampler, read);
         set.write_image(ctx, SCENE_SHADOW_MAPS, 0, self.shadow.image.view, self.shadow.sampler, read);
         for (i, (img, tex)) in self.textures.iter().zip(&scene.textures).enumerate() {
             let s = self.samplers.iter().find(|(d, _)| *d == tex.sampler).map(|(_, s)| *s).unwrap();
@@ -367,6 +404,8 @@ impl GpuScene {
             t.destroy(ctx);
         }
         self.env_map.destroy(ctx);
+        self.env_specular.destroy(ctx);
+        self.dfg.destroy(ctx);
         self.env_cdf.destroy(ctx);
         self.emitters.destroy(ctx);
         self.shadow.destroy(ctx);
@@ -376,6 +415,8 @@ impl GpuScene {
                 ctx.device.destroy_sampler(*s, None);
             }
             ctx.device.destroy_sampler(self.env_sampler, None);
+            ctx.device.destroy_sampler(self.env_specular_sampler, None);
+            ctx.device.destroy_sampler(self.dfg_sampler, None);
         }
         self.set.destroy(ctx);
     }

@@ -42,8 +42,15 @@ shared! {
     id SCENE_EMITTERS = 15;
     uint EMITTER_HEADER_WORDS = 2;
     uint NO_EMITTER = 2147483647;
+    // The environment prefiltered by GGX (gpu/env_prefilter.rs): mip k for perceptual roughness
+    // k / (ENV_SPECULAR_LEVELS - 1); and the split-sum table (gpu/split_sum.rs): DFG_LUT_SIZE² cells of
+    // (A, B) by (n.v, roughness).
+    id SCENE_ENV_SPECULAR = 16;
+    id SCENE_DFG = 17;
+    uint ENV_SPECULAR_LEVELS = 5;
+    uint DFG_LUT_SIZE = 32;
     // Bindless textures: variable-count, so the last binding.
-    id SCENE_TEXTURES = 16;
+    id SCENE_TEXTURES = 18;
     // At 1024 a directional light fitted to a 40 m scene has 4 cm texels, under a Sponza column's detail,
     // for 4 MiB a light (2048 quadruples memory and raster time).
     uint SHADOW_MAP_SIZE = 1024;

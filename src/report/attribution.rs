@@ -27,7 +27,7 @@ pub const TERMS: [Term; 5] = [
     Term {
         bit: TERM_ENV_SPECULAR,
         name: "environment specular",
-        hybrid: "rough surfaces: f0 x the unshadowed SH ambient",
+        hybrid: "the split-sum prefiltered environment, unshadowed (mirrors: traced)",
     },
     Term { bit: TERM_VISIBILITY, name: "diffuse visibility", hybrid: "the unshadowed SH (or PRT) ambient" },
     Term { bit: TERM_INDIRECT, name: "one indirect bounce", hybrid: "none" },

@@ -131,12 +131,13 @@ pub fn agreement() -> String {
 /// term. Under a constant environment L the unoccluded ambient irradiance
 /// of a floor point at distance D from the centre is pi L (1 - r^2 d / D^3)
 /// (pi L (1 - (r/d)^2) below the centre); the sphere's underside sees the
-/// floor (tests/render/prt.rs, tests/report/prt_report.rs).
+/// floor (tests/render/prt.rs, tests/report/prt_report.rs). White is pure
+/// Lambert (IOR 1: no specular lobe), so the frame is the diffuse ambient alone.
 pub fn plane_under_sphere() -> String {
     scene_toml([
         camera([3.0, 0.6, 0.0], [0.0, 0.0, 0.0]).yfov(60),
         no_light(),
-        lambert("white", [0.8, 0.8, 0.8]),
+        lambert("white", [0.8, 0.8, 0.8]).ior(1.0),
         plane("floor", [4.0, 4.0]).material("white"),
         sphere("ball", 1.0).slices(32, 16).at([0.0, 2.0, 0.0]).material("white"),
     ])

@@ -52,16 +52,21 @@ fn a_mirror_left_out_reflects_the_sky_as_the_traced_one_does_on_every_backend() 
             // The same weight times the same environment lookup: equal up
             // to one 8-bit step (float rounding of the two code paths).
             let (max_raster, _) = diff_stats(&traced.rgb8(), &raster.rgb8(), 3, 1);
-            // Without a fallback the sphere loses its reflection: most of
-            // its pixels (about 12% of the frame) change by more than 8.
-            let (_, share_none) = diff_stats(&traced.rgb8(), &none.rgb8(), 3, 8);
+            // Without a fallback the mirror is shaded as raster-only: the
+            // split-sum environment (gpu/env_prefilter.rs, level 0 at 256x128)
+            // stands in for the reflection, so the sky stays in it; before it
+            // the sphere lost its reflection (12% of the frame off by > 8).
+            let (max_none, share_none) = diff_stats(&traced.rgb8(), &none.rgb8(), 3, 8);
             eprintln!(
-                "{backend:?} {:?}: budget 0 raster fallback vs traced max {max_raster}; none changes {:.1}%",
+                "{backend:?} {:?}: budget 0 raster fallback vs traced max {max_raster}; none max {max_none}, {:.2}% over 8",
                 base.mode,
                 share_none * 100.0
             );
             assert!(max_raster <= 1, "{backend:?} {:?}: raster fallback differs by {max_raster}", base.mode);
-            assert!(share_none > 0.05, "{backend:?}: --fallback none kept the reflection ({share_none})");
+            assert!(
+                share_none < 0.01,
+                "{backend:?}: --fallback none lost the sky in the mirror ({share_none})"
+            );
         }
     }
 }

@@ -31,14 +31,15 @@ const H: u32 = 54;
 
 /// Four walls facing the centre (normals +X, -X, +Z, -Z), a sphere in the
 /// middle, camera 0 at +Z looking at -Z and camera 1 the other way. No
-/// light: the frame is the ambient term alone.
+/// light, and white is pure Lambert (IOR 1: no specular lobe, whose split-sum
+/// albedo depends on the view): the frame is the diffuse ambient alone.
 fn box_toml() -> String {
     let wall = |name, at, rot| plane(name, [4.0, 4.0]).at(at).rot(rot).material("white");
     scene_toml([
         camera([0.0, 0.0, 1.5], [0.0, 0.0, -2.0]).yfov(90),
         camera([0.0, 0.0, -1.5], [0.0, 0.0, 2.0]).yfov(90),
         no_light(),
-        lambert("white", [0.8, 0.8, 0.8]),
+        lambert("white", [0.8, 0.8, 0.8]).ior(1.0),
         wall("faces +X", [-2.0, 0.0, 0.0], [0.0, 0.0, -90.0]),
         wall("faces -X", [2.0, 0.0, 0.0], [0.0, 0.0, 90.0]),
         wall("faces +Z", [0.0, 0.0, -2.0], [90.0, 0.0, 0.0]),

@@ -89,9 +89,8 @@ fn red_at(f: &FrameOutput, (x, y): (u32, u32)) -> f32 {
     f.hdr[((y * W + x) * 4) as usize]
 }
 
-/// The Lambertian part plus the dielectric f0 (0.04 at ior 1.5) the
-/// ambient term adds for a rough white (0.8) surface: radiance / (E / pi).
-const AMBIENT_FACTOR: f64 = 0.8 * (1.0 - 0.04) + 0.04;
+/// The white floor's radiance over E / pi: its albedo (pure Lambert, IOR 1).
+const AMBIENT_FACTOR: f64 = 0.8;
 
 #[test]
 fn prt_renders_match_sh_and_the_occluded_plane() {

@@ -1,0 +1,39 @@
+// Split-sum environment specular (Karis 2013) and GGX multiple-scattering compensation (Turquin 2019),
+// from the host's tables (gpu/split_sum.rs, gpu/env_prefilter.rs).
+#ifndef SPLIT_SUM_GLSL
+#define SPLIT_SUM_GLSL
+#include "scene.glsl"
+#include "env.glsl"
+#include "brdf.glsl"
+
+// (A, B): the GGX lobe's directional albedo at n.v is f0 A + f90 B.
+vec2 dfg_at(float nv, float roughness) {
+    return textureLod(dfg_table, vec2(clamp(nv, 0.0, 1.0), clamp(roughness, 0.0, 1.0)), 0.0).rg;
+}
+
+// 1 + f0 (1 / E - 1), E the lobe's albedo at f0 = f90 = 1: scales a single-scattering lobe up to the
+// energy the lobe's multiple scattering returns.
+vec3 ms_compensation(vec3 f0, float nv, float roughness) {
+    vec2 ab = dfg_at(nv, roughness);
+    return 1.0 + f0 * (1.0 / max(ab.x + ab.y, 1e-3) - 1.0);
+}
+
+// The surface's GGX lobe lit by the unshadowed environment, towards v (nv = n.v > 0): the prefiltered
+// map about the lobe's dominant direction (towards n as roughness grows; Filament) times the lobe's
+// albedo. Constant ambient modes reflect the constant.
+vec3 env_specular(Surface s, vec3 v, float nv) {
+    vec3 f0 = surface_f0(s);
+    float f90 = schlick_f90(f0);
+    vec2 ab = dfg_at(nv, s.roughness);
+    vec3 albedo = (f0 * ab.x + f90 * ab.y) * ms_compensation(f0, nv, s.roughness);
+    vec3 radiance = frame.env_ambient;
+    if (frame.has_env_map != 0u && (frame.flags & (FRAME_AMBIENT_SH | FRAME_AMBIENT_PRT)) != 0u) {
+        float a = s.roughness * s.roughness;
+        vec3 r = normalize(mix(reflect(-v, s.normal), s.normal, a * a));
+        float lod = s.roughness * float(ENV_SPECULAR_LEVELS - 1u);
+        radiance = textureLod(env_specular_map, env_uv(r), lod).rgb * frame.env_intensity;
+    }
+    return radiance * albedo;
+}
+
+#endif
