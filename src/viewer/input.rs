@@ -11,7 +11,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use super::camera_controller::{self, digit};
 use super::session::Viewer;
 use super::{Flow, DEBUG_VIEWS};
-use crate::render::budget::{BudgetMode, BudgetSettings, Fallback};
+use crate::render::budget::{BudgetMode, BudgetReport, BudgetSettings, Fallback};
 use crate::render::shading::{AaMode, Mode};
 use crate::render::tone::{AutoExposure, ToneOperator, ToneSettings};
 use crate::render::DebugView;
@@ -163,15 +163,9 @@ impl Viewer {
             },
             KeyCode::BracketLeft | KeyCode::BracketRight => {
                 let up = code == KeyCode::BracketRight;
-                // From "everything", the cost of everything the last frame
-                // saw (effects mode: its ray stages' measured ms).
-                let everything = self
-                    .renderer
-                    .budget_report()
-                    .map(|r| if r.predicted_ms.is_some() { r.measured_ms } else { r.selection.spent })
-                    .filter(|t| t.is_finite());
+                let report = self.renderer.budget_report();
                 match &mut self.settings.budget {
-                    Some(b) => match step_budget(b.budget, everything, up) {
+                    Some(b) => match step_budget(b.budget, cost_of_everything(report, b), up) {
                         Some(t) => b.budget = t,
                         None => log::info!(
                             "[ / ]: no frame has measured what tracing everything costs yet; press again"
@@ -315,8 +309,21 @@ fn budget_text(b: &BudgetSettings) -> String {
     }
 }
 
+/// What tracing everything cost in `b`'s unit (effects mode: the ray stages' measured ms; paper mode:
+/// the estimated cost units), from the last selection's `report` when it was made in `b`'s mode from
+/// everything. None before such a frame: right after F8 the last report is the previous mode's (paper
+/// units read as ms, or ms as paper units, which made `[` a budget of nearly 0) or a limited budget's.
+fn cost_of_everything(report: Option<&BudgetReport>, b: &BudgetSettings) -> Option<f64> {
+    let r = report.filter(|r| r.settings.mode == b.mode && r.settings.budget.is_infinite())?;
+    let t = match r.settings.mode {
+        BudgetMode::Effects => r.measured_ms,
+        BudgetMode::Paper => r.selection.spent,
+    };
+    (t.is_finite() && t > 0.0).then_some(t)
+}
+
 /// [ (halve) or ] (double) on budget `t`; from "everything" (infinite) the step starts at what tracing
-/// everything cost in the last frame, and is not taken (None) before a frame has measured it.
+/// everything cost (`everything`, [`cost_of_everything`]), and is not taken (None) without it.
 fn step_budget(t: f64, everything: Option<f64>, up: bool) -> Option<f64> {
     let base = if t.is_finite() { t } else { everything.filter(|e| *e > 0.0)? };
     Some(if up { base * 2.0 } else { base * 0.5 })
@@ -325,6 +332,7 @@ fn step_budget(t: f64, everything: Option<f64>, up: bool) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::budget::Selection;
 
     #[test]
     fn budget_steps_wait_for_a_measurement() {
@@ -333,6 +341,47 @@ mod tests {
         assert_eq!(step_budget(f64::INFINITY, Some(0.0), false), None);
         assert_eq!(step_budget(f64::INFINITY, Some(8.0), false), Some(4.0));
         assert_eq!(step_budget(3.0, None, true), Some(6.0));
+    }
+
+    /// The last selection's report, made under `settings`, with `measured_ms` and `spent`.
+    fn report(settings: BudgetSettings, measured_ms: f64, spent: f64) -> BudgetReport {
+        BudgetReport {
+            settings,
+            objects: Vec::new(),
+            selection: Selection { selected: Vec::new(), spent, mask: Vec::new() },
+            effects: Vec::new(),
+            predicted_ms: (settings.mode == BudgetMode::Effects).then_some(spent),
+            measured_ms,
+            predicted_rays: None,
+            measured_rays: [0.0; 2],
+        }
+    }
+
+    #[test]
+    fn budget_steps_start_from_everything_in_the_same_mode() {
+        let inf = f64::INFINITY;
+        let (effects, paper) = (BudgetSettings::effects(inf), BudgetSettings::paper(inf));
+        // An effects-mode frame that traced everything in 29 ms (predicted 27), estimated at 1.2e5 units.
+        let effects_frame = report(effects, 29.0, 27.0);
+        let paper_frame = report(paper, f64::NAN, 1.2e5);
+        assert_eq!(cost_of_everything(Some(&effects_frame), &effects), Some(29.0));
+        assert_eq!(cost_of_everything(Some(&paper_frame), &paper), Some(1.2e5));
+        // F8 from effects to paper mode, then [ before a paper-mode frame: the 29 ms are not 29 paper
+        // units (half of that selects nothing: a budget of 0 in all but name).
+        assert_eq!(cost_of_everything(Some(&effects_frame), &paper), None, "ms taken for paper units");
+        assert_eq!(step_budget(inf, cost_of_everything(Some(&effects_frame), &paper), false), None);
+        // Nor are paper units ms.
+        assert_eq!(cost_of_everything(Some(&paper_frame), &effects), None, "paper units taken for ms");
+        // A limited budget's frame measured less than everything.
+        assert_eq!(cost_of_everything(Some(&report(BudgetSettings::effects(4.0), 3.9, 3.5)), &effects), None);
+        // The first frames measure nothing (NaN, or 0 before the GPU times arrive).
+        assert_eq!(cost_of_everything(Some(&report(effects, f64::NAN, 27.0)), &effects), None);
+        assert_eq!(cost_of_everything(Some(&report(effects, 0.0, 27.0)), &effects), None);
+        assert_eq!(cost_of_everything(None, &effects), None);
+        // Stickiness and fallback do not change what everything costs.
+        let sticky = BudgetSettings { stickiness: 10.0, fallback: Fallback::None, ..effects };
+        assert_eq!(cost_of_everything(Some(&effects_frame), &sticky), Some(29.0));
+        assert_eq!(step_budget(inf, Some(29.0), false), Some(14.5));
     }
 
     #[test]
