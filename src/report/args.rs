@@ -255,6 +255,9 @@ impl ReportKind {
             ReportKind::Stability { .. } | ReportKind::ToneSheet { .. } if view.fps.is_some() => {
                 Some(FPS_RULE.into())
             }
+            ReportKind::Prt { knobs: Some(k), .. } if super::prt::parse_selection(k).is_err() => {
+                super::prt::parse_selection(k).err().map(|e| format!("--knobs: {e:#}"))
+            }
             ReportKind::Prt { knobs: Some(_), .. } if view.fps.is_some() => Some(FPS_RULE.into()),
             ReportKind::Prt { common, .. } if common.frames < 5 => Some(few_frames(common.frames)),
             _ => None,

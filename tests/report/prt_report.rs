@@ -77,19 +77,19 @@ fn prt_report_rows_and_shadowed_beats_unshadowed() {
     drop(ctx); // validation errors, teardown included, fail here
 }
 
-/// Bad `report prt` input (or its earlier spelling `report --prt`): an
-/// error naming the knob and value (exit 1, checked before anything
-/// renders), or a usage error (exit 2); no panic, nothing written.
+/// Bad `report prt` input (or its earlier spelling `report --prt`): a
+/// usage error (exit 2, checked before anything renders) naming the knob and
+/// value or the flag; no panic, nothing written.
 #[test]
 fn prt_report_bad_input_is_named() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("prt-report-bad");
     let _ = std::fs::remove_dir_all(&out);
     for (args, code, says) in [
-        (&["--prt", "--knobs", "bands=9"][..], 1, "bands 9"),
-        (&["--prt", "--knobs", "sh-samples=many"], 1, "sh-samples 'many'"),
-        (&["--prt", "--knobs", "transfer=prt-interreflected-0"], 1, "transfer 'prt-interreflected-0'"),
-        (&["prt", "--knobs", "max-depth"], 1, "unknown knob 'max-depth' for report prt"),
-        (&["prt", "--sweep", "--knobs", "bands=9"], 1, "bands 9"),
+        (&["--prt", "--knobs", "bands=9"][..], 2, "bands 9"),
+        (&["--prt", "--knobs", "sh-samples=many"], 2, "sh-samples 'many'"),
+        (&["--prt", "--knobs", "transfer=prt-interreflected-0"], 2, "transfer 'prt-interreflected-0'"),
+        (&["prt", "--knobs", "max-depth"], 2, "unknown knob 'max-depth' for report prt"),
+        (&["prt", "--sweep", "--knobs", "bands=9"], 2, "bands 9"),
         (&["prt", "--ref-samples", "64"], 2, "unexpected argument '--ref-samples'"),
         (&["--prt-sweep"], 2, "--prt"),
         (&["--prt", "--stability"], 2, "--stability"),
