@@ -109,6 +109,32 @@ fn valid_triangle_renders() {
     assert!(left.clone().max().unwrap() - left.min().unwrap() <= 2, "no vertical leg on the left: {rows:?}");
     assert!(rows.windows(2).all(|w| w[1].1 + 1 >= w[0].1), "rows do not widen downwards: {rows:?}");
     assert!(rows.last().unwrap().1 >= 5 * rows[0].1, "not a triangle: {rows:?}");
+
+    // Where the camera puts it: a pixel whose ray, and its neighbours' rays,
+    // all hit the triangle (z = 0, x >= 0, y >= 0, x + y <= 1) shows it; one
+    // whose rays all miss shows the sky (pixels on the edge are left out).
+    let camera = &hybrid_rt::scene::Scene::load(&scene).unwrap().cameras[0];
+    let (w, h) = img.dimensions();
+    let hits = |x: u32, y: u32| {
+        let (o, d) = common::pixel_ray(camera, w, h, x, y);
+        let p = o + d * (-o.z / d.z);
+        d.z < 0.0 && p.x >= 0.0 && p.y >= 0.0 && p.x + p.y <= 1.0
+    };
+    let (mut inside, mut outside) = (0, 0);
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let around = [(x, y), (x - 1, y), (x + 1, y), (x, y - 1), (x, y + 1)].map(|(x, y)| hits(x, y));
+            let luma = img.get_pixel(x, y)[0];
+            if around.iter().all(|&hit| hit) {
+                assert!(luma > 90, "({x}, {y}) is on the triangle but {luma} (sky ~60, triangle ~110)");
+                inside += 1;
+            } else if around.iter().all(|&hit| !hit) {
+                assert!(luma <= 90, "({x}, {y}) is sky but {luma} (sky ~60, triangle ~110)");
+                outside += 1;
+            }
+        }
+    }
+    assert!(inside >= 100 && outside >= 500, "{inside} pixels on the triangle, {outside} off it");
 }
 
 #[test]
@@ -501,11 +527,12 @@ fn effect_switches_have_help() {
         ("--no-reflections", "mirror reflections"),
         ("--no-refractions", "refractions"),
     ] {
-        let at = help.find(flag).unwrap_or_else(|| panic!("{flag} not in:\n{help}"));
-        // Its description: the text before the next flag.
-        let rest = &help[at + flag.len()..];
-        let text = &rest[..rest.find("\n  -").unwrap_or(rest.len())];
-        assert!(text.contains(words), "{flag}: '{}'", text.trim());
+        // Its description: the lines under the flag's own, up to the next flag's.
+        let mut lines = help.lines().skip_while(|l| l.trim() != flag);
+        assert!(lines.next().is_some(), "{flag} not on a line of its own in:\n{help}");
+        let text: Vec<&str> = lines.take_while(|l| !l.trim_start().starts_with('-')).map(str::trim).collect();
+        let text = text.join(" ");
+        assert!(text.contains(words), "{flag}: its help is '{}'", text.trim());
     }
 }
 
@@ -550,6 +577,35 @@ fn view_help_lists_the_keys() {
     }
 }
 
+/// An unknown knob is a usage error like the others (exit 2, before any
+/// rendering): the message names the flag, the knob and every knob there is,
+/// for `report --knobs`, `report knobs --knobs` and `report prt --knobs`.
+#[test]
+fn unknown_knob_is_a_usage_error_listing_the_knobs() {
+    let d = tmp("unknown_knob");
+    let _ = std::fs::remove_dir_all(&d);
+    let names = |table: &[hybrid_rt::report::knobs::Knob]| table.iter().map(|k| k.name).collect::<Vec<_>>();
+    let main_knobs = names(hybrid_rt::report::knobs::KNOBS);
+    let prt_knobs = names(hybrid_rt::report::prt::PRT_KNOBS);
+    for (args, knobs) in [
+        (&["--knobs", "foo"][..], &main_knobs),
+        (&["knobs", "--knobs", "foo"], &main_knobs),
+        (&["prt", "--knobs", "foo"], &prt_knobs),
+        (&["--prt", "--knobs", "foo"], &prt_knobs),
+    ] {
+        let out = bin().arg("report").args(args).arg("--out").arg(&d).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "report {args:?}: {stderr}");
+        let line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("{stderr}"));
+        assert!(line.contains("--knobs") && line.contains("'foo'"), "report {args:?}: {line}");
+        assert!(knobs.len() >= 3, "{knobs:?}");
+        for k in knobs {
+            assert!(line.contains(k), "report {args:?}: knob {k} not listed in {line}");
+        }
+        assert!(!stderr.contains("panicked") && !d.exists(), "report {args:?}: {stderr}");
+    }
+}
+
 /// `report`'s subcommands take only their own options, each check reaches
 /// through them (exit 2, the problem named, nothing written), and `report`
 /// alone is `report knobs`.
@@ -568,6 +624,7 @@ fn report_subcommands_take_their_own_options() {
         (&["tone-sheet", "--maps", "a.hdr", "--fps", "5", "--animation", "0"], "--fps has no effect"),
         (&["prt", "--frames", "3"], "at least 5"),
         (&["prt", "--knobs", "bands", "--shares", "1"], "unexpected argument '--shares'"),
+        (&["prt", "--knobs", "foo"], "unknown knob 'foo' for report prt"),
     ] {
         let out = bin()
             .arg("report")

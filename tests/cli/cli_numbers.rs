@@ -146,6 +146,59 @@ fn negative_numbers_parse() {
     assert!(largest(&image, &render("2,1,-3", "-2.5")) > 20, "-2 rendered the view from +2");
 }
 
+/// A negative coordinate on the command line puts the camera where it says:
+/// the view from (-2, 2.5, 4) of a scene is the left-right mirror of the
+/// view from (2, 2.5, 4) of the scene's mirror image (a red cube at x = -1
+/// instead of +1 on a grey floor, a sun in the x = 0 plane, a black sky).
+#[test]
+fn negative_coordinates_mirror_the_view() {
+    use common::toml::*;
+    let d = tmp("mirror");
+    let (w, h) = (48u32, 32u32);
+    let render = |cube_x: f32, from: &str| -> image::RgbImage {
+        let scene = d.join(format!("cube_at_{cube_x}.toml"));
+        let text = scene_toml([
+            black_sky(),
+            camera([0.0, 2.5, 4.0], [0.0, 0.5, 0.0]),
+            directional([0.0, -1.0, -0.6], 3.0),
+            lambert("grey", [0.5, 0.5, 0.5]),
+            lambert("red", [0.8, 0.1, 0.1]),
+            plane("floor", 8.0).material("grey"),
+            cube("marker", 1.5).at([cube_x, 0.75, 0.0]).material("red"),
+        ]);
+        std::fs::write(&scene, text).unwrap();
+        let png = d.join(format!("cube_at_{cube_x}_from_{from}.png"));
+        let out = bin()
+            .args(["render", "--width", &w.to_string(), "--height", &h.to_string(), "--look-from", from])
+            .args(["--look-at", "0,0.5,0", "--scene"])
+            .arg(&scene)
+            .arg("--out")
+            .arg(&png)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{from}: {}", String::from_utf8_lossy(&out.stderr));
+        image::open(&png).unwrap().to_rgb8()
+    };
+    let mirrored = |img: &image::RgbImage| image::imageops::flip_horizontal(img);
+    // Pixels whose channels differ by more than 8/255 (edges may: the
+    // rasterizer's tie rule and the triangles' diagonals are not mirrored).
+    let differing = |a: &image::RgbImage, b: &image::RgbImage| {
+        a.pixels()
+            .zip(b.pixels())
+            .filter(|(p, q)| p.0.iter().zip(q.0).any(|(x, y)| x.abs_diff(y) > 8))
+            .count()
+    };
+    let right = render(1.0, "2,2.5,4");
+    let left = render(-1.0, "-2,2.5,4");
+    let n = (w * h) as usize;
+    let red = left.pixels().filter(|p| p[0] as u32 > 2 * p[1].max(p[2]) as u32 && p[0] > 40).count();
+    assert!(red > n / 20, "the cube is not in view: {red} red pixels of {n}");
+    let off = differing(&mirrored(&right), &left);
+    assert!(off <= n / 100, "{off} of {n} pixels differ from the mirrored view");
+    // The check can fail: neither view is its own mirror image.
+    assert!(differing(&mirrored(&left), &left) > n / 20, "the view is left-right symmetric");
+}
+
 /// The accepted ranges are in the help text.
 #[test]
 fn help_documents_the_ranges() {
