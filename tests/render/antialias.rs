@@ -199,18 +199,36 @@ fn tiled_edge_filter_matches_the_per_pixel_one() {
             let mut r = Renderer::new(&ctx, scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
             let tiled = RenderSettings { mode, ..Default::default() };
             let a = render(&ctx, &mut r, scene, &tiled);
+            let tiled_config = r.shading_config().unwrap().edge_aa_tiled;
             let b = render(&ctx, &mut r, scene, &RenderSettings { edge_aa_tiled: false, ..tiled });
+            // The two images are the same by design: only the frames'
+            // configuration tells the per-pixel run from a second tiled one.
+            assert!(
+                tiled_config && !r.shading_config().unwrap().edge_aa_tiled,
+                "{name}: edge_aa_tiled did not reach the frame's configuration"
+            );
             let plain = render(&ctx, &mut r, scene, &RenderSettings { aa: AaMode::None, ..tiled });
             r.destroy(&ctx);
+            let (_, filtered_tiled) = hybrid_rt::image_diff::diff_stats(&plain.ldr, &a.ldr, 4, 0);
             let (_, filtered) = hybrid_rt::image_diff::diff_stats(&plain.ldr, &b.ldr, 4, 0);
             let (max, share) = hybrid_rt::image_diff::diff_stats(&a.ldr, &b.ldr, 4, 0);
             eprintln!(
-                "{name} {w}x{h} {mode:?}: {:.1}% of pixels filtered; tiled vs per-pixel: max {max}/255 on {:.3}%",
+                "{name} {w}x{h} {mode:?}: {:.1}% (tiled) and {:.1}% (per-pixel) of pixels filtered; \
+                 tiled vs per-pixel: max {max}/255 on {:.3}%",
+                filtered_tiled * 100.0,
                 filtered * 100.0,
                 share * 100.0
             );
-            // Without filtered pixels the comparison would prove nothing.
-            assert!(filtered > 0.01, "{name}: the filter changed only {:.3}% of pixels", filtered * 100.0);
+            // Without filtered pixels the comparison would prove nothing:
+            // each path must change the frame against `--aa none` (a filter
+            // that does nothing, or is skipped, leaves both equal to it).
+            for (path, f) in [("tiled", filtered_tiled), ("per-pixel", filtered)] {
+                assert!(
+                    f > 0.01,
+                    "{name} {w}x{h} {mode:?}: the {path} filter changed only {:.3}% of pixels against aa none",
+                    f * 100.0
+                );
+            }
             // The same arithmetic, compiled twice: at most a rounding apart.
             assert!(
                 max <= 1 && share <= 0.001,
