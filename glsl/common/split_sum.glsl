@@ -13,9 +13,12 @@ vec2 dfg_at(float nv, float roughness) {
 
 // 1 + f0 (1 / E - 1), E the lobe's albedo at f0 = f90 = 1: scales a single-scattering lobe up to the
 // energy the lobe's multiple scattering returns.
-vec3 ms_compensation(vec3 f0, float nv, float roughness) {
-    vec2 ab = dfg_at(nv, roughness);
+vec3 ms_from(vec3 f0, vec2 ab) {
     return 1.0 + f0 * (1.0 / max(ab.x + ab.y, 1e-3) - 1.0);
+}
+
+vec3 ms_compensation(vec3 f0, float nv, float roughness) {
+    return ms_from(f0, dfg_at(nv, roughness));
 }
 
 // The surface's GGX lobe lit by the unshadowed environment, towards v (nv = n.v > 0): the prefiltered
@@ -25,7 +28,7 @@ vec3 env_specular(Surface s, vec3 v, float nv) {
     vec3 f0 = surface_f0(s);
     float f90 = schlick_f90(f0);
     vec2 ab = dfg_at(nv, s.roughness);
-    vec3 albedo = (f0 * ab.x + f90 * ab.y) * ms_compensation(f0, nv, s.roughness);
+    vec3 albedo = (f0 * ab.x + f90 * ab.y) * ms_from(f0, ab);
     vec3 radiance = frame.env_ambient;
     if (frame.has_env_map != 0u && (frame.flags & (FRAME_AMBIENT_SH | FRAME_AMBIENT_PRT)) != 0u) {
         float a = s.roughness * s.roughness;

@@ -68,7 +68,8 @@ pub(super) fn upload_environment(ctx: &Context, scene: &Scene) -> Result<Uploade
     };
     let texels_of =
         |img: &HdrImage| img.rgb.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect::<Vec<_>>();
-    let mean = equirect_mean(texels_of(sampled).into_iter(), map.width, map.height) * env.intensity;
+    let texels = texels_of(sampled);
+    let mean = equirect_mean(texels.iter().copied(), map.width, map.height) * env.intensity;
     let sh = project_environment(sampled)?;
     let t0 = std::time::Instant::now();
     let Prefiltered { levels, hot_texels } = prefilter(sampled, SAMPLES)?;
@@ -86,7 +87,7 @@ pub(super) fn upload_environment(ctx: &Context, scene: &Scene) -> Result<Uploade
         "environment map",
         format,
         vk::Extent2D { width: map.width, height: map.height },
-        &rgba_bytes(texels_of(sampled), wide),
+        &rgba_bytes(texels, wide),
         false,
     )?;
     let extent = vk::Extent2D { width: levels[0].width, height: levels[0].height };

@@ -75,11 +75,14 @@ pub fn dfg_lut() -> Vec<[f32; 2]> {
     (0..n * n).map(|k| dfg(centre(k % n), centre(k / n), 1024)).collect()
 }
 
-/// The table as an RG16F texture (half's 1e-3 steps are below the table's own sampling noise).
+/// The table as an RG16F texture (half's 1e-3 steps are below the table's own sampling noise),
+/// tabulated once per process: every renderer uploads the same.
 pub fn upload(ctx: &Context) -> Result<Image> {
-    let texels: Vec<u8> = dfg_lut().iter().flatten().flat_map(|v| f32_to_f16(*v).to_le_bytes()).collect();
+    static TEXELS: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    let texels = TEXELS
+        .get_or_init(|| dfg_lut().iter().flatten().flat_map(|v| f32_to_f16(*v).to_le_bytes()).collect());
     let extent = vk::Extent2D { width: DFG_LUT_SIZE, height: DFG_LUT_SIZE };
-    Image::texture(ctx, "split-sum DFG table", vk::Format::R16G16_SFLOAT, extent, &texels, false)
+    Image::texture(ctx, "split-sum DFG table", vk::Format::R16G16_SFLOAT, extent, texels, false)
 }
 
 #[cfg(test)]
