@@ -38,7 +38,8 @@ void budget_count_rays(uint instance) {
     }
 }
 
-// Surfaces at most MIRROR_ROUGHNESS (generated/shared.glsl) rough are traced as mirrors.
+// Surfaces at most MIRROR_ROUGHNESS (generated/shared.glsl) rough are traced as mirrors; primary hits
+// up to GLOSSY_ROUGHNESS get glossy rays (passes/glossy.glsl).
 const float RAY_TMAX = 1e30;
 
 #ifdef TRACE_NONE
@@ -116,7 +117,11 @@ struct Branch {
     uint effect;  // EFFECT_BIT_* of the chain it belongs to
     // Budget left its effect out (raster fallback): the environment stands in for the hit.
     bool env_only;
+    // A glossy lobe sample (passes/glossy.glsl): a miss brings g_lobe_miss, not the environment along dir.
+    bool lobe;
 };
+
+vec3 g_lobe_miss = vec3(0.0);
 
 Branch g_stack[BRANCH_STACK_SIZE];
 int g_sp = 0;
@@ -127,7 +132,7 @@ void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone, uint effect) {
     // Importance cutoff.
     if (max3(w) >= MIN_WEIGHT && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
         if (g_sp < int(BRANCH_STACK_SIZE)) {
-            g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone, effect, !effect_on(effect));
+            g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone, effect, !effect_on(effect), false);
             g_sp++;
         } else {
             g_truncated = true;
@@ -148,6 +153,14 @@ float face_viewer(inout Surface s, vec3 v) {
 // Traced, or its environment-only fallback.
 bool is_mirror(Surface s, uint depth) {
     return REFLECTIONS && effect_shaded(EFFECT_BIT_REFLECTIONS) && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
+}
+
+// A primary hit whose environment specular the `glossy` pass corrects with a traced lobe sample
+// (secondary hits keep the split sum). Not under the raster fallback: that is the split sum alone.
+bool is_glossy(Surface s, uint depth) {
+    return REFLECTIONS && effect_on(EFFECT_BIT_REFLECTIONS) && depth == 0u && MAX_DEPTH > 0u
+        && s.roughness > MIRROR_ROUGHNESS
+        && s.roughness <= GLOSSY_ROUGHNESS;
 }
 
 bool is_refracting(Surface s, uint depth) {
@@ -247,7 +260,7 @@ vec3 trace_branches() {
             vec3 w = back_face ? b.weight * volume_transmittance(h) : b.weight;
             radiance += shade(s, -b.dir, gn, back_face, w, b.depth, at_hit);
         } else {
-            radiance += b.weight * environment(b.dir);
+            radiance += b.weight * (b.lobe ? g_lobe_miss : environment(b.dir));
         }
     }
     if (g_truncated) atomicAdd(ray_counts[RAY_COUNTER_TRUNCATED], 1u);

@@ -1,6 +1,6 @@
 // Random numbers and direction sampling shared by the Monte-Carlo passes
-// (`reference`, `path`): PCG-hash streams (scene.glsl's pcg_hash), an
-// orthonormal basis about a normal, cosine and uniform-sphere directions.
+// (`reference`, `path`, `glossy`): PCG-hash streams (scene.glsl's pcg_hash), an
+// orthonormal basis about a normal, cosine and uniform-sphere directions, GGX visible normals.
 #ifndef SAMPLING_GLSL
 #define SAMPLING_GLSL
 #include "scene.glsl"
@@ -37,6 +37,20 @@ vec3 uniform_sphere(float u1, float u2) {
     float r = sqrt(max(1.0 - z * z, 0.0));
     float phi = 2.0 * PI * u2;
     return vec3(r * cos(phi), r * sin(phi), z);
+}
+
+// A visible normal for the local viewer v (v.z > 0), Heitz 2018.
+vec3 sample_vndf(vec3 v, float a, float u1, float u2) {
+    vec3 vh = normalize(vec3(a * v.x, a * v.y, v.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u1), phi = 2.0 * PI * u2;
+    float p1 = r * cos(phi), p2 = r * sin(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * p2;
+    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
+    return normalize(vec3(a * nh.x, a * nh.y, max(nh.z, 1e-6)));
 }
 
 // Power heuristic (beta 2) weight of a technique with pdf a against one with pdf b.

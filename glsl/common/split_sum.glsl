@@ -21,22 +21,30 @@ vec3 ms_compensation(vec3 f0, float nv, float roughness) {
     return ms_from(f0, dfg_at(nv, roughness));
 }
 
-// The surface's GGX lobe lit by the unshadowed environment, towards v (nv = n.v > 0): the prefiltered
-// map about the lobe's dominant direction (towards n as roughness grows; Filament) times the lobe's
-// albedo. Constant ambient modes reflect the constant.
-vec3 env_specular(Surface s, vec3 v, float nv) {
-    vec3 f0 = surface_f0(s);
-    float f90 = schlick_f90(f0);
-    vec2 ab = dfg_at(nv, s.roughness);
-    vec3 albedo = (f0 * ab.x + f90 * ab.y) * ms_from(f0, ab);
-    vec3 radiance = frame.env_ambient;
-    if (frame.has_env_map != 0u && (frame.flags & (FRAME_AMBIENT_SH | FRAME_AMBIENT_PRT)) != 0u) {
-        float a = s.roughness * s.roughness;
-        vec3 r = normalize(mix(reflect(-v, s.normal), s.normal, a * a));
-        float lod = s.roughness * float(ENV_SPECULAR_LEVELS - 1u);
-        radiance = textureLod(env_specular_map, env_uv(r), lod).rgb * frame.env_intensity;
+// The unshadowed environment's radiance over the surface's GGX lobe towards v: the prefiltered map
+// about the lobe's dominant direction (towards n as roughness grows; Filament). Constant ambient modes
+// reflect the constant. What a glossy ray that misses stands for (passes/glossy.glsl).
+vec3 env_specular_radiance(Surface s, vec3 v) {
+    if (frame.has_env_map == 0u || (frame.flags & (FRAME_AMBIENT_SH | FRAME_AMBIENT_PRT)) == 0u) {
+        return frame.env_ambient;
     }
-    return radiance * albedo;
+    float a = s.roughness * s.roughness;
+    vec3 r = normalize(mix(reflect(-v, s.normal), s.normal, a * a));
+    float lod = s.roughness * float(ENV_SPECULAR_LEVELS - 1u);
+    return textureLod(env_specular_map, env_uv(r), lod).rgb * frame.env_intensity;
+}
+
+// The GGX lobe's albedo towards v (nv = n.v > 0), multiple scattering included: what scales the
+// radiance it reflects.
+vec3 specular_albedo(Surface s, float nv) {
+    vec3 f0 = surface_f0(s);
+    vec2 ab = dfg_at(nv, s.roughness);
+    return (f0 * ab.x + schlick_f90(f0) * ab.y) * ms_from(f0, ab);
+}
+
+// The surface's GGX lobe lit by the unshadowed environment.
+vec3 env_specular(Surface s, vec3 v, float nv) {
+    return env_specular_radiance(s, v) * specular_albedo(s, nv);
 }
 
 #endif

@@ -71,6 +71,10 @@ struct Frame {
     mat4 proj;
     mat4 view_proj;
     mat4 inv_view_proj;
+    // The previous frame's (FRAME_GLOSSY_HISTORY: a history to reproject into exists).
+    mat4 prev_view_proj;
+    vec3 prev_camera_pos;
+    uint pad_prev;
     vec3 camera_pos;
     uint light_count;
     vec3 env_color;

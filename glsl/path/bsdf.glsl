@@ -87,20 +87,6 @@ float ggx_lambda(float c, float a2) {
     return 0.5 * (sqrt(1.0 + a2 * (1.0 - c2) / c2) - 1.0);
 }
 
-// A visible normal for the local viewer v (v.z > 0), Heitz 2018.
-vec3 sample_vndf(vec3 v, float a, float u1, float u2) {
-    vec3 vh = normalize(vec3(a * v.x, a * v.y, v.z));
-    float lensq = vh.x * vh.x + vh.y * vh.y;
-    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
-    vec3 t2 = cross(vh, t1);
-    float r = sqrt(u1), phi = 2.0 * PI * u2;
-    float p1 = r * cos(phi), p2 = r * sin(phi);
-    float s = 0.5 * (1.0 + vh.z);
-    p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * p2;
-    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
-    return normalize(vec3(a * nh.x, a * nh.y, max(nh.z, 1e-6)));
-}
-
 // f(v, l) |l.z| of the non-delta lobes, and their mixture pdf of l.
 vec3 bsdf_eval(Bsdf m, vec3 v, vec3 l, out float pdf) {
     pdf = 0.0;

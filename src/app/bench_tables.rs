@@ -170,7 +170,8 @@ fn budget_table(t: f64, frames: &[BudgetFrame]) -> String {
 }
 
 /// The passes that may trace rays (camera, shadow, reflection/refraction).
-const TRACING_PASSES: [&str; 6] = ["primary", "visibility trace", "direct", "reference", "specular", "path"];
+const TRACING_PASSES: [&str; 7] =
+    ["primary", "visibility trace", "direct", "reference", "specular", "glossy", "path"];
 
 pub(super) fn stats(name: &'static str, mut v: Vec<f64>) -> PassStats {
     v.sort_by(|a, b| a.total_cmp(b));

@@ -74,8 +74,8 @@ pub struct ViewArgs {
     /// Trace no shadow rays: punctual lights reach every surface unoccluded.
     #[arg(long)]
     pub no_shadows: bool,
-    /// Trace no mirror reflections (surfaces up to roughness 0.35 then get
-    /// the ambient term's specular share instead).
+    /// Trace no reflections: mirrors (roughness up to 0.1) and glossy
+    /// surfaces (up to 0.6) then reflect the prefiltered environment alone.
     #[arg(long)]
     pub no_reflections: bool,
     /// Trace no refractions: transmissive surfaces show only their

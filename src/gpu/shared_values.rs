@@ -93,6 +93,10 @@ shared! {
     // Shadow rays treat transmissive occluders as opaque (the path tracer:
     // light through glass comes along refracted paths, not straight rays).
     uint FRAME_OPAQUE_OCCLUDERS = 16;
+    // Glossy reflections reuse samples across frames (render/passes/glossy_temporal.rs): new samples
+    // each frame (FRAME_GLOSSY_TEMPORAL), and a history of the last frame's to reproject into.
+    uint FRAME_GLOSSY_HISTORY = 32;
+    uint FRAME_GLOSSY_TEMPORAL = 64;
     uint PRT_HEADER_WORDS = 4;
     uint PRT_NO_VERTEX = 2147483647;
 
@@ -120,6 +124,23 @@ shared! {
     // accumulation (rgb: radiance sum, a: samples) written by `reference`,
     // read by `composite`; samples per pixel per frame.
     id REFERENCE_OUT = 5;
+    // Glossy reflections (render/passes/glossy.rs, glossy_filter.rs): the one-sample correction
+    // written by `glossy`, read by `glossy_filter` beside the specular chain (SPECULAR_IN), which writes
+    // the frame's reflected radiance; the sample stream's seed; the filter's taps, radius (times alpha
+    // over the pixel's angle) and its cap in pixels.
+    id GLOSSY_OUT = 5;
+    id GLOSSY_IN = 5;
+    id REFLECTED_OUT = 7;
+    id GLOSSY_HISTORY = 8;
+    id GLOSSY_ACCUM = 9;
+    uint GLOSSY_SEED = 1729;
+    uint GLOSSY_FILTER_TAPS = 16;
+    // Weight of a frame's sample in the reprojected history (an exponential average of about
+    // 2 / GLOSSY_TEMPORAL_BLEND frames) and the relative distance mismatch that rejects the history.
+    float GLOSSY_TEMPORAL_BLEND = 0.1;
+    float GLOSSY_TEMPORAL_DEPTH = 0.02;
+    float GLOSSY_FILTER_SCALE = 0.5;
+    float GLOSSY_FILTER_MAX_PX = 16.0;
     id REFERENCE_IN = 8;
     uint REFERENCE_SAMPLES_PER_FRAME = 4;
     // The path tracer (render/passes/path.rs, glsl/path/path.glsl): its
@@ -286,8 +307,11 @@ shared! {
     uint ALPHA_BLEND = 2;
     uint MAT_DOUBLE_SIDED = 1;
     uint MAT_CASTS_SHADOWS = 2;
-    // Surfaces at most this rough get mirror reflections (glossy-as-mirror).
-    float MIRROR_ROUGHNESS = 0.35;
+    // Surfaces at most this rough get mirror reflections (one ray along r: alpha <= 0.01, a lobe
+    // under a degree wide); primary hits up to GLOSSY_ROUGHNESS get glossy rays (render/passes/
+    // glossy.rs), rougher ones and secondary hits the split-sum environment alone.
+    float MIRROR_ROUGHNESS = 0.1;
+    float GLOSSY_ROUGHNESS = 0.6;
     // Instances (Instance.flags).
     uint INST_CASTS_SHADOWS = 1;
     // Lights (Light.type, Light.flags).

@@ -79,6 +79,10 @@ pub struct GpuFrame {
     pub proj: [f32; 16],
     pub view_proj: [f32; 16],
     pub inv_view_proj: [f32; 16],
+    /// The previous frame's view-projection and camera (temporal reuse: glossy reflections' history).
+    pub prev_view_proj: [f32; 16],
+    pub prev_camera_pos: [f32; 3],
+    pub pad_prev: u32,
     pub camera_pos: [f32; 3],
     pub light_count: u32,
     pub env_color: [f32; 3],
@@ -117,7 +121,7 @@ pub struct GpuFrame {
     pub sh_radiance: [[f32; 4]; SH_PRT_MAX_COEFFS as usize],
 }
 const _: () = assert!(
-    std::mem::size_of::<GpuFrame>() == 384 + 16 * (SH_IRRADIANCE_COEFFS + SH_PRT_MAX_COEFFS) as usize
+    std::mem::size_of::<GpuFrame>() == 464 + 16 * (SH_IRRADIANCE_COEFFS + SH_PRT_MAX_COEFFS) as usize
 );
 
 // [T; 64] has no Default.

@@ -34,6 +34,9 @@ pub struct FrameChoices {
     /// The `reference` pass's frames accumulated (--reference-samples).
     pub(super) reference: reference::Accumulation,
     frame_index: u32,
+    /// The last prepared frame's view-projection and camera position (relative to the render origin): what
+    /// glossy reflections' history reprojects through.
+    prev_camera: Option<(glam::Mat4, glam::Vec3)>,
     /// Seconds since the previous frame for eye adaptation; None: converge
     /// at once (a still frame: no adaptation history).
     pub adapt_dt: Option<f32>,
@@ -60,6 +63,7 @@ impl FrameChoices {
         settings: &RenderSettings,
         config: ShadingConfig,
         extent: vk::Extent2D,
+        glossy_history: bool,
     ) -> Result<()> {
         if let (true, Some(b)) = (config.budget, &settings.budget) {
             self.budget_traced = Some(self.budget.before_frame(up, gpu, b, scene.objects.len())?);
@@ -106,12 +110,14 @@ impl FrameChoices {
             gpu,
             env,
             frame_index: self.frame_index,
+            prev_camera: self.prev_camera.filter(|_| glossy_history),
             adapt_dt: self.adapt_dt,
             budget_flags,
             sh,
             prt: self.prt.radiance().map(|l| crate::gpu::prt_buffer::radiance_uniform(l, env)),
         };
         let frame = uniforms::frame(&inputs, settings, &mut self.reference);
+        self.prev_camera = Some((proj * view, camera.position()));
         gpu.write_frame(up, &frame)
     }
 

@@ -274,7 +274,10 @@ impl Renderer {
         let up = &mut self.slots.uploads("prepare()")?;
         frame_slots::reset_counters(up, &self.gpu.ray_counters)?;
         let extent = self.frame.extent;
-        self.choices.prepare(ctx, up, &mut self.gpu, scene, camera, settings, config, extent)
+        // A frame of this configuration and size has written it.
+        let history =
+            self.frame.targets.get(&passes::glossy_temporal::HISTORY).is_some_and(|t| t.laid_out.get());
+        self.choices.prepare(ctx, up, &mut self.gpu, scene, camera, settings, config, extent, history)
     }
 
     /// Records every pass of one frame; the displayable result is in the

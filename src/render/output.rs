@@ -57,9 +57,9 @@ impl FrameOutput {
         self.timings.iter().filter(|(n, _)| *n != "readback").map(|(_, ms)| ms).sum()
     }
 
-    /// GPU ms of the ray stages the budget governs (`direct` + `specular`).
+    /// GPU ms of the ray stages the budget governs (render/budget/effects.rs's STAGES).
     pub fn ray_stage_ms(&self) -> f64 {
-        self.pass_ms("direct") + self.pass_ms("specular")
+        crate::render::budget::effects::STAGES.iter().flat_map(|s| s.iter()).map(|p| self.pass_ms(p)).sum()
     }
 
     /// What to tell the user when reflection/refraction trees were cut.

@@ -194,6 +194,10 @@ pub struct RenderSettings {
     /// The edge filter shares its pixels' depths and triangle exits within 8x8 tiles (glsl/aa_edge.comp).
     /// False runs the per-pixel version: the same image, slower; the tiled one's reference in tests. No flag.
     pub edge_aa_tiled: bool,
+    /// Glossy reflections draw new lobe samples each frame and reuse the reprojected history
+    /// (render/passes/glossy_temporal.rs): on for frame sequences (the viewer). Off, each frame is the
+    /// same one-sample frame whatever came before (`render`, `bench`, `report`, tests). No flag.
+    pub glossy_temporal: bool,
 }
 
 impl Default for RenderSettings {
@@ -216,6 +220,7 @@ impl Default for RenderSettings {
             primary_visibility: PrimaryVisibility::Auto,
             occlusion_culling: false,
             edge_aa_tiled: true,
+            glossy_temporal: false,
         }
     }
 }

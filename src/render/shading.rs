@@ -5,7 +5,7 @@
 
 use anyhow::{bail, Result};
 
-pub use crate::gpu::shared::MIRROR_ROUGHNESS;
+pub use crate::gpu::shared::{GLOSSY_ROUGHNESS, MIRROR_ROUGHNESS};
 use crate::gpu::shared::{
     SPEC_COUNT_RAYS, SPEC_MAX_DEPTH, SPEC_MIN_WEIGHT, SPEC_REFLECTIONS, SPEC_REFRACTIONS, SPEC_SHADOWS,
 };
@@ -19,7 +19,12 @@ pub use super::settings::{AaMode, Backend, Effects, Mode};
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SceneNeeds {
     pub shadows: bool,
+    /// Mirrors or glossy materials.
     pub reflections: bool,
+    /// At most MIRROR_ROUGHNESS rough: the `specular` chain reflects them.
+    pub mirrors: bool,
+    /// Rougher, up to GLOSSY_ROUGHNESS: the `glossy` pass samples their lobe.
+    pub glossy: bool,
     pub refractions: bool,
     /// A directional or spot light casts shadows (the budget's raster fallback renders shadow maps for them).
     pub shadow_maps: bool,
@@ -36,9 +41,14 @@ impl SceneNeeds {
             scene.objects.get(i.object).is_none_or(|o| o.props.casts_shadows)
                 && scene.materials[scene.instance_material(i)].casts_shadows
         });
+        let range = |m: &usize| scene.materials[*m].roughness_range();
+        let mirrors = used.iter().any(|m| range(m).0 <= MIRROR_ROUGHNESS);
+        let glossy = used.iter().any(|m| range(m).1 > MIRROR_ROUGHNESS && range(m).0 <= GLOSSY_ROUGHNESS);
         SceneNeeds {
             shadows: any_occluder && scene.lights.iter().any(|l| l.casts_shadows && light_is_on(l)),
-            reflections: used.iter().any(|&m| scene.materials[m].roughness <= MIRROR_ROUGHNESS),
+            reflections: mirrors || glossy,
+            mirrors,
+            glossy,
             refractions: used.iter().any(|&m| {
                 let mat = &scene.materials[m];
                 mat.transmission > 0.0 && mat.metallic < 1.0
@@ -340,6 +350,8 @@ mod tests {
         SceneNeeds {
             shadows: true,
             reflections: false,
+            mirrors: false,
+            glossy: false,
             refractions: false,
             shadow_maps: false,
             largest_primitive_triangles: triangles,

@@ -9,7 +9,8 @@ use super::settings::RenderSettings;
 use super::shading::Mode;
 use super::tone::{ToneOperator, ToneSettings};
 use crate::gpu::shared::{
-    FRAME_AMBIENT_PRT, FRAME_AMBIENT_SH, FRAME_OPAQUE_OCCLUDERS, SH_IRRADIANCE_COEFFS, SH_PRT_MAX_COEFFS,
+    FRAME_AMBIENT_PRT, FRAME_AMBIENT_SH, FRAME_GLOSSY_HISTORY, FRAME_GLOSSY_TEMPORAL, FRAME_OPAQUE_OCCLUDERS,
+    SH_IRRADIANCE_COEFFS, SH_PRT_MAX_COEFFS,
 };
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
@@ -25,6 +26,9 @@ pub struct Inputs<'a> {
     pub gpu: &'a GpuScene,
     pub env: &'a Environment,
     pub frame_index: u32,
+    /// The previous frame's view-projection and camera position where glossy reflections have a history
+    /// laid out for this configuration and size (FRAME_GLOSSY_HISTORY).
+    pub prev_camera: Option<(Mat4, glam::Vec3)>,
     pub adapt_dt: Option<f32>,
     /// FRAME_BUDGET / FRAME_FALLBACK_RASTER as the budget decided.
     pub budget_flags: u32,
@@ -45,12 +49,24 @@ pub fn frame(i: &Inputs, settings: &RenderSettings, accumulation: &mut Accumulat
         flags |= FRAME_AMBIENT_PRT;
     }
     let view_proj = i.proj * i.view;
+    if settings.glossy_temporal {
+        flags |= FRAME_GLOSSY_TEMPORAL;
+    }
+    let (prev_view_proj, prev_camera_pos) = match i.prev_camera.filter(|_| settings.glossy_temporal) {
+        Some((vp, pos)) => {
+            flags |= FRAME_GLOSSY_HISTORY;
+            (vp, pos)
+        }
+        None => (view_proj, i.camera.position()),
+    };
     let (env, e) = (i.env, i.extent);
     let mut frame = GpuFrame {
         view: i.view.to_cols_array(),
         proj: i.proj.to_cols_array(),
         view_proj: view_proj.to_cols_array(),
         inv_view_proj: view_proj.inverse().to_cols_array(),
+        prev_view_proj: prev_view_proj.to_cols_array(),
+        prev_camera_pos: prev_camera_pos.to_array(),
         camera_pos: i.camera.position().to_array(),
         light_count: i.gpu.light_count,
         env_color: env.color.to_array(),

@@ -214,6 +214,8 @@ mod tests {
         let needs = super::super::shading::SceneNeeds {
             shadows: false,
             reflections: false,
+            mirrors: false,
+            glossy: false,
             refractions: false,
             shadow_maps: false,
             largest_primitive_triangles: 1,

@@ -141,6 +141,15 @@ impl Default for Material {
 }
 
 impl Material {
+    /// The roughness its pixels can have: the factor, or with a metallic-roughness texture anything from 0
+    /// up to it (the texture's G scales the factor).
+    pub fn roughness_range(&self) -> (f32, f32) {
+        match self.metallic_roughness_texture {
+            Some(_) => (0.0, self.roughness),
+            None => (self.roughness, self.roughness),
+        }
+    }
+
     /// The medium's attenuation coefficient per world unit, per channel:
     /// -ln(colour) / distance (0 for a clear medium; a black channel is
     /// capped at e^-20 per distance).

@@ -249,7 +249,7 @@ impl Viewer {
                 let ray_ms: f64 = s
                     .passes
                     .iter()
-                    .filter(|(n, _)| matches!(*n, "direct" | "specular"))
+                    .filter(|(n, _)| crate::render::budget::effects::STAGES.iter().any(|s| s.contains(n)))
                     .map(|(_, ms)| ms)
                     .sum();
                 t.push_str(&format!(", rays {ray_ms:.2} ms"));

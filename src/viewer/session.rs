@@ -137,7 +137,8 @@ impl Viewer {
             animation,
             scene_dirty: false,
             controller,
-            settings: job.settings,
+            // A frame sequence: glossy reflections converge over frames.
+            settings: RenderSettings { glossy_temporal: true, ..job.settings },
             budget_keys: job.settings.budget.unwrap_or(BudgetSettings::effects(f64::INFINITY)),
             stats: FrameStats::new(now),
             needs_recreate: true,

@@ -524,7 +524,7 @@ fn effect_switches_have_help() {
     let help = String::from_utf8_lossy(&out.stdout);
     for (flag, words) in [
         ("--no-shadows", "shadow rays"),
-        ("--no-reflections", "mirror reflections"),
+        ("--no-reflections", "reflections: mirrors"),
         ("--no-refractions", "refractions"),
     ] {
         // Its description: the lines under the flag's own, up to the next flag's.

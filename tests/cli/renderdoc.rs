@@ -27,8 +27,18 @@ const PYTHON: &str = "/usr/bin/python3";
 /// FRAME in order, less those the log says it leaves out: visibility trace,
 /// primary, heuristic, shadow_map, reference, terms, inject, luminance,
 /// fxaa), each a debug-label region of the capture.
-const PASSES: &[&str] =
-    &["gbuffer", "gbuffer resolve", "direct", "specular", "composite", "tonemap", "edge aa"];
+const PASSES: &[&str] = &[
+    "gbuffer",
+    "gbuffer resolve",
+    "direct",
+    "specular",
+    "glossy",
+    "glossy temporal",
+    "glossy filter",
+    "composite",
+    "tonemap",
+    "edge aa",
+];
 
 /// Recorded after the frame's passes, in the same command buffer.
 const READBACK: &str = "readback";
@@ -44,6 +54,10 @@ const TARGETS: &[&str] = &[
     "direct light",
     "specular chain",
     "work list",
+    "glossy sample",
+    "glossy history",
+    "glossy blend",
+    "reflected radiance",
     "hdr radiance",
     "tonemapped output",
     "anti-aliased output",

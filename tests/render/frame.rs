@@ -39,7 +39,18 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
         let (h, targets) = frame_of(&ctx, &scene, &hybrid);
         assert_eq!(
             h,
-            ["gbuffer", "gbuffer resolve", "direct", "specular", "composite", "tonemap", "edge aa"],
+            [
+                "gbuffer",
+                "gbuffer resolve",
+                "direct",
+                "specular",
+                "glossy",
+                "glossy temporal",
+                "glossy filter",
+                "composite",
+                "tonemap",
+                "edge aa"
+            ],
             "{backend:?} hybrid"
         );
         assert!(targets.contains(&"gbuffer depth (reversed-Z)"), "{targets:?}");
@@ -47,7 +58,21 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
         assert!(targets.contains(&"work list"), "{targets:?}");
         let rt = RenderSettings { backend, mode: Mode::Rt, ..Default::default() };
         let (p, targets) = frame_of(&ctx, &scene, &rt);
-        assert_eq!(p, ["primary", "direct", "specular", "composite", "tonemap", "edge aa"], "{backend:?} rt");
+        assert_eq!(
+            p,
+            [
+                "primary",
+                "direct",
+                "specular",
+                "glossy",
+                "glossy temporal",
+                "glossy filter",
+                "composite",
+                "tonemap",
+                "edge aa"
+            ],
+            "{backend:?} rt"
+        );
         // Pure RT differs only in how the primary hits are found (raster
         // visibility buffer + resolve vs camera rays), and needs no depth buffer.
         assert_eq!(h[2..], p[1..]);
@@ -91,6 +116,45 @@ fn passes_and_targets_a_scene_does_not_need_are_left_out() {
     let (passes, targets) = frame_of(&ctx, &plain, &RenderSettings::default());
     assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap", "edge aa"]);
     assert!(!targets.contains(&"specular chain") && !targets.contains(&"work list"), "{targets:?}");
+
+    // Glossy but nothing mirrors or transmits: glossy reflections without the specular chain (and the
+    // filter reads no chain); a mirror alone: the chain without the glossy passes.
+    let one = |name: &str, roughness: f32| {
+        common::scene_from_toml(
+            name,
+            &scene_toml([
+                camera([0.0, 2.0, 5.0], [0.0; 3]),
+                directional([0.0, -1.0, -0.3], 2.0).no_shadows(),
+                material("metal").base([0.9, 0.8, 0.5]).metallic(1.0).roughness(roughness),
+                primitive("ball", "sphere").material("metal"),
+            ]),
+        )
+    };
+    let (passes, targets) = frame_of(&ctx, &one("frame_glossy", 0.3), &RenderSettings::default());
+    let glossy = [
+        "gbuffer",
+        "gbuffer resolve",
+        "direct",
+        "glossy",
+        "glossy temporal",
+        "glossy filter",
+        "composite",
+        "tonemap",
+        "edge aa",
+    ];
+    assert_eq!(passes, glossy);
+    assert!(!targets.contains(&"specular chain") && targets.contains(&"glossy sample"), "{targets:?}");
+    let (passes, targets) = frame_of(&ctx, &one("frame_mirror", 0.05), &RenderSettings::default());
+    assert_eq!(
+        passes,
+        ["gbuffer", "gbuffer resolve", "direct", "specular", "composite", "tonemap", "edge aa"]
+    );
+    assert!(
+        !["glossy sample", "glossy history", "glossy blend", "reflected radiance"]
+            .iter()
+            .any(|t| targets.contains(t)),
+        "{targets:?}"
+    );
 
     // The default scene with reflections and refractions switched off.
     let scene = Scene::load(&common::repo_path("assets/default.toml")).unwrap();

@@ -202,15 +202,17 @@ fn mirror_shows_the_wall_times_f0() {
     assert!(off.radiance(W / 2, H / 2)[0] < 0.01);
 }
 
-/// A red cube and a green ball, both glowing, under a blue sky, no light;
+/// A red cube and a green ball, both glowing (and rough), under a blue sky, no light;
 /// a glass material of index `ior` for `extra` (more blocks) to use.
 fn backdrop(ior: f32, extra: impl IntoIterator<Item = Block>) -> String {
     let blocks = [
         environment([0.2, 0.3, 0.5]),
         camera([0.0, 1.0, 5.0], [0.0, 1.0, 0.0]).yfov(50),
         no_light(),
-        emitter("red", [1.0, 0.1, 0.1]),
-        emitter("green", [0.1, 1.0, 0.2]),
+        // Rough: glossy reflections are traced at primary hits only, so a glossy surface seen through
+        // the slab would lose its lobe's occlusion; this is about the slab.
+        emitter("red", [1.0, 0.1, 0.1]).roughness(1.0),
+        emitter("green", [0.1, 1.0, 0.2]).roughness(1.0),
         glass("glass", ior),
         cube("a", 1.0).at([-1.0, 1.0, -2.0]).rot([20.0, 30.0, 0.0]).material("red"),
         sphere("b", 0.7).at([1.0, 1.3, -2.5]).material("green"),

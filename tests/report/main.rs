@@ -5,6 +5,7 @@
 mod common;
 
 mod attribution;
+mod glossy;
 mod path;
 mod prt_report;
 mod reference;

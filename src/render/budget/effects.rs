@@ -29,8 +29,9 @@ pub const EFFECTS: usize = EFFECT_COUNT as usize;
 /// The effects' names, by `EFFECT_BIT_*`.
 pub const EFFECT_NAMES: [&str; EFFECTS] = ["shadows", "reflections", "refractions"];
 
-/// The ray stages, by the pass that traces them.
-pub const STAGES: [&str; 2] = ["direct", "specular"];
+/// The ray stages, by the passes that make them: shadows in `direct`; reflection / refraction chains in
+/// `specular`, glossy reflections in `glossy` and their filter (a cost of having the effect at all).
+pub const STAGES: [&[&str]; 2] = [&["direct"], &["specular", "glossy", "glossy temporal", "glossy filter"]];
 pub const fn stage_of(effect: usize) -> usize {
     if effect == EFFECT_BIT_SHADOWS as usize {
         0

@@ -8,7 +8,7 @@ use anyhow::Result;
 use super::paper::{self, ObjectStats, Params, Screen, Selection};
 use super::{effects, BudgetMode, BudgetSettings};
 use crate::gpu::shared::{
-    BUDGET_STAT_RAYS, BUDGET_STAT_WORDS, EFFECT_ALL, EFFECT_BIT_SHADOWS, MIRROR_ROUGHNESS,
+    BUDGET_STAT_RAYS, BUDGET_STAT_WORDS, EFFECT_ALL, EFFECT_BIT_SHADOWS, GLOSSY_ROUGHNESS,
 };
 use crate::gpu::GpuScene;
 use crate::scene::{Aabb, Camera, Scene};
@@ -158,7 +158,7 @@ impl BudgetState {
     ) -> Result<()> {
         let n = scene.objects.len();
         let stage_ms = timings.map(|t| {
-            effects::STAGES.map(|s| t.iter().filter(|(p, _)| *p == s).map(|(_, ms)| ms).sum::<f64>())
+            effects::STAGES.map(|s| t.iter().filter(|(p, _)| s.contains(p)).map(|(_, ms)| ms).sum::<f64>())
         });
         let measured_ms = stage_ms.map_or(f64::NAN, |m| m.iter().sum());
         let stat = |o: usize| words.get(o * WORDS..(o + 1) * WORDS).unwrap_or(&[0; WORDS]);
@@ -225,7 +225,7 @@ impl BudgetState {
 }
 
 /// The paper's per-object inputs: A and pixel bounds from `heuristic` (`words`), D to the centre of
-/// the world bounds, reflective (roughness <= MIRROR_ROUGHNESS) / refractive (transmissive) from the
+/// the world bounds, reflective (roughness <= GLOSSY_ROUGHNESS: mirror or glossy) / refractive (transmissive) from the
 /// materials, E and K from the object's properties, S from `previous`.
 pub fn object_stats(
     scene: &Scene,
@@ -241,7 +241,7 @@ pub fn object_stats(
         let prim = &scene.meshes[inst.mesh].primitives[inst.primitive];
         bounds[o] = bounds[o].union(&prim.bounds.transformed_f64(&inst.world));
         let m = &scene.materials[scene.instance_material(inst)];
-        reflective[o] |= m.roughness <= MIRROR_ROUGHNESS;
+        reflective[o] |= m.roughness_range().0 <= GLOSSY_ROUGHNESS;
         refractive[o] |= m.transmission > 0.0 && m.metallic < 1.0;
     }
     let eye = camera.position_f64();

@@ -5,7 +5,7 @@
 use ash::vk;
 
 use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
-use super::{direct, gbuffer, reference, specular, terms, Creation, PassDesc, Upstream};
+use super::{direct, gbuffer, glossy_filter, reference, specular, terms, Creation, PassDesc, Upstream};
 use crate::gpu::shared::{DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN, TERMS_IN};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
@@ -26,7 +26,8 @@ struct Inputs {
 impl Inputs {
     fn of(up: &Upstream) -> Inputs {
         Inputs {
-            specular: up.get(&specular::SPECULAR),
+            // The glossy filter's output carries the specular chain too.
+            specular: up.get(&glossy_filter::REFLECTED).or(up.get(&specular::SPECULAR)),
             reference: up.get(&reference::ACCUMULATION),
             terms: up.get(&terms::ACCUMULATION),
         }

@@ -11,6 +11,9 @@ pub mod fullscreen;
 pub mod fxaa;
 pub mod gbuffer;
 pub mod gbuffer_resolve;
+pub mod glossy;
+pub mod glossy_filter;
+pub mod glossy_temporal;
 pub mod heuristic;
 pub mod inject;
 pub mod luminance;
@@ -38,7 +41,7 @@ use inject::Injected;
 
 /// The frame (DESIGN.md's data flow): primary hits (raster or traced visibility + resolve, or camera
 /// rays) -> budget statistics -> fallback shadow maps -> direct -> ambient reference -> attribution
-/// terms -> specular chain -> composite -> luminance -> tone map -> anti-aliasing (at most one). The
+/// terms -> specular chain -> glossy reflections, their history and filter -> composite -> luminance -> tone map -> anti-aliasing (at most one). The
 /// scene update (skinning, refit, top level) is recorded before it by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
     gbuffer::PASS,
@@ -51,6 +54,9 @@ pub const FRAME: &[PassDesc] = &[
     reference::PASS,
     terms::PASS,
     specular::PASS,
+    glossy::PASS,
+    glossy_temporal::PASS,
+    glossy_filter::PASS,
     composite::PASS,
     inject::PASS,
     luminance::PASS,

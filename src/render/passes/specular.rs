@@ -25,9 +25,9 @@ fn io(_: &ShadingConfig) -> Vec<TargetBinding> {
 pub fn skip(c: &ShadingConfig) -> Option<&'static str> {
     if c.debug_view {
         Some("a debug view shows the G-buffer instead")
-    } else if !c.needs.reflections && !c.needs.refractions {
+    } else if !c.needs.mirrors && !c.needs.refractions {
         Some("no mirror or transmissive material")
-    } else if !c.effects.reflections && !c.effects.refractions {
+    } else if !(c.effects.refractions || c.effects.reflections && c.needs.mirrors) {
         Some("reflections and refractions switched off")
     } else {
         None
