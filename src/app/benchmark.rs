@@ -10,6 +10,7 @@ use super::{
     check_validation, load_posed, log_frame_health, resolve_shading, with_context, GpuOptions, RenderJob,
 };
 use crate::accel::dynamic::RebuildPolicy;
+use crate::render::settings::PrimaryVisibility;
 use crate::render::shading::{Backend, Effects, Mode};
 use crate::render::{RenderSettings, Renderer};
 use crate::scene::{Camera, Scene};
@@ -181,9 +182,24 @@ pub fn bench(
         bail!("bench: not every variant asked for can run on {}: {}", ctx.caps.name, unavailable.join("; "));
     }
     let n = variants.len();
+    // Warm-up frames per variant: under auto primary visibility at least until both techniques have run
+    // (each pass's first frame compiles its shaders on a software device; a probe reaching the traced
+    // pass within the measured frames cost one of them seconds). The extra frames repeat the path's
+    // first, so the measured frames are the same whatever the count.
+    let warm: Vec<usize> = variants
+        .iter()
+        .map(|v| {
+            let auto = v.mode == Mode::Hybrid && job.settings.primary_visibility == PrimaryVisibility::Auto;
+            if auto {
+                warmup.max(crate::render::visibility::FRAMES_TO_WARM_BOTH as usize)
+            } else {
+                warmup
+            }
+        })
+        .collect();
     // Frames in rendering order: per variant a ray-counting frame and the warm-up, then one measured
     // frame per variant for each frame of the path; `--capture-frame` counts the same way.
-    let total = n * (1 + warmup + frames);
+    let total = warm.iter().map(|w| 1 + w + frames).sum::<usize>();
     if let Some(c) = ctx.capture_frame.filter(|&c| c >= total as u64) {
         bail!("--capture-frame {c}: this bench renders {total} frames (0..={})", total - 1);
     }
@@ -194,8 +210,9 @@ pub fn bench(
         let mut rays = Vec::new();
         for (k, &v) in variants.iter().enumerate() {
             eprintln!(
-                "bench: warming up {}/{n}: {:?} mode, {:?} backend, AS update {:?}",
+                "bench: warming up {}/{n} ({} frames): {:?} mode, {:?} backend, AS update {:?}",
                 k + 1,
+                warm[k],
                 v.mode,
                 v.backend,
                 v.accel
@@ -218,7 +235,8 @@ pub fn bench(
                 renderer.render(ctx, &scene, &base_camera, &counting)
             })?;
             rays.push(counted.ray_counts);
-            for i in 0..warmup {
+            for w in 0..warm[k] {
+                let i = (w + warmup).saturating_sub(warm[k]);
                 bench_frame(
                     ctx,
                     renderer,
@@ -378,24 +396,7 @@ fn bench_with(
         );
     }
     if reports.len() > 1 {
-        println!(
-            "side by side (median GPU ms per frame; ratio of the medians to the first row; paired: median \
-             [quartiles] of the per-frame ratios, the variants interleaved frame by frame):"
-        );
-        let base = &reports[0];
-        for (i, r) in reports.iter().enumerate() {
-            let ratio = r.frame_total.median / base.frame_total.median;
-            let word = if i == 0 { "baseline" } else { ratio_word(ratio) };
-            let paired = match paired_ratios(&r.frame_totals, &base.frame_totals) {
-                Some(_) if i == 0 => String::new(),
-                Some([lo, mid, hi]) => format!("paired {mid:.3} [{lo:.3}, {hi:.3}]"),
-                None => "paired -".into(),
-            };
-            println!(
-                "  {:>10.3} ms  {ratio:>5.2}x {word:<8} {paired:<30} {}",
-                r.frame_total.median, r.config
-            );
-        }
+        println!("{}", side_by_side(&reports));
     }
     if let Some(path) = csv {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -405,6 +406,30 @@ fn bench_with(
         log::info!("wrote {}", path.display());
     }
     check_validation(ctx)
+}
+
+/// The variants against the first: one ratio each, the median of the per-frame ratios (frames rendered
+/// next to each other at the same path position, so a drift in the device's speed cancels), with its
+/// quartiles as the spread. A ratio of the medians would mix frames from different path positions; it
+/// is the fallback only where frames do not pair.
+fn side_by_side(reports: &[BenchReport]) -> String {
+    let mut s = String::from(
+        "side by side (median GPU ms per frame; time ratio to the first row: median [quartiles] of the \
+         per-frame ratios, the variants interleaved frame by frame):",
+    );
+    let base = &reports[0];
+    for (i, r) in reports.iter().enumerate() {
+        let ratio = match paired_ratios(&r.frame_totals, &base.frame_totals) {
+            _ if i == 0 => "baseline".to_string(),
+            Some([lo, mid, hi]) => format!("{mid:.3}x [{lo:.3}, {hi:.3}] {}", ratio_word(mid)),
+            None => {
+                let ratio = r.frame_total.median / base.frame_total.median;
+                format!("{ratio:.3}x {} (ratio of the medians: frames do not pair)", ratio_word(ratio))
+            }
+        };
+        s.push_str(&format!("\n  {:>10.3} ms  {ratio:<36} {}", r.frame_total.median, r.config));
+    }
+    s
 }
 
 /// What refitting costs in tree quality, and a CPU refit in time, over the benchmark's own animation

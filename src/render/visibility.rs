@@ -31,6 +31,10 @@ pub const PROBE_SAMPLES: u32 = 3;
 /// The technique in use (raster before any decision) is kept unless the other costs less than this
 /// fraction of it, so near-equal costs do not flip the choice.
 pub const SWITCH_BELOW: f64 = 0.8;
+/// Frames from a fresh renderer until the first probe has decided: the raster's cold frame and samples,
+/// then the traced pass's. A benchmark warms up at least this long, so neither pass's first frame (a
+/// software device's shader compile) nor the probe's slower-technique frames land in measured ones.
+pub const FRAMES_TO_WARM_BOTH: u32 = 2 * (PROBE_SAMPLES + 1);
 /// A decision where one pass cost this many times the other is re-measured only every REPROBE_FRAMES
 /// frames, not on view changes: such a margin rarely turns, and each probe costs slower-pass frames
 /// (on lavapipe, Sponza's raster at 2.5x its camera rays re-probed every 30 frames along its path).
@@ -280,7 +284,10 @@ mod tests {
         let o = Vec3::ZERO;
         // The raster (in use before any decision): a cold frame and k
         // samples; then the traced pass likewise; then traced is kept.
-        let seq: Vec<_> = (0..2 * k + 4).map(|_| frame(&mut c, o, 8.0, 5.0)).collect();
+        let mut seq: Vec<_> = (0..FRAMES_TO_WARM_BOTH).map(|_| frame(&mut c, o, 8.0, 5.0)).collect();
+        // What `bench` warms up for: both passes have run their cold frame, the probe has decided.
+        assert!(c.warm == [true, true] && c.last.is_some(), "after FRAMES_TO_WARM_BOTH frames");
+        seq.extend((0..2).map(|_| frame(&mut c, o, 8.0, 5.0)));
         assert_eq!(seq, [probe(Raster, k + 1), probe(Traced, k + 1), vec![One(Traced); 2]].concat());
         assert_eq!(c.last, Some((Traced, 8.0, 5.0)));
         // A small move keeps the choice; so does a large one within MIN_PROBE_INTERVAL frames of the probe.

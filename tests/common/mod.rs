@@ -192,9 +192,10 @@ pub fn scene_from_toml(name: &str, toml: &str) -> hybrid_rt::scene::Scene {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("scenes");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.toml"));
-    // Tests running in parallel may write the same scene: write a private
-    // file and rename it into place, so no reader sees a half-written one.
-    let tmp = dir.join(format!("{name}.toml.{:?}.tmp", std::thread::current().id()));
+    // Tests running in parallel (threads, or test processes sharing the
+    // target dir) may write the same scene: write a private file and rename
+    // it into place, so no reader sees a half-written one.
+    let tmp = dir.join(format!("{name}.toml.{}.{:?}.tmp", std::process::id(), std::thread::current().id()));
     std::fs::write(&tmp, toml).unwrap();
     std::fs::rename(&tmp, &path).unwrap();
     hybrid_rt::scene::Scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e:#}"))

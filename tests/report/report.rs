@@ -197,8 +197,10 @@ fn compare_cli() {
     }
 }
 
-/// `bench --csv` writes one row per variant and pass, and the side-by-side
-/// ratios say slower or faster.
+/// `bench --csv` writes one row per variant and pass; the side-by-side
+/// summary gives one ratio per variant, the median of the per-frame ratios
+/// with its quartiles, and a word that agrees with it; the hybrid variant
+/// (auto primary visibility) warms up until both visibility passes have run.
 #[test]
 fn bench_csv_and_ratio_words() {
     let d = tmp("bench");
@@ -211,26 +213,33 @@ fn bench_csv_and_ratio_words() {
         .unwrap();
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{stderr}");
+    let both = hybrid_rt::render::visibility::FRAMES_TO_WARM_BOTH;
     assert!(
-        stderr.contains("bench: warming up 2/2")
+        stderr.contains(&format!("bench: warming up 1/2 ({both} frames): Hybrid"))
+            && stderr.contains("bench: warming up 2/2 (1 frames): Rt")
             && stderr.contains("bench: measuring 2 variants interleaved"),
         "{stderr}"
     );
     let side: Vec<&str> = stdout.lines().skip_while(|l| !l.starts_with("side by side")).skip(1).collect();
-    assert!(side[0].contains("1.00x baseline") && !side[0].contains("paired"), "{stdout}");
-    assert!(
-        side[1].contains(" slower ") || side[1].contains(" faster ") || side[1].contains(" as fast "),
-        "{stdout}"
-    );
-    // Two frame pairs: the per-frame ratios' median and quartiles.
-    let paired = side[1].split("paired ").nth(1).unwrap_or_else(|| panic!("no paired ratio: {stdout}"));
-    let nums: Vec<f64> = paired
+    assert!(side[0].contains(" baseline ") && !side[0].contains('['), "{stdout}");
+    // Two frame pairs: the per-frame ratios' median and quartiles, one ratio only.
+    let ratio = side[1].split(" ms ").nth(1).unwrap_or_else(|| panic!("{stdout}")).trim_start();
+    let nums: Vec<f64> = ratio
         .split(|c: char| !(c.is_ascii_digit() || c == '.'))
         .filter(|t| !t.is_empty())
         .take(3)
         .map(|t| t.parse().unwrap())
         .collect();
     assert!(nums.len() == 3 && nums[1] <= nums[0] && nums[0] <= nums[2] && nums[1] > 0.0, "{stdout}");
+    assert!(ratio.starts_with(&format!("{:.3}x [", nums[0])), "{stdout}");
+    let word = ["slower", "faster", "as fast"].into_iter().find(|w| ratio.contains(&format!("] {w} ")));
+    let agrees = match word {
+        Some("slower") => nums[0] > 1.0,
+        Some("faster") => nums[0] < 1.0,
+        Some(_) => (nums[0] - 1.0).abs() < 0.006,
+        None => false,
+    };
+    assert!(agrees && !ratio.contains("paired"), "{stdout}");
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
