@@ -119,6 +119,14 @@ impl BenchReport {
             s.push_str(v);
             s.push('\n');
         }
+        if let Some(p) = self.passes.iter().find(|p| p.name == crate::render::passes::heuristic::PASS.name) {
+            // The budget's own overhead: its statistics pass against the whole frame (medians).
+            s.push_str(&format!(
+                "budget heuristic: {:.3} ms, {:.1} % of the frame\n",
+                p.median,
+                100.0 * p.median / self.frame_total.median
+            ));
+        }
         if let Some((t, frames)) = &self.budget {
             s.push_str(&budget_table(*t, frames));
         }

@@ -46,6 +46,7 @@ impl GpuArgs {
             disable_ray_tracing: self.no_rt,
             disable_ray_query: self.no_ray_query,
             disable_trace_rays_indirect: false,
+            disable_subgroup_arithmetic: false,
             max_api_version: self.vulkan_api,
             capture_frame: None,
         }

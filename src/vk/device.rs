@@ -37,6 +37,9 @@ pub struct Capabilities {
     /// Subgroup ballot and broadcast in compute shaders: the compute tracer's packet traversal
     /// (glsl/trace/compute_packet.glsl) needs them.
     pub subgroup_ops: bool,
+    /// Subgroup arithmetic (add, min, max) with ballot in compute shaders: the `heuristic` pass reduces
+    /// its per-object statistics per subgroup (glsl/heuristic.comp); without, per tile in shared memory.
+    pub subgroup_arithmetic: bool,
     /// multiDrawIndirect and drawIndirectFirstInstance: the occlusion-culled
     /// G-buffer (render/occlusion.rs) draws clusters that way.
     pub multi_draw_indirect: bool,
@@ -113,8 +116,10 @@ pub fn query_capabilities(
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let props = props2.properties;
     let ops = vk::SubgroupFeatureFlags::BASIC | vk::SubgroupFeatureFlags::BALLOT;
-    let subgroup_ops = subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
-        && subgroup.supported_operations.contains(ops);
+    let compute = subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE);
+    let subgroup_ops = compute && subgroup.supported_operations.contains(ops);
+    let subgroup_arithmetic =
+        subgroup_ops && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::ARITHMETIC);
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
     // What a layer lets through differs from the driver (RenderDoc hides
     // what it cannot capture): `--log debug` lists it.
@@ -223,6 +228,7 @@ pub fn query_capabilities(
         timestamp_period_ns: props.limits.timestamp_period,
         timestamps,
         subgroup_ops,
+        subgroup_arithmetic,
         multi_draw_indirect: base.multi_draw_indirect != 0 && base.draw_indirect_first_instance != 0,
         graphics_queue_family: gfx.unwrap_or(0) as u32,
         limits: super::limits::Limits::query(instance, pd, has_as),

@@ -53,6 +53,8 @@ pub struct GpuOptions {
     pub disable_ray_query: bool,
     /// No indirect ray-tracing launch even where the device has one (tests).
     pub disable_trace_rays_indirect: bool,
+    /// No subgroup arithmetic even where the device has it (tests of the portable paths).
+    pub disable_subgroup_arithmetic: bool,
     /// `--vulkan-api 1.2`: use the device as a Vulkan 1.2 device.
     pub max_api_version: Option<u32>,
     /// `--capture-frame N` (render, bench, view): capture frame N with RenderDoc's in-application API.
@@ -132,6 +134,7 @@ impl Context {
         }
         let (pd, mut caps) = device::select(&devices, &opts.gpu.device)?;
         caps.trace_rays_indirect &= !opts.gpu.disable_trace_rays_indirect;
+        caps.subgroup_arithmetic &= !opts.gpu.disable_subgroup_arithmetic;
         let rt = if opts.gpu.disable_ray_tracing {
             RtEnables::default()
         } else {

@@ -503,3 +503,44 @@ fn path_traced_reference_is_measured_and_cached() {
     assert_eq!(third.reference().image.rgb, first.reference().image.rgb, "rendered again, the same seeds");
     common::assert_validation_clean(&ctx);
 }
+
+/// `bench --budget-ms` prints the budget's own overhead: the `heuristic`
+/// pass's median as a share of the frame's (issue 41 item 11).
+#[test]
+fn bench_prints_the_budget_heuristics_share_of_the_frame() {
+    let out = bin()
+        .args([
+            "bench",
+            "--width",
+            "32",
+            "--height",
+            "18",
+            "--frames",
+            "3",
+            "--warmup",
+            "1",
+            "--budget-ms",
+            "5",
+        ])
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{stderr}");
+    let median = |name: &str| -> f64 {
+        let line = stdout
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(name))
+            .unwrap_or_else(|| panic!("{stdout}"));
+        line.split_whitespace().nth(2).unwrap().parse().unwrap()
+    };
+    let (pass, frame) = (median("heuristic"), median("frame"));
+    let line =
+        stdout.lines().find(|l| l.starts_with("budget heuristic: ")).unwrap_or_else(|| panic!("{stdout}"));
+    let share: f64 = line
+        .strip_prefix(&format!("budget heuristic: {pass:.3} ms, "))
+        .and_then(|r| r.strip_suffix(" % of the frame"))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
+    // The table's medians are rounded to 1 µs: the share agrees within its own rounding.
+    assert!((share - 100.0 * pass / frame).abs() <= 0.06 + 100.0 * 0.0005 / frame, "{line} vs {stdout}");
+}

@@ -27,6 +27,8 @@ pub const PASS: PassDesc = PassDesc {
         u
     },
     create: |i: &Creation| {
-        FullScreen::create(i, "heuristic", io(), Shader::Compute("heuristic.comp"), &Specialization::new(&[]))
+        // Per subgroup where the device reduces across lanes, else per tile in shared memory.
+        let shader = if i.ctx.caps.subgroup_arithmetic { "heuristic.comp" } else { "heuristic_shared" };
+        FullScreen::create(i, "heuristic", io(), Shader::Compute(shader), &Specialization::new(&[]))
     },
 };
