@@ -41,10 +41,14 @@ fn render_all(scene: &Scene, w: u32, h: u32, mode: Mode, aa: AaMode) -> Vec<(Bac
 enum Bound {
     /// No channel of any pixel differs by more than 1/255.
     Identical,
-    /// At most 0.5% of pixels differ by more than 2/255.
+    /// At most 0.5% of pixels differ by more than 2/255, none by more than
+    /// NEAR_MAX (a share alone would pass a few pixels that are plain wrong;
+    /// measured on lavapipe: 5/255 at most, TransmissionTest's compute vs query).
     Near,
 }
 use Bound::*;
+
+const NEAR_MAX: u8 = 16;
 
 fn assert_agree(name: &str, frames: &[(Backend, FrameOutput)], bound: Bound) {
     for i in 0..frames.len() {
@@ -60,7 +64,11 @@ fn assert_agree(name: &str, frames: &[(Backend, FrameOutput)], bound: Bound) {
             match bound {
                 Identical => assert!(max <= 1, "{name}: {a:?} vs {b:?}: max difference {max}/255 > 1/255"),
                 Near => {
-                    assert!(frac <= 0.005, "{name}: {a:?} vs {b:?}: {:.3}% pixels differ", frac * 100.0)
+                    assert!(frac <= 0.005, "{name}: {a:?} vs {b:?}: {:.3}% pixels differ", frac * 100.0);
+                    assert!(
+                        max <= NEAR_MAX,
+                        "{name}: {a:?} vs {b:?}: max difference {max}/255 > {NEAR_MAX}/255"
+                    );
                 }
             }
         }
