@@ -1,5 +1,7 @@
-// Picks the traversal the variant was compiled for, behind the same two
-// functions (trace_closest, trace_shadow):
+// Picks the traversal the variant was compiled for, behind the same
+// functions: trace_closest, trace_shadow, and trace_ray (either kind, picked
+// at run time: a shader that traces both kinds through ONE trace_ray call
+// inlines the traversal once; lavapipe's JIT time grows with every copy):
 //   TRACE_QUERY     ray queries (compute)
 //   TRACE_COMPUTE   our BVH (compute)
 //   TRACE_PIPELINE  traceRayEXT (ray-generation shader)

@@ -52,7 +52,7 @@ bool packet_leaf(bool in_flat, uint mask, Instance inst, uint inst_index, uint f
     return blocked;
 }
 
-// `in_flat` and `mask` as in trace_blas_wide; for the lanes with `lane` set.
+// `in_flat` and `mask` as in trace_bvh's walk; for the lanes with `lane` set.
 bool packet_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint prim_offset, bool lane, vec3 o,
                       vec3 inv_d, vec3 dir0, WatertightRay wr, bool shadow, inout float tmax, inout RayHit hit,
                       inout vec3 tr) {
@@ -124,6 +124,41 @@ bool packet_blas_wide(bool in_flat, uint mask, uint inst_index, uint base, uint 
     return found;
 }
 
+// A binary (skinned, refitted) BLAS, one lane on its own; the caller tested the root. Ray in object space.
+bool lane_blas_binary(uint inst_index, vec3 o, vec3 d, bool shadow, inout float tmax, inout RayHit hit,
+                      inout vec3 tr) {
+    BvhInstance bi = bvh_instances[inst_index];
+    Instance inst = instances[inst_index];
+    vec3 inv_d = 1.0 / d;
+    WatertightRay wr = watertight_setup(o, d);
+    uint stack[BVH_STACK];
+    int sp = 0;
+    uint node = 0u;
+    bool found = false;
+    while (true) {
+        STAT_NODE();
+        BvhNode n = blas_nodes[bi.node_offset + node];
+        if (n.count > 0u) {
+            if (trace_leaf(false, 0xFFFFFFFFu, inst, inst_index, bi.prim_offset + n.left_or_first, n.count, wr, shadow,
+                           tmax, hit, found, tr)) {
+                return true;
+            }
+        } else {
+            uint l = n.left_or_first;
+            BvhNode cl = blas_nodes[bi.node_offset + l];
+            BvhNode cr = blas_nodes[bi.node_offset + l + 1u];
+            uint far;
+            uint visit = order_children(l, ray_box(o, inv_d, tmax, cl.bmin, cl.bmax),
+                                        ray_box(o, inv_d, tmax, cr.bmin, cr.bmax), node, far);
+            if (visit == 2u && sp < BVH_STACK) stack[sp++] = far;
+            if (visit > 0u) continue;
+        }
+        if (sp == 0) break;
+        node = stack[--sp];
+    }
+    return found;
+}
+
 // The instance is the same in every lane; the ray is each lane's, in object space.
 bool packet_blas(uint inst_index, bool lane, vec3 o, vec3 d, bool shadow, inout float tmax, inout RayHit hit,
                  inout vec3 tr) {
@@ -138,7 +173,7 @@ bool packet_blas(uint inst_index, bool lane, vec3 o, vec3 d, bool shadow, inout 
                                 inv_d, subgroupBroadcastFirst(d), wr, shadow, tmax, hit, tr);
     }
     // A binary (skinned, refitted) BLAS: each lane on its own.
-    return lane && trace_blas(inst_index, o, d, shadow, tmax, hit, tr);
+    return lane && lane_blas_binary(inst_index, o, d, shadow, tmax, hit, tr);
 }
 
 bool trace_packet(vec3 o, vec3 d, float tmax, uint mask, bool shadow, out RayHit hit, inout vec3 tr) {

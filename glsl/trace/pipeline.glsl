@@ -33,4 +33,13 @@ vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
     return payload.hit != 0u ? vec3(0.0) : payload.transmittance;
 }
 
+// traceRayEXT is a call into the pipeline's shaders, not inlined traversal: two call sites cost nothing.
+bool trace_ray(vec3 o, vec3 d, float tmax, bool shadow, out RayHit hit, out vec3 tr) {
+    tr = vec3(1.0);
+    hit = RayHit(0u, 0u, vec2(0.0), tmax);
+    if (!shadow) return trace_closest(o, d, tmax, hit);
+    tr = trace_shadow(o, d, tmax);
+    return all(equal(tr, vec3(0.0)));
+}
+
 #endif

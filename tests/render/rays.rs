@@ -8,12 +8,13 @@
 //! tracer's per-lane and its subgroup ("packet") traversal alike. No timing
 //! is checked.
 //! Scenes: the default scene (every material and light type, opaque and
-//! glass) and a glass square between a point light and the ground (shadow
-//! rays through it carry a transmittance strictly between 0 and 1).
+//! glass), a glass square between a point light and the ground (shadow
+//! rays through it carry a transmittance strictly between 0 and 1), and
+//! orbiting objects that the compute tracer reaches through its top level.
 use crate::common;
 
 use common::scenes::{glass_occluder, shadow_scene, Frame};
-use common::toml::material;
+use common::toml::*;
 use hybrid_rt::app::{RayBench, RenderJob};
 use hybrid_rt::render::rays::sets::RayKind;
 use hybrid_rt::render::rays::Traversal;
@@ -156,5 +157,57 @@ fn shadow_rays_pass_an_occluder_that_casts_no_shadow() {
         let primary = reports.iter().find(|r| r.kind == RayKind::Primary).unwrap();
         let occ = primary.compute.results.iter().filter(|x| x.hit != 0 && x.instance == 1).count();
         assert!(occ > 0, "no camera ray sees the occluder");
+    }
+}
+
+/// Rays through the compute tracer's top level: animated (orbiting) rigid
+/// objects are not flattened into the static tree but traced through the
+/// top level into their own 4-wide BLAS, several instances per top-level
+/// leaf, in the same walk as the static ground (glsl/trace/compute.glsl's
+/// trace_bvh). Opaque, mirror and glass instances, and one whose material
+/// casts no shadow (the top level's instance mask). The default and glass
+/// scenes above are all static, so only this one reaches those levels.
+#[test]
+fn compute_and_query_agree_through_the_top_level() {
+    let orbit = |period: f32| {
+        shown(format!("{{ center = [0.0, 0.6, 0.0], axis = [0.0, 1.0, 0.0], period = {period} }}"))
+    };
+    let mut blocks = vec![
+        environment([0.3, 0.4, 0.6]),
+        camera([0.0, 3.0, 6.5], [0.0, 0.4, 0.0]).yfov(50),
+        point([2.0, 5.0, 2.0], 60.0),
+        directional([-0.3, -1.0, -0.5], 2.0),
+        mirror("mirror", [0.9, 0.9, 0.9]),
+        glass("glass", 1.5),
+        material("red").base([0.8, 0.1, 0.1]).roughness(0.7),
+        material("ground").base([0.7, 0.7, 0.7]).roughness(0.8),
+        material("ghost").base([0.2, 0.8, 0.2]).no_shadows(),
+        plane("ground", [20.0, 20.0]).material("ground"),
+    ];
+    let materials = ["mirror", "glass", "red", "ghost", "red", "glass", "red", "mirror"];
+    for (i, m) in materials.iter().enumerate() {
+        let a = i as f32 * std::f32::consts::TAU / materials.len() as f32;
+        let r = 1.2 + 0.6 * (i % 2) as f32;
+        let body =
+            if i % 3 == 0 { cube(&format!("box {i}"), 0.6) } else { sphere(&format!("ball {i}"), 0.35) };
+        let at = [r * a.cos(), 0.6, r * a.sin()];
+        let period = [8.0, 4.0, 2.0][i % 3];
+        blocks.push(body.at(at).material(m).set("orbit", orbit(period)));
+        // A second instance inside it, same centre: the top level cannot split the two, so its leaves
+        // hold several instances.
+        blocks.push(cube(&format!("core {i}"), 0.2).at(at).material("red").set("orbit", orbit(period)));
+    }
+    let scene = common::scene_from_toml("rays_top_level", &scene_toml(blocks));
+    let flattened = hybrid_rt::accel::flat::static_instances(&scene);
+    assert_eq!(
+        flattened.iter().filter(|f| !**f).count(),
+        2 * materials.len(),
+        "the orbiting objects stay in the top level"
+    );
+    for traversal in [Traversal::Lane, Traversal::Packet] {
+        let reports = agree(&scene, 64, 36, traversal);
+        let primary = reports.iter().find(|r| r.kind == RayKind::Primary).unwrap();
+        let on_movers = primary.compute.results.iter().filter(|x| x.hit != 0 && x.instance >= 1).count();
+        assert!(on_movers > 20, "only {on_movers} camera rays hit an orbiting object");
     }
 }
