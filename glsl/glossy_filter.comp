@@ -71,10 +71,12 @@ void main() {
     vec4 centre = imageLoad(glossy_in, px);
     // Only this pixel's: `glossy temporal` read the history before this pass.
     imageStore(glossy_history, px, centre);
-    PrimaryHit p;
-    if (centre.a > 0.0 && read_primary(px, p)) {
-        Surface s = p.s;
-        vec3 v = -p.dir;
+    uvec2 hit;
+    Surface s;
+    // Material terms and the shading normal are all the albedo needs (no triangle rebuilt).
+    if (centre.a > 0.0 && read_primary_material(px, hit, s)) {
+        s.normal = oct_decode(texelFetch(gb_normal, px, 0).x);
+        vec3 v = -camera_ray_dir(vec2(px) + 0.5);
         float nv = face_viewer(s, v);
         // composite adds env_specular_radiance x albedo: the sum never goes below zero.
         vec3 env = env_specular_radiance(s, v);

@@ -28,6 +28,15 @@ fn scene() -> hybrid_rt::scene::Scene {
     common::scene_from_toml("glossy_floor_red_wall", &toml)
 }
 
+/// The path-traced truth, 256 paths a pixel.
+fn truth() -> RenderSettings {
+    RenderSettings {
+        mode: Mode::Path,
+        path: PathSettings { samples: 256, ..Default::default() },
+        ..Default::default()
+    }
+}
+
 /// Floor pixels whose point lies between the camera and the wall, close to it (z in [-1.0, -0.3]).
 fn floor_in_front_of_the_wall(scene: &hybrid_rt::scene::Scene, w: u32, h: u32) -> Vec<usize> {
     let cam = &scene.cameras[0];
@@ -60,11 +69,7 @@ fn glossy_reflections_match_the_path_traced_floor() {
         aa: AaMode::None,
         ..Default::default()
     };
-    let truth = RenderSettings {
-        mode: Mode::Path,
-        path: PathSettings { samples: 256, ..Default::default() },
-        ..Default::default()
-    };
+    let truth = truth();
     let mut frames: Vec<FrameOutput> = Vec::new();
     for s in [&hybrid, &split_sum, &truth] {
         let f = hybrid_rt::render::reference::render_converged(&mut r, &ctx, &scene, cam, s).unwrap();
@@ -96,12 +101,7 @@ fn glossy_history_lowers_the_noise_of_a_still_view() {
     let ctx = common::validated_context();
     let mut r = Renderer::new(&ctx, &scene, Extent2D { width: w, height: h }).unwrap();
     let cam = &scene.cameras[0];
-    let truth = RenderSettings {
-        mode: Mode::Path,
-        path: PathSettings { samples: 256, ..Default::default() },
-        ..Default::default()
-    };
-    let truth = hybrid_rt::render::reference::render_converged(&mut r, &ctx, &scene, cam, &truth).unwrap();
+    let truth = hybrid_rt::render::reference::render_converged(&mut r, &ctx, &scene, cam, &truth()).unwrap();
     let hybrid = RenderSettings { aa: AaMode::None, glossy_temporal: true, ..Default::default() };
     let pixels = floor_in_front_of_the_wall(&scene, w, h);
     // RMS over the floor of the relative difference (red channel, the wall's colour).
