@@ -32,7 +32,7 @@ layout(set = SET_PASS, binding = RAYS_STATS, scalar) writeonly buffer Stats { uv
 
 layout(push_constant) uniform Push {
     uint count;
-    uint shadow;  // 1: any-hit shadow rays (trace_shadow), 0: closest hit
+    uint shadow;  // 1: any-hit shadow rays, 0: closest hit
 };
 
 #ifndef TRACE_NONE
@@ -48,13 +48,16 @@ void trace_bench_ray(uint i) {
     res.pad0 = 0.0;
     res.normal = vec3(0.0);
     res.pad1 = 0.0;
+    // One trace_ray call for both kinds: each call inlines the whole traversal.
+    RayHit h;
+    vec3 tr;
+    bool hit = trace_ray(r.origin, r.dir, r.tmax, shadow != 0u, h, tr);
     if (shadow != 0u) {
-        vec3 tr = trace_shadow(r.origin, r.dir, r.tmax);
+        tr = hit ? vec3(0.0) : tr;
         res.hit = all(equal(tr, vec3(0.0))) ? 1u : 0u;
         res.next = tr;
     } else {
-        RayHit h;
-        if (trace_closest(r.origin, r.dir, r.tmax, h)) {
+        if (hit) {
             TriangleWorld tri = triangle_world(h.instance, h.primitive);
             vec3 p = interpolate(tri, h.bary);
             vec3 gn = cross(tri.p1 - tri.p0, tri.p2 - tri.p0);

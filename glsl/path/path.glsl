@@ -19,64 +19,94 @@ bool consistent_side(vec3 l_world, float l_local_z, vec3 gn) {
     return (dot(l_world, gn) > 0.0) == (l_local_z > 0.0);
 }
 
-float visible(Surface s, vec3 gn, vec3 l_world, float tmax) {
-    vec3 o = offset_ray(s.position, dot(l_world, gn) > 0.0 ? gn : -gn, s.extent);
-    count_ray(RAY_KIND_SHADOW);
-    return trace_shadow(o, l_world, tmax).x;
-}
-
-// NEE: every punctual light, plus the environment and one emissive triangle (MIS-weighted).
-vec3 light_samples(Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng) {
-    vec3 lit = vec3(0.0);
+// NEE candidate k at a vertex: punctual light k, then (k == light_count) one emissive triangle, then
+// the environment (MIS-weighted), in that order (the random numbers they draw). False where it brings
+// nothing; else `c` is its contribution if unblocked along `d` up to `tmax` (`shadowed`: a shadow ray
+// decides; a light that casts no shadow does not need one).
+bool nee_candidate(uint k, Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng, out vec3 c, out vec3 d,
+                   out float tmax, out bool shadowed) {
     float unused;
-    for (uint i = 0u; i < frame.light_count; ++i) {
-        Light light = lights[i];
+    c = vec3(0.0);
+    tmax = RAY_TMAX;
+    shadowed = true;
+    if (k < frame.light_count) {
+        Light light = lights[k];
         LightSample ls = sample_light(light, s.position);
-        vec3 l = bsdf_local(m, ls.l);
-        if (!consistent_side(ls.l, l.z, gn)) continue;
-        vec3 c = bsdf_eval(m, v, l, unused) * ls.irradiance;
-        if (!(max3(c) > 0.0)) continue;
-        if ((light.flags & LIGHT_CASTS_SHADOWS) != 0u) {
-            float tmax = light.type == LIGHT_DIRECTIONAL ? RAY_TMAX : ls.distance * (1.0 - 1e-4);
-            c *= visible(s, gn, ls.l, tmax);
-        }
-        lit += c;
-    }
-    RayHit e;
-    float choice;
-    if (sample_emitter(rng, e, choice)) {
+        d = ls.l;
+        vec3 l = bsdf_local(m, d);
+        if (!consistent_side(d, l.z, gn)) return false;
+        c = bsdf_eval(m, v, l, unused) * ls.irradiance;
+        shadowed = (light.flags & LIGHT_CASTS_SHADOWS) != 0u;
+        if (light.type != LIGHT_DIRECTIONAL) tmax = ls.distance * (1.0 - 1e-4);
+    } else if (k == frame.light_count) {
+        RayHit e;
+        float choice;
+        d = vec3(0.0, 0.0, 1.0);
+        if (!sample_emitter(rng, e, choice)) return false;
         TriangleWorld tw = triangle_world(e.instance, e.primitive);
         vec3 en;
         float area = triangle_area(tw, en);
         vec3 b = bary3(e.bary);
         vec3 to = tw.p0 * b.x + tw.p1 * b.y + tw.p2 * b.z - s.position;
         e.t = length(to);
-        vec3 d = to / max(e.t, 1e-30);
+        d = to / max(e.t, 1e-30);
         vec3 l = bsdf_local(m, d);
         float cos_l = abs(dot(en, d));
-        if (e.t > 0.0 && cos_l > 0.0 && consistent_side(d, l.z, gn) && hit_alpha_passes(e.instance, e.primitive, e.bary, e.t)) {
-            float pdf_light = emitter_pdf(choice, area, e.t, cos_l), pdf_bsdf;
-            vec3 egn;
-            bool eback;
-            vec3 le = hit_surface(e, s.position, d, 0.0, egn, eback).emissive;
-            vec3 c = bsdf_eval(m, v, l, pdf_bsdf) * le * (power_heuristic(pdf_light, pdf_bsdf) / pdf_light);
-            // Stops short of the emitter itself.
-            if (max3(c) > 0.0) lit += c * visible(s, gn, d, e.t * (1.0 - 1e-3));
+        if (!(e.t > 0.0 && cos_l > 0.0 && consistent_side(d, l.z, gn)
+              && hit_alpha_passes(e.instance, e.primitive, e.bary, e.t))) {
+            return false;
         }
-    }
-    if (env_emits()) {
+        float pdf_light = emitter_pdf(choice, area, e.t, cos_l), pdf_bsdf;
+        vec3 egn;
+        bool eback;
+        vec3 le = hit_surface(e, s.position, d, 0.0, egn, eback).emissive;
+        c = bsdf_eval(m, v, l, pdf_bsdf) * le * (power_heuristic(pdf_light, pdf_bsdf) / pdf_light);
+        // Stops short of the emitter itself.
+        tmax = e.t * (1.0 - 1e-3);
+    } else {
+        d = vec3(0.0, 0.0, 1.0);
+        if (!env_emits()) return false;
         float pdf_env, pdf_bsdf;
-        vec3 d = env_sample(rng, pdf_env);
+        d = env_sample(rng, pdf_env);
         vec3 l = bsdf_local(m, d);
-        if (pdf_env > 0.0 && consistent_side(d, l.z, gn)) {
-            vec3 c = bsdf_eval(m, v, l, pdf_bsdf) * environment(d);
-            c *= power_heuristic(pdf_env, pdf_bsdf) / pdf_env;
-            if (max3(c) > 0.0) lit += c * visible(s, gn, d, RAY_TMAX);
-        }
+        if (!(pdf_env > 0.0 && consistent_side(d, l.z, gn))) return false;
+        c = bsdf_eval(m, v, l, pdf_bsdf) * environment(d);
+        c *= power_heuristic(pdf_env, pdf_bsdf) / pdf_env;
     }
-    return lit;
+    return max3(c) > 0.0;
 }
 
+// The BSDF sample at a vertex continues the path (o, dir); false where the path ends there.
+bool continue_path(Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng, inout vec3 throughput, out vec3 o,
+                   out vec3 dir, out float prev_pdf, out bool prev_delta, uint bounce) {
+    o = s.position;
+    dir = vec3(0.0, 0.0, 1.0);
+    prev_pdf = 0.0;
+    prev_delta = true;
+    BsdfSample bs;
+    if (!bsdf_sample(m, v, rng, bs)) return false;
+    vec3 l = normalize(bsdf_world(m, bs.l));
+    if (!consistent_side(l, bs.l.z, gn)) return false;
+    throughput *= bs.weight;
+    if (!(max3(throughput) > 0.0) || any(isinf(throughput))) return false;  // also NaN
+    o = offset_ray(s.position, bs.l.z > 0.0 ? gn : -gn, s.extent);
+    dir = l;
+    prev_pdf = bs.pdf;
+    prev_delta = bs.delta;
+    if (bounce + 1u >= PATH_RR_START) {
+        // Capped at 0.95 so paths in a closed white scene still end.
+        float q = min(max3(throughput), 0.95);
+        if (next_random(rng) >= q) return false;
+        throughput /= q;
+    }
+    return true;
+}
+
+#define NO_VERTEX 0xFFFFFFFFu
+
+// One ray per iteration, path and shadow rays alike, through ONE trace_ray call: every call inlines the
+// whole traversal, and lavapipe's JIT time grows steeply with the code. After each hit the vertex's
+// NEE candidates come one per iteration (k), then its BSDF sample continues the path.
 vec3 path_radiance(ivec2 px, inout uint rng) {
     vec2 jitter = vec2(next_random(rng), next_random(rng));
     vec3 dir = camera_ray_dir(vec2(px) + jitter);
@@ -85,17 +115,49 @@ vec3 path_radiance(ivec2 px, inout uint rng) {
     // A delta lobe (or the camera) sees the environment whole; a BSDF sample shares it via MIS.
     float prev_pdf = 0.0;
     bool prev_delta = true;
-    for (uint bounce = 0u;; ++bounce) {
+    uint bounce = 0u;
+    // The vertex whose light samples are under way: candidate k next, of `candidates`.
+    Surface s;
+    vec3 gn = vec3(0.0), v = vec3(0.0);
+    Bsdf m;
+    uint k = NO_VERTEX;
+    uint candidates = frame.light_count + 2u;
+    while (true) {
+        bool shadow = k < candidates;
+        vec3 ro = o, rd = dir, sample_c = vec3(0.0);
+        float tmax = RAY_TMAX;
+        if (shadow) {
+            if (!nee_candidate(k++, s, gn, m, v, rng, sample_c, rd, tmax, shadow)) continue;
+            if (!shadow) {
+                radiance += throughput * sample_c;
+                continue;
+            }
+            ro = offset_ray(s.position, dot(rd, gn) > 0.0 ? gn : -gn, s.extent);
+            count_ray(RAY_KIND_SHADOW);
+        } else {
+            if (k == candidates) {
+                k = NO_VERTEX;
+                if (!continue_path(s, gn, m, v, rng, throughput, o, dir, prev_pdf, prev_delta, bounce)) break;
+                bounce++;
+                ro = o;
+                rd = dir;
+            }
+            count_ray(bounce == 0u ? RAY_KIND_CAMERA : RAY_KIND_SECONDARY);
+        }
         RayHit h;
-        count_ray(bounce == 0u ? RAY_KIND_CAMERA : RAY_KIND_SECONDARY);
-        if (!trace_closest(o, dir, RAY_TMAX, h)) {
+        vec3 tr;
+        bool hit = trace_ray(ro, rd, tmax, shadow, h, tr);
+        if (shadow) {
+            if (!hit) radiance += throughput * sample_c * tr.x;
+            continue;
+        }
+        if (!hit) {
             float w = prev_delta || !env_emits() ? 1.0 : power_heuristic(prev_pdf, env_pdf(dir));
             radiance += throughput * environment(dir) * w;
             break;
         }
-        vec3 gn;
         bool back_face;
-        Surface s = hit_surface(h, o, dir, 0.0, gn, back_face);
+        s = hit_surface(h, o, dir, 0.0, gn, back_face);
         // Leaving a mesh from inside: the path crossed its medium.
         if (back_face) throughput *= volume_transmittance(h);
         if (max3(s.emissive) > 0.0) {
@@ -112,25 +174,9 @@ vec3 path_radiance(ivec2 px, inout uint rng) {
         if (bounce >= frame.accum_bounces) break;
         vec3 v_world = -dir;
         face_viewer(s, v_world);
-        Bsdf m = bsdf_at(s, v_world, back_face);
-        vec3 v = bsdf_local(m, v_world);
-        radiance += throughput * light_samples(s, gn, m, v, rng);
-        BsdfSample bs;
-        if (!bsdf_sample(m, v, rng, bs)) break;
-        vec3 l = normalize(bsdf_world(m, bs.l));
-        if (!consistent_side(l, bs.l.z, gn)) break;
-        throughput *= bs.weight;
-        if (!(max3(throughput) > 0.0) || any(isinf(throughput))) break;  // also NaN
-        o = offset_ray(s.position, bs.l.z > 0.0 ? gn : -gn, s.extent);
-        dir = l;
-        prev_pdf = bs.pdf;
-        prev_delta = bs.delta;
-        if (bounce + 1u >= PATH_RR_START) {
-            // Capped at 0.95 so paths in a closed white scene still end.
-            float q = min(max3(throughput), 0.95);
-            if (next_random(rng) >= q) break;
-            throughput /= q;
-        }
+        m = bsdf_at(s, v_world, back_face);
+        v = bsdf_local(m, v_world);
+        k = 0u;
     }
     return radiance;
 }
