@@ -1,11 +1,11 @@
 #version 460
-// Pass `glossy filter`: denoises the glossy correction (`glossy temporal`'s blend of the frames' samples)
-// with a joint bilateral filter guided by the G-buffer, then scales it by the lobe's albedo, and keeps the
-// blend as the next frame's history; variant HAS_SPECULAR adds the mirror / glass chain,
-// so `composite` reads one specular input. Taps: GLOSSY_FILTER_TAPS on a golden-angle spiral turned per
-// pixel, over a radius of the lobe's width as seen from the camera (alpha over the pixel's angle, capped),
-// kept where normal (against the lobe's width), plane distance (against the pixel's footprint) and
-// roughness agree.
+// Pass `glossy filter`: denoises the glossy correction (the frame's sample; variant TEMPORAL: `glossy
+// temporal`'s blend of the frames' samples, kept as the next frame's history) with a joint bilateral
+// filter guided by the G-buffer, then scales it by the lobe's albedo; variant HAS_SPECULAR adds the
+// mirror / glass chain, so `composite` reads one specular input. Taps: GLOSSY_FILTER_TAPS on a
+// golden-angle spiral turned per pixel, over a radius of the lobe's width as seen from the camera
+// (alpha over the pixel's angle, capped), kept where normal (against the lobe's width), plane distance
+// (against the pixel's footprint) and roughness agree.
 #include "common/gbuffer_read.glsl"
 #include "common/integrator.glsl"
 
@@ -15,7 +15,9 @@ layout(set = SET_PASS, binding = GLOSSY_IN, rgba32f) uniform readonly image2D gl
 layout(set = SET_PASS, binding = SPECULAR_IN, rgba32f) uniform readonly image2D specular_in;
 #endif
 layout(set = SET_PASS, binding = REFLECTED_OUT, rgba32f) uniform writeonly image2D reflected_out;
+#ifdef TEMPORAL
 layout(set = SET_PASS, binding = GLOSSY_HISTORY, rgba32f) uniform writeonly image2D glossy_history;
+#endif
 
 struct Guide {
     vec3 n;
@@ -69,8 +71,10 @@ void main() {
     vec3 color = vec3(0.0);
 #endif
     vec4 centre = imageLoad(glossy_in, px);
+#ifdef TEMPORAL
     // Only this pixel's: `glossy temporal` read the history before this pass.
     imageStore(glossy_history, px, centre);
+#endif
     uvec2 hit;
     Surface s;
     // Material terms and the shading normal are all the albedo needs (no triangle rebuilt).

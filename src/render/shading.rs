@@ -171,6 +171,9 @@ pub struct ShadingConfig {
     pub occlusion: bool,
     /// Fault injection is armed (tests: `Renderer::inject_radiance`): the `inject` pass exists.
     pub inject: bool,
+    /// RenderSettings::glossy_temporal: the `glossy temporal` pass and the history exist (the viewer);
+    /// without it the filter reads the frame's sample itself.
+    pub glossy_temporal: bool,
 }
 
 impl ShadingConfig {
@@ -244,6 +247,7 @@ impl ShadingConfig {
                 && ctx.caps.multi_draw_indirect
                 && mode == Mode::Hybrid
                 && visibility != Pv::Traced,
+            glossy_temporal: settings.glossy_temporal,
         })
     }
 
@@ -274,6 +278,7 @@ impl ShadingConfig {
             terms: false,
             visibility: crate::render::settings::PrimaryVisibility::Raster,
             occlusion: false,
+            glossy_temporal: false,
         })
     }
 

@@ -241,6 +241,7 @@ mod tests {
             terms: false,
             visibility: PrimaryVisibility::Auto,
             occlusion: false,
+            glossy_temporal: false,
         }
     }
 

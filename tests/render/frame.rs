@@ -45,7 +45,6 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
                 "direct",
                 "specular",
                 "glossy",
-                "glossy temporal",
                 "glossy filter",
                 "composite",
                 "tonemap",
@@ -60,17 +59,7 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
         let (p, targets) = frame_of(&ctx, &scene, &rt);
         assert_eq!(
             p,
-            [
-                "primary",
-                "direct",
-                "specular",
-                "glossy",
-                "glossy temporal",
-                "glossy filter",
-                "composite",
-                "tonemap",
-                "edge aa"
-            ],
+            ["primary", "direct", "specular", "glossy", "glossy filter", "composite", "tonemap", "edge aa"],
             "{backend:?} rt"
         );
         // Pure RT differs only in how the primary hits are found (raster
@@ -136,7 +125,6 @@ fn passes_and_targets_a_scene_does_not_need_are_left_out() {
         "gbuffer resolve",
         "direct",
         "glossy",
-        "glossy temporal",
         "glossy filter",
         "composite",
         "tonemap",
@@ -144,6 +132,15 @@ fn passes_and_targets_a_scene_does_not_need_are_left_out() {
     ];
     assert_eq!(passes, glossy);
     assert!(!targets.contains(&"specular chain") && targets.contains(&"glossy sample"), "{targets:?}");
+    // A one-sample frame (render, bench, report) blends no history: no `glossy temporal`, no history or
+    // blend target; the viewer's temporal reuse brings them in before the filter.
+    assert!(!targets.contains(&"glossy history") && !targets.contains(&"glossy blend"), "{targets:?}");
+    let temporal = RenderSettings { glossy_temporal: true, ..Default::default() };
+    let (passes, targets) = frame_of(&ctx, &one("frame_glossy_temporal", 0.3), &temporal);
+    let mut with_history = glossy.to_vec();
+    with_history.insert(4, "glossy temporal");
+    assert_eq!(passes, with_history);
+    assert!(targets.contains(&"glossy history") && targets.contains(&"glossy blend"), "{targets:?}");
     let (passes, targets) = frame_of(&ctx, &one("frame_mirror", 0.05), &RenderSettings::default());
     assert_eq!(
         passes,

@@ -1,7 +1,7 @@
 //! Pass `glossy temporal`: this frame's glossy sample blended into the reprojected history of the last
 //! frames (glsl/glossy_temporal.comp); `glossy filter` filters the blend and keeps it as the next
-//! frame's history. A single frame (`render`) has no history and passes its sample through. Runs exactly
-//! when `glossy` does.
+//! frame's history. Runs where `glossy` does with temporal reuse on (the viewer): `render`, `bench`,
+//! `report` and the tests render one-sample frames, and the filter reads the sample itself.
 
 use ash::vk;
 
@@ -9,6 +9,7 @@ use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
 use super::{gbuffer, glossy, Creation, PassDesc};
 use crate::gpu::shared::{GLOSSY_ACCUM, GLOSSY_HISTORY, GLOSSY_IN};
 use crate::render::frame::Access;
+use crate::render::shading::ShadingConfig;
 use crate::render::targets::TargetDesc;
 use crate::vk::pipeline::Specialization;
 
@@ -26,10 +27,14 @@ fn io() -> Vec<TargetBinding> {
     io
 }
 
+fn skip(c: &ShadingConfig) -> Option<&'static str> {
+    glossy::skip(c).or((!c.glossy_temporal).then_some("no temporal reuse: each frame is a one-sample frame"))
+}
+
 pub const PASS: PassDesc = PassDesc {
     name: "glossy temporal",
     this_frame: super::every_frame,
-    skip: glossy::skip,
+    skip,
     uses: |_, _| fullscreen::uses(&io(), false),
     create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
