@@ -21,4 +21,18 @@
 #ifdef TRACE_PIPELINE
 #include "../trace/pipeline.glsl"
 #endif
+#if defined(TRACE_QUERY) || defined(TRACE_COMPUTE)
+// Inlined traversal (driver's ray query, our BVH): both kinds are trace_ray; a kernel that traces both
+// should call trace_ray once rather than these two.
+bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
+    vec3 unused;
+    return trace_ray(o, d, tmax, false, hit, unused);
+}
+
+vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
+    vec3 tr;
+    RayHit hit;
+    return trace_ray(o, d, tmax, true, hit, tr) ? vec3(0.0) : tr;
+}
+#endif
 #endif

@@ -374,15 +374,4 @@ bool trace_ray(vec3 o, vec3 d, float tmax, bool shadow, out RayHit hit, out vec3
     return packet ? trace_packet(o, d, tmax, mask, shadow, hit, tr) : trace_bvh(o, d, tmax, mask, shadow, hit, tr);
 }
 
-bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
-    vec3 unused;
-    return trace_ray(o, d, tmax, false, hit, unused);
-}
-
-vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
-    vec3 tr;
-    RayHit hit;
-    return trace_ray(o, d, tmax, true, hit, tr) ? vec3(0.0) : tr;
-}
-
 #endif

@@ -1,5 +1,5 @@
 // Traversal with VK_KHR_ray_tracing_pipeline (traceRayEXT from the
-// ray-generation shader). Same interface as trace/query.glsl.
+// ray-generation shader): trace_closest, trace_shadow and trace_ray (common/trace.glsl).
 #ifndef TRACE_PIPELINE_GLSL
 #define TRACE_PIPELINE_GLSL
 #extension GL_EXT_ray_tracing : require

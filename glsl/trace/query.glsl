@@ -1,7 +1,6 @@
-// Traversal with VK_KHR_ray_query. Implements the tracing interface:
-//   bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit)
-//   vec3 trace_shadow(vec3 o, vec3 d, float tmax)   -> transmittance
+// Traversal with VK_KHR_ray_query. Implements the tracing interface's
 //   bool trace_ray(vec3 o, vec3 d, float tmax, bool shadow, out RayHit hit, out vec3 tr)
+// (common/trace.glsl builds trace_closest and trace_shadow on it).
 #ifndef TRACE_QUERY_GLSL
 #define TRACE_QUERY_GLSL
 #extension GL_EXT_ray_query : require
@@ -45,17 +44,6 @@ bool trace_ray(vec3 o, vec3 d, float tmax, bool shadow, out RayHit hit, out vec3
     hit.bary = rayQueryGetIntersectionBarycentricsEXT(q, true);
     hit.t = rayQueryGetIntersectionTEXT(q, true);
     return true;
-}
-
-bool trace_closest(vec3 o, vec3 d, float tmax, out RayHit hit) {
-    vec3 unused;
-    return trace_ray(o, d, tmax, false, hit, unused);
-}
-
-vec3 trace_shadow(vec3 o, vec3 d, float tmax) {
-    vec3 tr;
-    RayHit hit;
-    return trace_ray(o, d, tmax, true, hit, tr) ? vec3(0.0) : tr;
 }
 
 #endif
