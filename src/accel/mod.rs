@@ -367,9 +367,7 @@ impl SceneAccel {
     /// Writes the instance records and (re)builds the TLAS, waiting for it.
     pub fn build_tlas(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         upload_now(ctx, "TLAS instances", |up| self.write_instances(up, scene))?;
-        let cmd = ctx.allocate_command_buffer("build TLAS")?;
-        let r = (|| {
-            unsafe { ctx.device.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())? };
+        ctx.one_shot("build TLAS", |cmd| {
             // The upload's copy (an earlier submission) before the build reads it.
             memory_barrier(
                 ctx,
@@ -377,12 +375,8 @@ impl SceneAccel {
                 (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
                 (vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR, vk::AccessFlags2::SHADER_READ),
             );
-            self.record_tlas(ctx, cmd, scene)?;
-            unsafe { ctx.device.end_command_buffer(cmd)? };
-            ctx.submit_and_wait(cmd)
-        })();
-        unsafe { ctx.device.free_command_buffers(ctx.command_pool, &[cmd]) };
-        r
+            self.record_tlas(ctx, cmd, scene)
+        })
     }
 
     /// Records the refit / rebuild of every skinned BLAS (one entry per slot), then the barrier the TLAS

@@ -82,6 +82,11 @@ pub struct Context {
     pub queue_family: u32,
     pub allocator: ManuallyDrop<Mutex<Allocator>>,
     pub command_pool: vk::CommandPool,
+    /// Command buffers `one_shot` finished with, reused rather than freed: with Khronos validation
+    /// 1.3.239 (Debian 12's), freeing a labelled command buffer per submission corrupted the heap when
+    /// two contexts ran at once (the tests): the layer erases a freed command buffer's debug-label state
+    /// without its lock (Vulkan-ValidationLayers issue 5172, fixed after 1.3.239).
+    one_shot_spare: Mutex<Vec<vk::CommandBuffer>>,
     pub debug_utils: Option<ext::debug_utils::Device>,
     pub rt: RtEnables,
     pub accel: Option<khr::acceleration_structure::Device>,
@@ -196,6 +201,7 @@ impl Context {
             queue,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             command_pool,
+            one_shot_spare: Mutex::new(Vec::new()),
             debug_utils,
             rt,
             accel,
@@ -275,11 +281,20 @@ impl Context {
         Ok(())
     }
 
-    /// Records `f` into a fresh command buffer, submits it and waits.
+    /// Records `f` into a command buffer of its own (a spare one reused, see `one_shot_spare`), submits
+    /// it and waits.
     pub fn one_shot<R>(&self, name: &str, f: impl FnOnce(vk::CommandBuffer) -> Result<R>) -> Result<R> {
-        let cmd = self.allocate_command_buffer(name)?;
+        let spare = self.one_shot_spare.lock().unwrap().pop();
+        let cmd = match spare {
+            Some(cmd) => {
+                self.name(cmd, name);
+                cmd
+            }
+            None => self.allocate_command_buffer(name)?,
+        };
         let result = (|| {
             unsafe {
+                self.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
                 self.device.begin_command_buffer(
                     cmd,
                     &vk::CommandBufferBeginInfo::default()
@@ -293,7 +308,12 @@ impl Context {
             self.submit_and_wait(cmd)?;
             Ok(r)
         })();
-        unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
+        if result.is_ok() {
+            self.one_shot_spare.lock().unwrap().push(cmd);
+        } else {
+            // It may still be pending (a failed wait): never reused.
+            unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
+        }
         result
     }
 

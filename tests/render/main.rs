@@ -24,6 +24,7 @@ mod frame;
 mod ibl;
 mod models;
 mod occlusion;
+mod one_shot;
 mod orbit;
 mod primary_visibility;
 mod prt;
