@@ -16,6 +16,9 @@ use super::tracer::Tracer;
 use crate::gpu::GpuScene;
 use crate::vk::Context;
 
+/// The debug name of the first frame's submissions on a device that compiles on first use.
+pub(super) const COMPILING: &str = "frame: first use (compiling)";
+
 /// A pass of the current frame with what it declared.
 struct Recorded {
     desc: &'static PassDesc,
@@ -139,6 +142,42 @@ impl FramePasses {
 
     /// Records the passes a frame in `state` runs.
     pub fn record(&self, rec: &mut Recorder, cx: &Recording, state: &FrameState) -> Result<()> {
+        self.record_each(rec, cx, state, |_, _| Ok(()))
+    }
+
+    /// `record` for the first frame of these passes on a device that compiles each pipeline on first
+    /// use (lavapipe): each pass goes out in a submission of its own (`rec.cmd` from `Context::begin_spare`,
+    /// a new one after each), and the log says which pass compiled and how long it took; the frame's
+    /// image is the same.
+    pub fn record_compiling(&self, rec: &mut Recorder, cx: &Recording, state: &FrameState) -> Result<()> {
+        let ctx = cx.ctx;
+        let n = self.names(state).len();
+        log::info!(
+            "frame: compiling the shaders of {n} passes: a software device compiles each pipeline on first use \
+             (seconds each the first time; Mesa's disk cache keeps them for later runs)"
+        );
+        let started = std::time::Instant::now();
+        let (mut k, mut last) = (0, started);
+        self.record_each(rec, cx, state, |rec, name| {
+            ctx.submit_spare(rec.cmd)?;
+            rec.cmd = ctx.begin_spare(COMPILING)?;
+            k += 1;
+            let now = std::time::Instant::now();
+            let (pass_s, all_s) = ((now - last).as_secs_f64(), (now - started).as_secs_f64());
+            log::info!("frame: [{k}/{n}] {name} compiled and ran in {pass_s:.1} s ({all_s:.1} s in all)");
+            last = now;
+            Ok(())
+        })
+    }
+
+    /// Records the passes a frame in `state` runs, calling `after` behind each.
+    fn record_each(
+        &self,
+        rec: &mut Recorder,
+        cx: &Recording,
+        state: &FrameState,
+        mut after: impl FnMut(&mut Recorder, &'static str) -> Result<()>,
+    ) -> Result<()> {
         for p in &self.passes {
             if (p.desc.this_frame)(state).is_some() {
                 continue;
@@ -147,6 +186,7 @@ impl FramePasses {
                 p.pass.record(cx, cmd);
                 Ok(())
             })?;
+            after(rec, p.desc.name)?;
         }
         Ok(())
     }

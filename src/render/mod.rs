@@ -240,12 +240,6 @@ impl Renderer {
         }
         let left_out = self.frame.build(ctx, config, &self.gpu, self.tracer.as_deref())?;
         self.choices.visibility.passes_rebuilt(&config);
-        if ctx.caps.device_type == vk::PhysicalDeviceType::CPU {
-            log::info!(
-                "frame: compiling shaders: a software device compiles each pipeline on first use, inside the \
-                 first frame (seconds per variant the first time; Mesa keeps them in its disk cache)"
-            );
-        }
         log::info!("frame: {} ({})", config.describe(), config.backend_reason(ctx, settings.backend));
         log::info!("frame: passes {}", self.pass_names().join(" -> "));
         if !left_out.is_empty() {
@@ -295,9 +289,13 @@ impl Renderer {
         tail: impl FnOnce(&mut Recorder, &Targets) -> Result<()>,
     ) -> Result<()> {
         let config = self.frame.config.context("prepare() must run before record()")?;
-        self.slots.record_uploads(ctx, cmd)?;
+        // A software device compiles each pipeline inside the first frame that uses it: that frame goes
+        // out a pass per submission, so the log can say how far the compile is.
+        let compiling = self.frame.passes_new && ctx.caps.device_type == vk::PhysicalDeviceType::CPU;
+        let head = if compiling { ctx.begin_spare(frame_passes::COMPILING)? } else { cmd };
+        self.slots.record_uploads(ctx, head)?;
         let frame = &self.frame;
-        let mut rec = Recorder::new(ctx, cmd, &mut self.slots.timer, Some(&frame.targets));
+        let mut rec = Recorder::new(ctx, head, &mut self.slots.timer, Some(&frame.targets));
         let cx = Recording {
             ctx,
             gpu: &self.gpu,
@@ -306,7 +304,13 @@ impl Renderer {
             draws: &self.choices.draw_list,
             injected: &frame.injection,
         };
-        frame.record(&mut rec, &cx, &self.choices.frame_state())?;
+        if compiling {
+            frame.record_compiling(&mut rec, &cx, &self.choices.frame_state())?;
+            ctx.submit_spare(rec.cmd)?;
+            rec.cmd = cmd;
+        } else {
+            frame.record(&mut rec, &cx, &self.choices.frame_state())?;
+        }
         tail(&mut rec, &frame.targets)?;
         self.choices.recorded();
         self.frame.recorded_cold = std::mem::take(&mut self.frame.passes_new);

@@ -284,6 +284,21 @@ impl Context {
     /// Records `f` into a command buffer of its own (a spare one reused, see `one_shot_spare`), submits
     /// it and waits.
     pub fn one_shot<R>(&self, name: &str, f: impl FnOnce(vk::CommandBuffer) -> Result<R>) -> Result<R> {
+        let cmd = self.begin_spare(name)?;
+        let r = match f(cmd) {
+            Ok(r) => r,
+            Err(e) => {
+                self.drop_spare(cmd);
+                return Err(e);
+            }
+        };
+        self.submit_spare(cmd)?;
+        Ok(r)
+    }
+
+    /// A command buffer of its own, begun and labelled `name`, for `submit_spare` (a spare one reused,
+    /// see `one_shot_spare`).
+    pub fn begin_spare(&self, name: &str) -> Result<vk::CommandBuffer> {
         let spare = self.one_shot_spare.lock().unwrap().pop();
         let cmd = match spare {
             Some(cmd) => {
@@ -292,29 +307,31 @@ impl Context {
             }
             None => self.allocate_command_buffer(name)?,
         };
-        let result = (|| {
-            unsafe {
-                self.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
-                self.device.begin_command_buffer(
-                    cmd,
-                    &vk::CommandBufferBeginInfo::default()
-                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                )?
-            };
-            self.begin_label(cmd, name, [0.6, 0.6, 0.6, 1.0]);
-            let r = f(cmd)?;
-            self.end_label(cmd);
-            unsafe { self.device.end_command_buffer(cmd)? };
-            self.submit_and_wait(cmd)?;
-            Ok(r)
-        })();
-        if result.is_ok() {
-            self.one_shot_spare.lock().unwrap().push(cmd);
-        } else {
-            // It may still be pending (a failed wait): never reused.
-            unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
+        if let Err(e) = self.begin_commands(cmd) {
+            self.drop_spare(cmd);
+            return Err(e);
         }
-        result
+        self.begin_label(cmd, name, [0.6, 0.6, 0.6, 1.0]);
+        Ok(cmd)
+    }
+
+    /// Ends, submits and waits for a command buffer from `begin_spare`; it becomes a spare again.
+    pub fn submit_spare(&self, cmd: vk::CommandBuffer) -> Result<()> {
+        self.end_label(cmd);
+        let r = unsafe { self.device.end_command_buffer(cmd) }
+            .map_err(anyhow::Error::from)
+            .and_then(|_| self.submit_and_wait(cmd));
+        match r {
+            Ok(()) => self.one_shot_spare.lock().unwrap().push(cmd),
+            Err(_) => self.drop_spare(cmd),
+        }
+        r
+    }
+
+    /// Frees a command buffer from `begin_spare` that failed: it may still be pending (a failed wait), so
+    /// it is never reused.
+    pub fn drop_spare(&self, cmd: vk::CommandBuffer) {
+        unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
     }
 
     pub fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> Result<()> {

@@ -645,3 +645,36 @@ fn report_subcommands_take_their_own_options() {
     assert!(help("stability").contains("--cases") && !help("stability").contains("--ref-samples"));
     assert!(help("prt").contains("--sweep") && help("prt").contains("--reference-samples"));
 }
+
+/// On a software device the first frame says how far the shader compile is: a line per pass of the
+/// frame, in the frame's order, counted against the total (the first run was silent for ~40 s).
+#[test]
+fn first_frame_reports_compile_progress() {
+    let dir = tmp("compile_progress");
+    let out = common::tiny_render_cmd()
+        .arg("--out")
+        .arg(dir.join("out.png"))
+        .env("RUST_LOG", "info")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let passes: Vec<&str> = stderr
+        .lines()
+        .find_map(|l| l.split_once("frame: passes ").map(|(_, rest)| rest.trim()))
+        .unwrap_or_else(|| panic!("no pass list:\n{stderr}"))
+        .split(" -> ")
+        .collect();
+    let progress: Vec<(String, String)> = stderr
+        .lines()
+        .filter_map(|l| l.split_once("frame: [")?.1.split_once(" compiled and ran in "))
+        .map(|(counted, _)| {
+            let (k, name) = counted.split_once("] ").expect("[k/n] name");
+            (k.to_string(), name.to_string())
+        })
+        .collect();
+    let n = passes.len();
+    let expected: Vec<(String, String)> =
+        passes.iter().enumerate().map(|(i, p)| (format!("{}/{n}", i + 1), p.to_string())).collect();
+    assert_eq!(progress, expected, "{stderr}");
+}
