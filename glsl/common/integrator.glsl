@@ -12,20 +12,18 @@
 #include "trace.glsl"
 #include "shadow_map.glsl"
 
-// Effects the scene does not need are compiled out.
+// Effects the scene does not need are compiled out. The recursion limits and ray counting are frame
+// uniforms: a software device compiles a variant for ~10 s, too long to spend on a knob.
 layout(constant_id = SPEC_SHADOWS) const bool SHADOWS = false;
 layout(constant_id = SPEC_REFLECTIONS) const bool REFLECTIONS = false;
 layout(constant_id = SPEC_REFRACTIONS) const bool REFRACTIONS = false;
-layout(constant_id = SPEC_MAX_DEPTH) const uint MAX_DEPTH = 8u;
-layout(constant_id = SPEC_MIN_WEIGHT) const float MIN_WEIGHT = 0.01;
-layout(constant_id = SPEC_COUNT_RAYS) const bool COUNT_RAYS = false;
 
 // Rays per effect (EFFECT_BIT_*) for the budget's cost model; a ray counts for its chain's effect.
 uint g_effect_rays[EFFECT_COUNT] = uint[](0u, 0u, 0u);
 uint g_ray_effect = EFFECT_BIT_SHADOWS;
 
 void count_ray(uint kind) {
-    if (COUNT_RAYS) atomicAdd(ray_counts[kind], 1u);
+    if ((frame.flags & FRAME_COUNT_RAYS) != 0u) atomicAdd(ray_counts[kind], 1u);
     g_effect_rays[g_ray_effect]++;
 }
 
@@ -156,7 +154,7 @@ bool g_truncated = false;
 
 void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone, uint effect) {
     // Importance cutoff.
-    if (max3(w) >= MIN_WEIGHT && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
+    if (max3(w) >= frame.min_weight && !any(isnan(d)) && !any(isinf(d)) && dot(d, d) > 0.0) {
         if (g_sp < int(BRANCH_STACK_SIZE)) {
             g_stack[g_sp] = Branch(o, normalize(d), w, depth, cone, effect, !effect_on(effect), false);
             g_sp++;
@@ -178,23 +176,23 @@ float face_viewer(inout Surface s, vec3 v) {
 
 // Traced, or its environment-only fallback.
 bool is_mirror(Surface s, uint depth) {
-    return REFLECTIONS && effect_shaded(EFFECT_BIT_REFLECTIONS) && depth < MAX_DEPTH && s.roughness <= MIRROR_ROUGHNESS;
+    return REFLECTIONS && effect_shaded(EFFECT_BIT_REFLECTIONS) && depth < frame.max_depth && s.roughness <= MIRROR_ROUGHNESS;
 }
 
 // A primary hit whose environment specular the `glossy` pass corrects with a traced lobe sample
 // (secondary hits keep the split sum). Not under the raster fallback: that is the split sum alone.
 bool is_glossy(Surface s, uint depth) {
-    return REFLECTIONS && effect_on(EFFECT_BIT_REFLECTIONS) && depth == 0u && MAX_DEPTH > 0u
+    return REFLECTIONS && effect_on(EFFECT_BIT_REFLECTIONS) && depth == 0u && frame.max_depth > 0u
         && s.roughness > MIRROR_ROUGHNESS
         && s.roughness <= GLOSSY_ROUGHNESS;
 }
 
 bool is_refracting(Surface s, uint depth) {
-    return REFRACTIONS && effect_shaded(EFFECT_BIT_REFRACTIONS) && depth < MAX_DEPTH
+    return REFRACTIONS && effect_shaded(EFFECT_BIT_REFRACTIONS) && depth < frame.max_depth
         && s.transmission * (1.0 - s.metallic) > 0.0;
 }
 
-// By material terms alone; push_branches may still drop one under MIN_WEIGHT.
+// By material terms alone; push_branches may still drop one under frame.min_weight.
 bool spawns_branches(Surface s, uint depth) {
     return is_mirror(s, depth) || is_refracting(s, depth);
 }

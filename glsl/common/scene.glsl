@@ -16,7 +16,7 @@ layout(set = SET_SCENE, binding = SCENE_DFG) uniform sampler2D dfg_table;
 // Diffuse PRT transfer (layout: shared_values.rs SCENE_PRT; prt.glsl).
 layout(set = SET_SCENE, binding = SCENE_PRT, scalar) readonly buffer PrtData { uint prt_data[]; };
 layout(set = SET_SCENE, binding = SCENE_TEXTURES) uniform sampler2D textures[];  // bindless: last binding
-// Benchmark counters by RAY_KIND_* (only with COUNT_RAYS); the truncated and bad-pixel slots always.
+// Benchmark counters by RAY_KIND_* (only with FRAME_COUNT_RAYS); the truncated and bad-pixel slots always.
 layout(set = SET_SCENE, binding = SCENE_RAY_COUNTERS) buffer RayCounters { uint ray_counts[RAY_COUNTER_SLOTS]; };
 // render/budget: statistics `heuristic` gathers, and the host's per-object selection.
 layout(set = SET_SCENE, binding = SCENE_BUDGET_STATS) buffer BudgetStats { uint budget_stats[]; };

@@ -74,7 +74,9 @@ struct Frame {
     // The previous frame's (FRAME_GLOSSY_HISTORY: a history to reproject into exists).
     mat4 prev_view_proj;
     vec3 prev_camera_pos;
-    uint pad_prev;
+    // The integrator's recursion limits (uniforms, not specialization constants: changing them compiles
+    // nothing): branches deeper than max_depth or weighing under min_weight are not traced.
+    uint max_depth;
     vec3 camera_pos;
     uint light_count;
     vec3 env_color;
@@ -104,6 +106,8 @@ struct Frame {
     uint accum_frame;
     uint accum_bounces;
     float path_clamp;
+    float min_weight;
+    uint pad_limits[3];
     // The environment's SH irradiance E_lm (rgb), with FRAME_AMBIENT_SH.
     vec4 sh_irradiance[SH_IRRADIANCE_COEFFS];
     // The environment's SH radiance L_lm (rgb), with FRAME_AMBIENT_PRT.

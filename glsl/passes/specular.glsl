@@ -20,7 +20,7 @@ bool specular_root(ivec2 px, out PrimaryHit p) {
 }
 
 // Decided from the G-buffer's material terms alone: the chain kernel reads the whole hit anyway (and
-// writes zero where its branches fall under MIN_WEIGHT).
+// writes zero where its branches fall under frame.min_weight).
 void specular_select(ivec2 px) {
     uvec2 hit;
     Surface s;

@@ -97,6 +97,9 @@ shared! {
     // each frame (FRAME_GLOSSY_TEMPORAL), and a history of the last frame's to reproject into.
     uint FRAME_GLOSSY_HISTORY = 32;
     uint FRAME_GLOSSY_TEMPORAL = 64;
+    // Count rays by kind into the benchmark counters (Effects::count_rays: a flag, not a
+    // specialization constant, so counting compiles no new pipeline).
+    uint FRAME_COUNT_RAYS = 128;
     uint PRT_HEADER_WORDS = 4;
     uint PRT_NO_VERTEX = 2147483647;
 
@@ -255,9 +258,6 @@ shared! {
     id SPEC_SHADOWS = 1;
     id SPEC_REFLECTIONS = 2;
     id SPEC_REFRACTIONS = 3;
-    id SPEC_MAX_DEPTH = 4;
-    id SPEC_MIN_WEIGHT = 5;
-    id SPEC_COUNT_RAYS = 6;
     // The luminance reduction's two kernels (glsl/luminance.comp).
     id SPEC_LUMINANCE_STAGE = 7;
     // The compute tracer's subgroup-cooperative ("packet") traversal

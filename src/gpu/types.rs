@@ -82,7 +82,9 @@ pub struct GpuFrame {
     /// The previous frame's view-projection and camera (temporal reuse: glossy reflections' history).
     pub prev_view_proj: [f32; 16],
     pub prev_camera_pos: [f32; 3],
-    pub pad_prev: u32,
+    /// The integrator's recursion limits (Effects::max_depth, min_weight): uniforms, so changing them
+    /// compiles no new pipeline.
+    pub max_depth: u32,
     pub camera_pos: [f32; 3],
     pub light_count: u32,
     pub env_color: [f32; 3],
@@ -112,6 +114,8 @@ pub struct GpuFrame {
     pub accum_bounces: u32,
     /// The path tracer's clamp of a sample's radiance (<= 0: none).
     pub path_clamp: f32,
+    pub min_weight: f32,
+    pub pad_limits: [u32; 3],
     /// Irradiance E_lm (rgb, w unused) of the environment as shaded: rotated
     /// and scaled by its intensity; read where `flags` has FRAME_AMBIENT_SH.
     pub sh_irradiance: [[f32; 4]; SH_IRRADIANCE_COEFFS as usize],
@@ -121,7 +125,7 @@ pub struct GpuFrame {
     pub sh_radiance: [[f32; 4]; SH_PRT_MAX_COEFFS as usize],
 }
 const _: () = assert!(
-    std::mem::size_of::<GpuFrame>() == 464 + 16 * (SH_IRRADIANCE_COEFFS + SH_PRT_MAX_COEFFS) as usize
+    std::mem::size_of::<GpuFrame>() == 480 + 16 * (SH_IRRADIANCE_COEFFS + SH_PRT_MAX_COEFFS) as usize
 );
 
 // [T; 64] has no Default.

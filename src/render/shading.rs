@@ -1,14 +1,13 @@
 //! What a frame runs: the render mode, the secondary effects the scene needs (and the user did not
 //! switch off), the ray backend and whether a debug view replaces the lighting. The passes decide from
-//! this whether they record; unneeded effects are compiled out through specialization constants, and
+//! this whether they record; unneeded effects are compiled out through specialization constants (the
+//! recursion limits and ray counting are frame uniforms instead, so the configuration ignores them), and
 //! with none at all no ray is traced and no acceleration structure is built.
 
 use anyhow::{bail, Result};
 
 pub use crate::gpu::shared::{GLOSSY_ROUGHNESS, MIRROR_ROUGHNESS};
-use crate::gpu::shared::{
-    SPEC_COUNT_RAYS, SPEC_MAX_DEPTH, SPEC_MIN_WEIGHT, SPEC_REFLECTIONS, SPEC_REFRACTIONS, SPEC_SHADOWS,
-};
+use crate::gpu::shared::{SPEC_REFLECTIONS, SPEC_REFRACTIONS, SPEC_SHADOWS};
 use crate::scene::{LightKind, Scene};
 use crate::vk::limits::Limits;
 use crate::vk::{Context, RtEnables};
@@ -136,7 +135,8 @@ fn light_is_on(l: &crate::scene::Light) -> bool {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadingConfig {
     pub mode: Mode,
-    /// The effects that run: wanted and needed.
+    /// The effects that run: wanted and needed. The per-frame values (`max_depth`, `min_weight`,
+    /// `count_rays`: frame uniforms) are at their defaults here, so changing them rebuilds nothing.
     pub effects: Effects,
     /// None: no ray is traced (deferred shading only).
     pub backend: Option<Backend>,
@@ -193,11 +193,14 @@ impl ShadingConfig {
         } else {
             settings.effects
         };
+        let d = Effects::default();
         let effects = Effects {
             shadows: wanted.shadows && needs.shadows,
             reflections: wanted.reflections && needs.reflections,
             refractions: wanted.refractions && needs.refractions,
-            ..wanted
+            max_depth: d.max_depth,
+            min_weight: d.min_weight,
+            count_rays: d.count_rays,
         };
         let reference = settings.reference.is_some() && !debug_view;
         if settings.terms != 0 && (reference || debug_view) {
@@ -265,7 +268,7 @@ impl ShadingConfig {
         Ok(ShadingConfig {
             inject: false,
             mode: Mode::Path,
-            effects: Effects { count_rays: settings.effects.count_rays, ..Effects::NONE },
+            effects: Effects::NONE,
             backend: Some(backend),
             debug_view: false,
             needs,
@@ -309,9 +312,6 @@ impl ShadingConfig {
             (SPEC_SHADOWS, (on && e.shadows) as u32),
             (SPEC_REFLECTIONS, (on && e.reflections) as u32),
             (SPEC_REFRACTIONS, (on && e.refractions) as u32),
-            (SPEC_MAX_DEPTH, e.max_depth),
-            (SPEC_MIN_WEIGHT, e.min_weight.to_bits()),
-            (SPEC_COUNT_RAYS, (on && e.count_rays) as u32),
         ]
     }
 

@@ -9,8 +9,8 @@ use super::settings::RenderSettings;
 use super::shading::Mode;
 use super::tone::{ToneOperator, ToneSettings};
 use crate::gpu::shared::{
-    FRAME_AMBIENT_PRT, FRAME_AMBIENT_SH, FRAME_GLOSSY_HISTORY, FRAME_GLOSSY_TEMPORAL, FRAME_OPAQUE_OCCLUDERS,
-    SH_IRRADIANCE_COEFFS, SH_PRT_MAX_COEFFS,
+    FRAME_AMBIENT_PRT, FRAME_AMBIENT_SH, FRAME_COUNT_RAYS, FRAME_GLOSSY_HISTORY, FRAME_GLOSSY_TEMPORAL,
+    FRAME_OPAQUE_OCCLUDERS, SH_IRRADIANCE_COEFFS, SH_PRT_MAX_COEFFS,
 };
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
@@ -52,6 +52,9 @@ pub fn frame(i: &Inputs, settings: &RenderSettings, accumulation: &mut Accumulat
     if settings.glossy_temporal {
         flags |= FRAME_GLOSSY_TEMPORAL;
     }
+    if settings.effects.count_rays {
+        flags |= FRAME_COUNT_RAYS;
+    }
     let (prev_view_proj, prev_camera_pos) = match i.prev_camera.filter(|_| settings.glossy_temporal) {
         Some((vp, pos)) => {
             flags |= FRAME_GLOSSY_HISTORY;
@@ -67,6 +70,8 @@ pub fn frame(i: &Inputs, settings: &RenderSettings, accumulation: &mut Accumulat
         inv_view_proj: view_proj.inverse().to_cols_array(),
         prev_view_proj: prev_view_proj.to_cols_array(),
         prev_camera_pos: prev_camera_pos.to_array(),
+        max_depth: settings.effects.max_depth,
+        min_weight: settings.effects.min_weight,
         camera_pos: i.camera.position().to_array(),
         light_count: i.gpu.light_count,
         env_color: env.color.to_array(),

@@ -8,7 +8,7 @@ use common::toml::*;
 
 use glam::Vec3;
 use hybrid_rt::render::shading::{AaMode, Effects, Mode};
-use hybrid_rt::render::{DebugView, FrameOutput, RenderSettings};
+use hybrid_rt::render::{DebugView, FrameOutput, RenderSettings, Renderer};
 
 const W: u32 = 160;
 const H: u32 = 90;
@@ -301,9 +301,15 @@ fn ior_one_slab_is_invisible_and_glass_sphere_stays_finite() {
 /// whatever the flag says leaves 8 and 64 equal) and never pass one per
 /// pixel and level (a mirror-only scene branches nowhere); no pixel hits
 /// the per-pixel ray budget; each deeper image shows more inter-reflections.
+/// One renderer changes the depth, the weight limit and ray counting between
+/// frames: they are frame uniforms, so no pass is rebuilt or recompiled.
 #[test]
 fn facing_mirrors_terminate_at_max_depth() {
     let scene = common::scene_from_toml("mirrors", &facing_mirrors());
+    let ctx = common::validated_context();
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
+    let first = r.render(&ctx, &scene, &scene.cameras[0], &settings()).unwrap();
+    assert!(first.cold, "the first frame compiles its passes");
     let mut frames = Vec::new();
     for depth in [2u32, 8, 64] {
         let t = std::time::Instant::now();
@@ -311,7 +317,9 @@ fn facing_mirrors_terminate_at_max_depth() {
             effects: Effects { max_depth: depth, min_weight: 0.0, count_rays: true, ..Effects::default() },
             ..settings()
         };
-        let f = common::render_scene(&scene, W, H, &s);
+        let f = r.render(&ctx, &scene, &scene.cameras[0], &s).unwrap();
+        assert!(!f.cold, "max depth {depth}: the passes were rebuilt for a frame uniform");
+        assert!(f.all_finite(), "NaN or Inf reached the frame");
         let secondary = f.ray_counts[2] as u64;
         eprintln!(
             "facing mirrors, max depth {depth}: {secondary} secondary rays ({:.2} per pixel), {:.2} s",
@@ -322,6 +330,17 @@ fn facing_mirrors_terminate_at_max_depth() {
         assert_eq!(f.truncated_pixels, 0, "depth {depth}: the per-pixel ray budget cut a mirror path");
         frames.push((depth, secondary, f));
     }
+    // The weight limit, a frame uniform too: a 0.98 mirror's branch falls under 0.9 after 6 bounces.
+    let s = RenderSettings {
+        effects: Effects { max_depth: 64, min_weight: 0.9, count_rays: true, ..Effects::default() },
+        ..settings()
+    };
+    let light = r.render(&ctx, &scene, &scene.cameras[0], &s).unwrap();
+    assert!(!light.cold, "min weight 0.9: the passes were rebuilt for a frame uniform");
+    let (cut, all) = (light.ray_counts[2] as u64, frames[2].1);
+    assert!(cut < all, "min weight 0.9 traced no fewer secondary rays than 0 ({cut} vs {all})");
+    r.destroy(&ctx);
+    drop(ctx); // validation errors, teardown included, fail here
     for pair in frames.windows(2) {
         let ((d0, n0, a), (d1, n1, b)) = (&pair[0], &pair[1]);
         assert!(n1 > n0, "max depth {d1} traced no more rays than {d0} ({n1} vs {n0})");
