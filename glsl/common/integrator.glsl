@@ -93,7 +93,7 @@ LightTerm light_term(Surface s, vec3 v, vec3 gn, vec3 ms, uint i) {
             t.o = offset_ray(s.position, light_side ? gn : -gn, s.extent);
             t.tmax = light.type == LIGHT_DIRECTIONAL ? RAY_TMAX : ls.distance * (1.0 - 1e-4);
         }
-    } else if (SHADOWS && raster_fallback() && light.type != LIGHT_POINT && (light.flags & LIGHT_CASTS_SHADOWS) != 0u
+    } else if (SHADOWS && (frame.flags & FRAME_SHADOW_MAPS) != 0u && light.type != LIGHT_POINT && (light.flags & LIGHT_CASTS_SHADOWS) != 0u
                && max3(t.contrib) > 0.0) {
         // Point lights have no shadow map and stay unshadowed.
         bool light_side = dot(gn, ls.l) > 0.0;

@@ -147,7 +147,9 @@ pub struct BudgetFrame {
 /// Effects mode's budget against what the ray stages took, per frame. The rays tell a wrong ray estimate (the
 /// selection's latency on a moving camera) from a wrong or noisy time per ray.
 fn budget_table(t: f64, frames: &[BudgetFrame]) -> String {
-    let mut s = format!("budget T = {t:.3} ms (effects mode), ray stages (direct + specular) per frame:\n");
+    let mut s = format!(
+        "budget T = {t:.3} ms (effects mode), ray stages (direct + specular + glossy) and shadow maps per frame:\n"
+    );
     s.push_str(&format!(
         "{:>6} {:>11} {:>10} {:>8} {:>12} {:>12}\n",
         "frame", "predicted", "measured", "vs T", "pred. rays", "rays"
@@ -172,6 +174,8 @@ fn budget_table(t: f64, frames: &[BudgetFrame]) -> String {
     ));
     if frames.iter().all(|f| f.predicted_ms < 0.9 * t) {
         s.push_str(" (T is more than tracing every effect of every visible object costs)");
+    } else if frames.iter().all(|f| f.predicted_rays == 0.0 && f.predicted_ms > 1.1 * t) {
+        s.push_str(" (T is below what the ray stages cost tracing nothing: no selection can meet it)");
     }
     s.push('\n');
     s
@@ -262,7 +266,26 @@ pub fn ratio_word(ratio: f64) -> &'static str {
 
 #[cfg(test)]
 mod tests {
-    use super::paired_ratios;
+    use super::{budget_table, paired_ratios, BudgetFrame};
+
+    #[test]
+    fn the_budget_table_says_when_t_is_out_of_reach() {
+        let frame = |predicted_ms, measured_ms, rays| BudgetFrame {
+            predicted_ms,
+            measured_ms,
+            predicted_rays: rays,
+            measured_rays: rays,
+        };
+        let below = budget_table(20.0, &[frame(190.0, 200.0, 0.0), frame(180.0, 170.0, 0.0)]);
+        assert!(
+            below.contains("within +-10% of T: 0 of 2") && below.contains("no selection can meet it"),
+            "{below}"
+        );
+        let above = budget_table(20.0, &[frame(10.0, 11.0, 50.0)]);
+        assert!(above.contains("more than tracing every effect"), "{above}");
+        let met = budget_table(20.0, &[frame(20.0, 21.0, 50.0), frame(20.0, 19.0, 0.0)]);
+        assert!(met.contains("2 of 2") && !met.contains("(T is"), "{met}");
+    }
 
     #[test]
     fn paired_ratios_pair_frames_by_position() {

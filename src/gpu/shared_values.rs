@@ -100,6 +100,10 @@ shared! {
     // Count rays by kind into the benchmark counters (Effects::count_rays: a flag, not a
     // specialization constant, so counting compiles no new pipeline).
     uint FRAME_COUNT_RAYS = 128;
+    // The raster fallback's shadow maps rendered this frame (pass `shadow_map`): left-out shadows of
+    // directional and spot lights read them; without it they stay unshadowed (the budget found the
+    // maps too dear).
+    uint FRAME_SHADOW_MAPS = 256;
     uint PRT_HEADER_WORDS = 4;
     uint PRT_NO_VERTEX = 2147483647;
 

@@ -12,7 +12,7 @@ use super::passes::FrameState;
 use super::prt_state::PrtState;
 use super::shading::{Mode, ShadingConfig};
 use super::{cull, reference, uniforms, visibility, AmbientMode, RenderSettings};
-use crate::gpu::shared::{FRAME_BUDGET, FRAME_FALLBACK_RASTER};
+use crate::gpu::shared::{FRAME_BUDGET, FRAME_FALLBACK_RASTER, FRAME_SHADOW_MAPS};
 use crate::gpu::GpuScene;
 use crate::scene::{Camera, Scene};
 use crate::vk::frame_ring::Uploads;
@@ -66,7 +66,8 @@ impl FrameChoices {
         glossy_history: bool,
     ) -> Result<()> {
         if let (true, Some(b)) = (config.budget, &settings.budget) {
-            self.budget_traced = Some(self.budget.before_frame(up, gpu, b, scene.objects.len())?);
+            self.budget_traced =
+                Some(self.budget.before_frame(up, gpu, b, scene.objects.len(), config.shadow_fallback)?);
         }
         self.choose_shadow_maps(up, gpu, scene, config)?;
         // The camera relative to the render origin, like every GPU transform.
@@ -101,6 +102,10 @@ impl FrameChoices {
             _ if !config.budget => 0,
             Some(budget::Fallback::Raster) => FRAME_BUDGET | FRAME_FALLBACK_RASTER,
             _ => FRAME_BUDGET,
+        } | if config.shadow_fallback && self.shadow_map_left_out.is_none() {
+            FRAME_SHADOW_MAPS
+        } else {
+            0
         };
         let inputs = uniforms::Inputs {
             camera,
@@ -132,7 +137,10 @@ impl FrameChoices {
     ) -> Result<()> {
         let left_out = match config.shadow_fallback {
             false => None,
-            true if !self.budget.shadows_left_out() => Some("every visible object's shadows are ray-traced"),
+            true if !self.budget.shadow_maps_render() => Some(
+                "every visible object's shadows are ray-traced, or the budget left shadows out rather than pay \
+                 for maps that cost more than the rays they replace or do not fit",
+            ),
             true => {
                 gpu.shadow.write_views(up, scene, gpu.origin)?;
                 None

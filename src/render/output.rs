@@ -57,9 +57,11 @@ impl FrameOutput {
         self.timings.iter().filter(|(n, _)| *n != "readback").map(|(_, ms)| ms).sum()
     }
 
-    /// GPU ms of the ray stages the budget governs (render/budget/effects.rs's STAGES).
+    /// GPU ms of what effects mode's budget bounds: the ray stages (render/budget/effects.rs's STAGES)
+    /// and the raster fallback's shadow maps.
     pub fn ray_stage_ms(&self) -> f64 {
-        crate::render::budget::effects::STAGES.iter().flat_map(|s| s.iter()).map(|p| self.pass_ms(p)).sum()
+        use crate::render::budget::effects::{SHADOW_MAP_PASS, STAGES};
+        STAGES.iter().flat_map(|s| s.iter()).chain([&SHADOW_MAP_PASS]).map(|p| self.pass_ms(p)).sum()
     }
 
     /// What to tell the user when reflection/refraction trees were cut.

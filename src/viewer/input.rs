@@ -354,6 +354,7 @@ mod tests {
             measured_ms,
             predicted_rays: None,
             measured_rays: [0.0; 2],
+            shadow_maps: false,
         }
     }
 

@@ -32,6 +32,9 @@ pub const EFFECT_NAMES: [&str; EFFECTS] = ["shadows", "reflections", "refraction
 /// The ray stages, by the passes that make them: shadows in `direct`; reflection / refraction chains in
 /// `specular`, glossy reflections in `glossy` and their filter (a cost of having the effect at all).
 pub const STAGES: [&[&str]; 2] = [&["direct"], &["specular", "glossy", "glossy temporal", "glossy filter"]];
+/// The raster fallback's pass (render/passes/shadow_map.rs): its time counts against the budget too.
+pub const SHADOW_MAP_PASS: &str = "shadow_map";
+
 pub const fn stage_of(effect: usize) -> usize {
     if effect == EFFECT_BIT_SHADOWS as usize {
         0
@@ -128,6 +131,8 @@ pub struct Observation<'a> {
     /// GPU ms of `direct` and `specular` (0 when left out; None when not representative, e.g. a shader
     /// compiled on first use inside them).
     pub stage_ms: Option<[f64; 2]>,
+    /// GPU ms of the `shadow_map` pass when it rendered (representative frames only).
+    pub shadow_maps_ms: Option<f64>,
 }
 
 /// The measured cost model, kept across frames (and budgets).
@@ -138,6 +143,8 @@ pub struct CostModel {
     rays_per_pixel: Vec<[Option<f64>; EFFECTS]>,
     /// A frame that traced every effect of every object has been seen.
     seen_full: bool,
+    /// The raster fallback's shadow maps (moving average; None until they rendered in a measured frame).
+    shadow_maps: Option<f64>,
 }
 
 impl CostModel {
@@ -176,12 +183,21 @@ impl CostModel {
                 }
             }
         }
+        if let Some(ms) = o.shadow_maps_ms.filter(|ms| ms.is_finite() && *ms >= 0.0) {
+            self.shadow_maps = Some(self.shadow_maps.map_or(ms, |m| m + SMOOTHING * (ms - m)));
+        }
         let Some(stage_ms) = o.stage_ms else { return };
         for (s, fit) in self.stages.iter_mut().enumerate() {
             // A stage that traced no ray shows its base.
             fit.observe(stage_ms[s], stage_rays[s]);
         }
         self.seen_full |= all_traced && o.pixels.iter().any(|&p| p > 0);
+    }
+
+    /// What the raster fallback's shadow maps cost a frame: measured, else 0 (the first calibration
+    /// frame, which traces nothing, renders and measures them).
+    pub fn shadow_maps_ms(&self) -> f64 {
+        self.shadow_maps.unwrap_or(0.0)
     }
 
     /// Measured, else the paper's estimate for that effect.
@@ -213,13 +229,95 @@ pub struct EffectsSelection {
     pub partial: Option<(usize, usize, f64)>,
     /// Predicted rays of each ray stage (`direct`, `specular`).
     pub predicted_rays: [f64; 2],
-    /// Predicted ms of the ray stages with this selection (bases included).
+    /// Predicted ms of the ray stages with this selection (bases included), and of the shadow maps when
+    /// they render.
     pub predicted_ms: f64,
     /// The bases alone (what any selection costs).
     pub base_ms: f64,
+    /// The raster fallback's shadow maps render: the selection leaves shadows out, and the maps cost
+    /// less than tracing those shadows would and fit the budget.
+    pub shadow_maps: bool,
 }
 
-/// Selects (object, effect) pairs within `budget_ms`; `previous` gives per-pair stickiness.
+/// The (object, effect) pairs that could be traced, with their costs and rays.
+struct Pairs {
+    scored: Vec<Scored>,
+    rays: Vec<f64>,
+    objects: usize,
+}
+
+/// One greedy pick within `left` ms: the pairs `forced` says first, then the paper's rule, then the
+/// leftover as a share of the most relevant pair that did not fit.
+struct Pick {
+    bits: Vec<u32>,
+    partial: Option<(usize, f64)>,
+    predicted_rays: [f64; 2],
+    spent: f64,
+}
+
+impl Pairs {
+    fn effect(&self, i: usize) -> usize {
+        self.scored[i].object % EFFECTS
+    }
+
+    fn pick(&self, left: f64, forced: impl Fn(usize) -> bool) -> Pick {
+        let mut pick =
+            Pick { bits: vec![0; self.objects], partial: None, predicted_rays: [0.0; 2], spent: 0.0 };
+        let mut taken = vec![false; self.scored.len()];
+        let take = |pick: &mut Pick, i: usize, share: f64| {
+            let (o, e) = (self.scored[i].object / EFFECTS, self.effect(i));
+            let word = &mut pick.bits[o];
+            *word = if share >= 1.0 { *word | 1 << e } else { selection_word(*word, 1 << e, share) };
+            let share = traced_fraction(*word, e);
+            pick.predicted_rays[stage_of(e)] += share * self.rays[i];
+            pick.spent += share * self.scored[i].cost;
+        };
+        for i in (0..self.scored.len()).filter(|&i| forced(i)) {
+            take(&mut pick, i, 1.0);
+            taken[i] = true;
+        }
+        let rest: Vec<Scored> =
+            self.scored.iter().zip(&taken).filter(|(_, t)| !**t).map(|(p, _)| *p).collect();
+        let chosen = paper::select(&rest, left - pick.spent);
+        let in_rest = |i: usize| chosen.mask.get(self.scored[i].object).copied().unwrap_or(false);
+        let rest_taken: Vec<usize> = (0..taken.len()).filter(|&i| !taken[i] && in_rest(i)).collect();
+        for i in rest_taken {
+            take(&mut pick, i, 1.0);
+        }
+        let chosen_pair = |i: usize| taken[i] || in_rest(i);
+        let left = left - pick.spent;
+        let partial = (0..self.scored.len())
+            .filter(|&i| paper::candidate(&self.scored[i]) && self.scored[i].cost > 0.0 && !chosen_pair(i))
+            .min_by(|&a, &b| paper::rank(&self.scored[a], &self.scored[b]))
+            .filter(|_| left.is_finite() && left > 0.0)
+            .map(|i| (i, (left / self.scored[i].cost).min(1.0)));
+        if let Some((i, share)) = partial {
+            take(&mut pick, i, share);
+        }
+        pick.partial = partial;
+        pick
+    }
+
+    /// What tracing the shadows `pick` leaves out would cost (ms), and whether every one could be traced
+    /// (none belongs to an object the heuristic never traces).
+    fn shadows_left_out(&self, pick: &Pick) -> (f64, bool) {
+        let (mut ms, mut traceable) = (0.0, true);
+        for (i, p) in self.scored.iter().enumerate() {
+            let share = traced_fraction(pick.bits[p.object / EFFECTS], EFFECT_BIT_SHADOWS as usize);
+            if self.effect(i) == EFFECT_BIT_SHADOWS as usize && p.pixels > 0 && share < 1.0 {
+                ms += (1.0 - share) * p.cost;
+                traceable &= paper::candidate(p);
+            }
+        }
+        (ms, traceable)
+    }
+}
+
+/// Selects (object, effect) pairs within `budget_ms`; `previous` gives per-pair stickiness. With
+/// `shadow_fallback` (`--fallback raster` and a light with a shadow map) the shadows left out are
+/// rasterized from shadow maps, whose measured cost counts against the budget too: a selection that
+/// leaves shadows out pays for the maps, and where tracing the shadows it leaves out costs no more than
+/// the maps, it traces them instead. Maps that do not fit leave those shadows out with no fallback.
 pub fn select(
     objects: &[ObjectStats],
     screen: Screen,
@@ -227,13 +325,13 @@ pub fn select(
     model: &CostModel,
     budget_ms: f64,
     previous: Option<&[u32]>,
+    shadow_fallback: bool,
 ) -> EffectsSelection {
     // The paper's score gives V and K per object; cost and S are per pair.
     let scored = paper::score(objects, screen, params);
     let stickiness = if params.stickiness.is_finite() { params.stickiness as f64 } else { 0.0 };
     let k = [0usize, 1].map(|s| model.stages[s].ms_per_ray());
-    let mut pairs = Vec::new();
-    let mut pair_rays = Vec::new();
+    let mut pairs = Pairs { scored: Vec::new(), rays: Vec::new(), objects: objects.len() };
     for (o, (stats, s)) in objects.iter().zip(&scored).enumerate() {
         let q = estimated_rays(stats, params.shadow_lights, params.lights);
         let relevance_factor = if stats.relevance.is_finite() { stats.relevance as f64 } else { 0.0 };
@@ -244,48 +342,44 @@ pub fn select(
             }
             let sticky = previous.and_then(|p| p.get(o)).is_some_and(|b| (b >> e) & 1 == 1);
             let relevance = ((if sticky { stickiness } else { 0.0 }) + s.visibility) * relevance_factor;
-            pairs.push(Scored {
+            pairs.scored.push(Scored {
                 object: o * EFFECTS + e,
                 pixels: s.pixels,
                 visibility: s.visibility,
                 cost: s.pixels as f64 * rays * k[stage_of(e)],
                 relevance,
             });
-            pair_rays.push(s.pixels as f64 * rays);
+            pairs.rays.push(s.pixels as f64 * rays);
         }
     }
     let base_ms: f64 = model.stages.iter().map(|s| s.base_ms.unwrap_or(0.0)).sum();
-    let chosen = paper::select(&pairs, budget_ms - base_ms);
-    let mut bits = vec![0u32; objects.len()];
-    let mut predicted_rays = [0.0; 2];
-    let mut spent = 0.0;
-    let mut take = |i: usize, word: &mut u32, share: f64| {
-        let e = pairs[i].object % EFFECTS;
-        *word = if share >= 1.0 { *word | 1 << e } else { selection_word(*word, 1 << e, share) };
-        let share = traced_fraction(*word, e);
-        predicted_rays[stage_of(e)] += share * pair_rays[i];
-        spent += share * pairs[i].cost;
-    };
-    for (i, p) in pairs.iter().enumerate() {
-        if chosen.mask.get(p.object).copied().unwrap_or(false) {
-            take(i, &mut bits[p.object / EFFECTS], 1.0);
+    let left = budget_ms - base_ms;
+    let mut pick = pairs.pick(left, |_| false);
+    let mut shadow_maps = false;
+    let mut maps_ms = 0.0;
+    if shadow_fallback && pairs.shadows_left_out(&pick).0 > 0.0 {
+        let maps = model.shadow_maps_ms();
+        let shadows = |i: usize| pairs.effect(i) == EFFECT_BIT_SHADOWS as usize;
+        let (all_shadows_ms, traceable) =
+            pairs.shadows_left_out(&Pick { bits: vec![0; objects.len()], ..pick });
+        let with_maps = pairs.pick(left - maps, |_| false);
+        let (replaced, _) = pairs.shadows_left_out(&with_maps);
+        if maps <= left && replaced > maps {
+            (pick, shadow_maps, maps_ms) = (with_maps, true, maps);
+        } else if traceable && all_shadows_ms <= left {
+            // Tracing every shadow costs no more than the maps would, or the maps do not fit.
+            pick = pairs.pick(left, |i| shadows(i) && paper::candidate(&pairs.scored[i]));
         }
     }
-    // The leftover goes to the most relevant pair that did not fit, on that share of its pixels.
-    let left = budget_ms - base_ms - chosen.spent;
-    let partial = (0..pairs.len())
-        .filter(|&i| {
-            let p = &pairs[i];
-            paper::candidate(p) && p.cost > 0.0 && !chosen.mask.get(p.object).copied().unwrap_or(false)
-        })
-        .min_by(|&a, &b| paper::rank(&pairs[a], &pairs[b]))
-        .filter(|_| left.is_finite() && left > 0.0)
-        .map(|i| (i, (left / pairs[i].cost).min(1.0)));
-    if let Some((i, share)) = partial {
-        take(i, &mut bits[pairs[i].object / EFFECTS], share);
+    let partial = pick.partial.map(|(i, share)| (pairs.scored[i].object / EFFECTS, pairs.effect(i), share));
+    EffectsSelection {
+        bits: pick.bits,
+        partial,
+        predicted_rays: pick.predicted_rays,
+        predicted_ms: base_ms + pick.spent + maps_ms,
+        base_ms,
+        shadow_maps,
     }
-    let partial = partial.map(|(i, share)| (pairs[i].object / EFFECTS, pairs[i].object % EFFECTS, share));
-    EffectsSelection { bits, partial, predicted_rays, predicted_ms: base_ms + spent, base_ms }
 }
 
 #[cfg(test)]
@@ -325,15 +419,28 @@ mod tests {
             rays: &none,
             traced: &vec![0; objects],
             stage_ms: Some([2.0, 2.0]),
+            shadow_maps_ms: None,
         });
         assert!(!m.calibrated() && m.calibration_mask() == crate::gpu::shared::EFFECT_ALL);
         let rays: Vec<[u32; EFFECTS]> = refl.iter().map(|&r| [100, 100 * r, 0]).collect();
         let all = vec![crate::gpu::shared::EFFECT_ALL; objects];
         let refl_rays: u32 = refl.iter().sum::<u32>() * 100;
         let ms = [2.0 + 0.001 * 100.0 * objects as f64, 2.0 + 0.01 * refl_rays as f64];
-        m.observe(&Observation { pixels: &pixels, rays: &rays, traced: &all, stage_ms: None });
+        m.observe(&Observation {
+            pixels: &pixels,
+            rays: &rays,
+            traced: &all,
+            stage_ms: None,
+            shadow_maps_ms: None,
+        });
         assert!(!m.calibrated(), "a frame without representative times calibrates nothing");
-        m.observe(&Observation { pixels: &pixels, rays: &rays, traced: &all, stage_ms: Some(ms) });
+        m.observe(&Observation {
+            pixels: &pixels,
+            rays: &rays,
+            traced: &all,
+            stage_ms: Some(ms),
+            shadow_maps_ms: None,
+        });
         assert!(m.calibrated());
         m
     }
@@ -357,6 +464,7 @@ mod tests {
                 rays: &[[100, 200, 0]],
                 traced: &[EFFECT_ALL],
                 stage_ms: Some([2.1, 2.0 + 200.0 * per_ray]),
+                shadow_maps_ms: None,
             })
         };
         for _ in 0..WINDOW {
@@ -390,7 +498,7 @@ mod tests {
         // not its reflections (2 ms more), the third's shadows.
         // The 0.05 ms left go to the best pair that did not fit, the second
         // object's reflections, on 0.05 / 2 of its pixels.
-        let s = select(&objects, SCREEN, &params(0.0), &m, 6.35, None);
+        let s = select(&objects, SCREEN, &params(0.0), &m, 6.35, None, false);
         assert_eq!(s.bits.iter().map(|b| b & EFFECT_ALL).collect::<Vec<_>>(), vec![0b011, 0b001, 0b001]);
         let (o, e, share) = s.partial.expect("a partial pair");
         assert_eq!((o, e), (1, EFFECT_BIT_REFLECTIONS as usize));
@@ -402,8 +510,8 @@ mod tests {
         assert!((s.predicted_rays[0] - 300.0).abs() < 1e-9, "{:?}", s.predicted_rays);
         assert!((s.predicted_rays[1] - 205.0).abs() < 0.01, "{:?}", s.predicted_rays);
         // Below the bases nothing; an unlimited budget everything possible.
-        assert_eq!(select(&objects, SCREEN, &params(0.0), &m, 3.9, None).bits, vec![0; 3]);
-        let all = select(&objects, SCREEN, &params(0.0), &m, f64::INFINITY, None);
+        assert_eq!(select(&objects, SCREEN, &params(0.0), &m, 3.9, None, false).bits, vec![0; 3]);
+        let all = select(&objects, SCREEN, &params(0.0), &m, f64::INFINITY, None, false);
         assert_eq!(all.bits, vec![0b011, 0b011, 0b001]);
         assert_eq!(all.partial, None, "nothing is left out of an unlimited budget");
     }
@@ -415,16 +523,16 @@ mod tests {
         let objects = [obj(100, 1.0, true)];
         let m = model(&[2]);
         for t in [4.5, 5.0, 6.0] {
-            let s = select(&objects, SCREEN, &params(0.0), &m, t, None);
+            let s = select(&objects, SCREEN, &params(0.0), &m, t, None, false);
             assert!((s.predicted_ms - t).abs() < 2.0 * 2.1 / 65536.0, "T {t}: {}", s.predicted_ms);
         }
         // 4.5 ms: shadows (0.1 ms) fit; reflections (2 ms) get 0.4 / 2.
-        let s = select(&objects, SCREEN, &params(0.0), &m, 4.5, None);
+        let s = select(&objects, SCREEN, &params(0.0), &m, 4.5, None, false);
         assert_eq!(s.bits[0] & EFFECT_ALL, 0b001);
         assert!((traced_fraction(s.bits[0], 1) - 0.2).abs() < 1.0 / 65536.0);
         // K = 0 gets no share either.
         let none = [ObjectStats { relevance: 0.0, ..objects[0] }];
-        let s = select(&none, SCREEN, &params(0.0), &m, 5.0, None);
+        let s = select(&none, SCREEN, &params(0.0), &m, 5.0, None, false);
         assert_eq!((s.bits[0], s.partial), (0, None));
     }
 
@@ -447,11 +555,18 @@ mod tests {
             rays: &[[1000, (500.0 * share / 0.25).round() as u32, 0]],
             traced: &[word],
             stage_ms: Some([3.0, 7.0]),
+            shadow_maps_ms: None,
         });
         assert!((m.rays_per_pixel(0, 1, 99.0) - 2.0).abs() < 1e-3, "{}", m.rays_per_pixel(0, 1, 99.0));
         // A share of too few pixels leaves the last measurement alone.
         let tiny = selection_word(0, 0b010, 0.01);
-        m.observe(&Observation { pixels: &[1000], rays: &[[0, 7, 0]], traced: &[tiny], stage_ms: None });
+        m.observe(&Observation {
+            pixels: &[1000],
+            rays: &[[0, 7, 0]],
+            traced: &[tiny],
+            stage_ms: None,
+            shadow_maps_ms: None,
+        });
         assert!((m.rays_per_pixel(0, 1, 99.0) - 2.0).abs() < 1e-3);
     }
 
@@ -463,10 +578,51 @@ mod tests {
         // lower id; with it, the pair selected last frame.
         let p = params(1e3);
         let full = |s: EffectsSelection| s.bits.iter().map(|b| b & EFFECT_ALL).collect::<Vec<_>>();
-        assert_eq!(full(select(&objects, SCREEN, &p, &m, 6.25, None)), vec![0b011, 0b001]);
-        assert_eq!(full(select(&objects, SCREEN, &p, &m, 6.25, Some(&[0b001, 0b011]))), vec![0b001, 0b011]);
+        assert_eq!(full(select(&objects, SCREEN, &p, &m, 6.25, None, false)), vec![0b011, 0b001]);
+        assert_eq!(
+            full(select(&objects, SCREEN, &p, &m, 6.25, Some(&[0b001, 0b011]), false)),
+            vec![0b001, 0b011]
+        );
         objects[0].relevance = 0.0;
-        assert_eq!(select(&objects, SCREEN, &p, &m, f64::INFINITY, None).bits, vec![0, 0b011]);
+        assert_eq!(select(&objects, SCREEN, &p, &m, f64::INFINITY, None, false).bits, vec![0, 0b011]);
+    }
+
+    fn with_maps(mut m: CostModel, ms: f64) -> CostModel {
+        m.observe(&Observation {
+            pixels: &[],
+            rays: &[],
+            traced: &[],
+            stage_ms: None,
+            shadow_maps_ms: Some(ms),
+        });
+        assert_eq!(m.shadow_maps_ms(), ms);
+        m
+    }
+
+    #[test]
+    fn shadow_maps_count_against_the_budget_and_cost_no_more_than_the_rays_they_replace() {
+        // Shadows 0.1 ms, reflections 2 ms per object, bases 4 ms; T = 6.15 leaves 2.15.
+        let objects = [obj(100, 1.0, true), obj(100, 2.0, true), obj(100, 4.0, false)];
+        let m = model(&[2, 2, 0]);
+        let shadows = |s: &EffectsSelection| s.bits.iter().map(|b| b & 1).collect::<Vec<_>>();
+        let p = params(0.0);
+        // Without the fallback: the nearest object's shadows and reflections; the others' shadows out.
+        let plain = select(&objects, SCREEN, &p, &m, 6.15, None, false);
+        assert_eq!((shadows(&plain), plain.shadow_maps), (vec![1, 0, 0], false));
+        // Maps of 0.01 ms replace the ~0.2 ms of shadow rays left out: bought, within T.
+        let cheap = select(&objects, SCREEN, &p, &with_maps(m.clone(), 0.01), 6.15, None, true);
+        assert_eq!((shadows(&cheap), cheap.shadow_maps), (vec![1, 0, 0], true));
+        assert!((cheap.predicted_ms - 6.15).abs() < 1e-3, "{}", cheap.predicted_ms);
+        // Maps of 0.5 ms cost more than tracing those shadows: every shadow traced, no maps, within T.
+        let dear = select(&objects, SCREEN, &p, &with_maps(m.clone(), 0.5), 6.15, None, true);
+        assert_eq!((shadows(&dear), dear.shadow_maps), (vec![1, 1, 1], false));
+        assert!(dear.predicted_ms <= 6.15 + 1e-3, "{}", dear.predicted_ms);
+        // Neither the maps (1 ms) nor every shadow (0.3 ms) fit 0.15 ms: no maps, T kept.
+        let tight = select(&objects, SCREEN, &p, &with_maps(m.clone(), 1.0), 4.15, None, true);
+        assert!(!tight.shadow_maps && tight.predicted_ms <= 4.15 + 1e-3, "{tight:?}");
+        // Nothing left out: no maps, whatever they cost.
+        let all = select(&objects, SCREEN, &p, &with_maps(m, 0.01), f64::INFINITY, None, true);
+        assert_eq!((shadows(&all), all.shadow_maps), (vec![1, 1, 1], false));
     }
 
     #[test]

@@ -5,6 +5,7 @@
 
 use anyhow::Result;
 
+use super::effects::SHADOW_MAP_PASS;
 use super::paper::{self, ObjectStats, Params, Screen, Selection};
 use super::{effects, BudgetMode, BudgetSettings};
 use crate::gpu::shared::{
@@ -32,6 +33,8 @@ pub struct BudgetReport {
     /// estimate from a wrong ms per ray.
     pub predicted_rays: Option<[f64; 2]>,
     pub measured_rays: [f64; 2],
+    /// The next frame may render the raster fallback's shadow maps (where it leaves shadows out).
+    pub shadow_maps: bool,
 }
 
 impl BudgetReport {
@@ -52,9 +55,10 @@ impl BudgetReport {
                     m if m.is_nan() => "not measured".to_string(),
                     m => format!("{m:.2} ms"),
                 };
+                let maps = if self.shadow_maps { " and shadow maps" } else { "" };
                 format!(
-                    "budget {} ms: {picked} of {visible} visible objects ray-traced ({}), ray stages predicted \
-                     {p:.2} ms (last frame {last})",
+                    "budget {} ms: {picked} of {visible} visible objects ray-traced ({}), ray stages{maps} \
+                     predicted {p:.2} ms (last frame {last})",
                     self.settings.budget,
                     per_effect.join(", "),
                 )
@@ -71,8 +75,14 @@ impl BudgetReport {
 pub struct BudgetState {
     /// EFFECT_* bits per object for the next frame, and the settings they were made under.
     mask: Option<(BudgetSettings, Vec<u32>)>,
-    /// The bits the frame in flight traces, per object.
+    /// The next frame may render the raster fallback's shadow maps (effects mode leaves them out where
+    /// they cost more than the shadows they replace or do not fit the budget).
+    maps_next: bool,
+    /// The bits the frame in flight traces, per object, and whether it may render shadow maps.
     in_flight: Vec<u32>,
+    in_flight_maps: bool,
+    /// The frame's configuration has the `shadow_map` pass (`--fallback raster`, a light with a map).
+    shadow_fallback: bool,
     /// Effects mode's measured costs (kept when the budget changes).
     model: effects::CostModel,
     last: Option<BudgetReport>,
@@ -98,14 +108,21 @@ impl BudgetState {
     /// object): to check the passes honour any selection, and to replay one.
     pub fn set_selection(&mut self, settings: &BudgetSettings, bits: Vec<u32>) {
         self.mask = Some((*settings, bits));
+        self.maps_next = true;
     }
 
-    /// Whether the frame in flight leaves out the shadows of an object with pixels (visible in the last
-    /// statistics, or any object before there are any).
-    pub fn shadows_left_out(&self) -> bool {
+    /// Whether the frame in flight renders the raster fallback's shadow maps: its selection allows them
+    /// and leaves out the shadows of an object with pixels (visible in the last statistics, or any object
+    /// before there are any).
+    pub fn shadow_maps_render(&self) -> bool {
         let visible =
             |o: usize| self.last.as_ref().is_none_or(|r| r.objects.get(o).is_none_or(|s| s.pixels > 0));
-        self.in_flight.iter().enumerate().any(|(o, bits)| (bits >> EFFECT_BIT_SHADOWS) & 1 == 0 && visible(o))
+        self.in_flight_maps
+            && self
+                .in_flight
+                .iter()
+                .enumerate()
+                .any(|(o, bits)| (bits >> EFFECT_BIT_SHADOWS) & 1 == 0 && visible(o))
     }
 
     /// Effects mode's cost model.
@@ -115,15 +132,18 @@ impl BudgetState {
 
     /// Resets the statistics and writes the selection for `objects` objects through the frame's ring
     /// slot: the current one, or everything before there is one (a measuring frame; effects mode
-    /// calibrates with nothing). Returns it for this frame's `after_frame`, since with frames in flight
-    /// later frames select before this one completes.
+    /// calibrates with nothing, which also measures the shadow maps). Returns it for this frame's
+    /// `after_frame`, since with frames in flight later frames select before this one completes.
+    /// `shadow_fallback`: the configuration has the raster fallback's shadow maps.
     pub fn before_frame(
         &mut self,
         up: &mut Uploads,
         gpu: &GpuScene,
         settings: &BudgetSettings,
         objects: usize,
+        shadow_fallback: bool,
     ) -> Result<Vec<u32>> {
+        self.shadow_fallback = shadow_fallback;
         let mut words = vec![0u32; objects.max(1) * WORDS];
         for w in words.chunks_exact_mut(WORDS) {
             // Minima start at the largest value for atomicMin; the rest at 0.
@@ -134,9 +154,11 @@ impl BudgetState {
             BudgetMode::Effects if !self.model.calibrated() => self.model.calibration_mask(),
             _ => EFFECT_ALL,
         };
-        self.in_flight = match self.mask_for(settings) {
-            Some(m) => (0..objects.max(1)).map(|o| m.get(o).copied().unwrap_or(0)).collect(),
-            None => vec![measuring; objects.max(1)],
+        (self.in_flight, self.in_flight_maps) = match self.mask_for(settings) {
+            Some(m) => {
+                ((0..objects.max(1)).map(|o| m.get(o).copied().unwrap_or(0)).collect(), self.maps_next)
+            }
+            None => (vec![measuring; objects.max(1)], true),
         };
         up.write(&gpu.budget_mask, 0, bytemuck::cast_slice(&self.in_flight))?;
         Ok(self.in_flight.clone())
@@ -160,12 +182,21 @@ impl BudgetState {
         let stage_ms = timings.map(|t| {
             effects::STAGES.map(|s| t.iter().filter(|(p, _)| s.contains(p)).map(|(_, ms)| ms).sum::<f64>())
         });
-        let measured_ms = stage_ms.map_or(f64::NAN, |m| m.iter().sum());
+        let shadow_maps_ms =
+            timings.and_then(|t| t.iter().find(|(p, _)| *p == SHADOW_MAP_PASS).map(|(_, ms)| *ms));
+        let measured_ms =
+            stage_ms.map_or(f64::NAN, |m| m.iter().sum::<f64>() + shadow_maps_ms.unwrap_or(0.0));
         let stat = |o: usize| words.get(o * WORDS..(o + 1) * WORDS).unwrap_or(&[0; WORDS]);
         let pixels: Vec<u32> = (0..n).map(|o| stat(o)[0]).collect();
         let rays: Vec<[u32; effects::EFFECTS]> =
             (0..n).map(|o| std::array::from_fn(|e| stat(o)[BUDGET_STAT_RAYS as usize + e])).collect();
-        self.model.observe(&effects::Observation { pixels: &pixels, rays: &rays, traced, stage_ms });
+        self.model.observe(&effects::Observation {
+            pixels: &pixels,
+            rays: &rays,
+            traced,
+            stage_ms,
+            shadow_maps_ms,
+        });
         let previous = self.mask_for(settings).map(|m| m.to_vec());
         let traced_before: Option<Vec<bool>> = previous.as_ref().map(|m| m.iter().map(|&b| b != 0).collect());
         let objects = object_stats(scene, camera, words, traced_before.as_deref());
@@ -179,13 +210,14 @@ impl BudgetState {
                 measured_rays[effects::stage_of(e)] += n as f64;
             }
         }
-        let (bits, predicted_ms, predicted_rays, selection) = match settings.mode {
+        let (bits, predicted_ms, predicted_rays, selection, maps) = match settings.mode {
             BudgetMode::Paper => {
                 let selection = paper::select(&paper::score(&objects, screen, &params), settings.budget);
                 let mut bits: Vec<u32> =
                     selection.mask.iter().map(|&m| if m { EFFECT_ALL } else { 0 }).collect();
                 bits.resize(n, 0);
-                (bits, None, None, selection)
+                // Paper mode's T is in abstract units, which a pass's ms cannot join.
+                (bits, None, None, selection, true)
             }
             BudgetMode::Effects => {
                 if !self.model.calibrated() {
@@ -199,15 +231,23 @@ impl BudgetState {
                     &self.model,
                     settings.budget,
                     previous.as_deref(),
+                    self.shadow_fallback,
                 );
                 let selected: Vec<usize> = (0..n).filter(|&o| chosen.bits[o] != 0).collect();
                 let spent = chosen.predicted_ms - chosen.base_ms;
                 let mask = chosen.bits.iter().map(|&b| b != 0).collect();
                 let predicted = (Some(chosen.predicted_ms), Some(chosen.predicted_rays));
-                (chosen.bits, predicted.0, predicted.1, Selection { selected, spent, mask })
+                (
+                    chosen.bits,
+                    predicted.0,
+                    predicted.1,
+                    Selection { selected, spent, mask },
+                    chosen.shadow_maps,
+                )
             }
         };
         self.mask = Some((*settings, bits.clone()));
+        self.maps_next = maps;
         let report = BudgetReport {
             settings: *settings,
             objects,
@@ -217,6 +257,7 @@ impl BudgetState {
             measured_ms,
             predicted_rays,
             measured_rays,
+            shadow_maps: self.shadow_fallback && maps,
         };
         log::debug!("{}", report.summary());
         self.last = Some(report);

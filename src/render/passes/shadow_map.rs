@@ -29,7 +29,7 @@ fn skip(c: &ShadingConfig) -> Option<&'static str> {
 }
 
 pub const PASS: PassDesc = PassDesc {
-    name: "shadow_map",
+    name: crate::render::budget::effects::SHADOW_MAP_PASS,
     this_frame: |f| f.shadow_maps_left_out,
     skip,
     // The shadow maps are the pass's own (transitions inside `record`).
