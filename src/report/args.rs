@@ -118,13 +118,14 @@ pub struct KnobArgs {
     /// out the hybrid-vs-rt difference the self-check reports).
     #[arg(long, value_enum, default_value_t = Mode::Rt)]
     pub ref_mode: Mode,
-    /// Do not count rays per frame (saves a pipeline compile per setting).
+    /// Do not count rays per frame (saves a frame per setting).
     #[arg(long)]
     pub no_ray_counts: bool,
     /// The aa knob's reference: the base settings with K×K samples per
-    /// pixel (1..=16).
-    #[arg(long, default_value_t = 4, value_parser = parse_supersample, allow_hyphen_values = true)]
-    pub ref_supersample: u32,
+    /// pixel (1..=16) [default: 16 or 8 where the large frame stays within
+    /// 4096² samples, else 4].
+    #[arg(long, value_parser = parse_supersample, allow_hyphen_values = true)]
+    pub ref_supersample: Option<u32>,
     /// How the aa knob's reference weighs its samples.
     #[arg(long, value_enum, default_value_t = SampleFilter::Box)]
     pub ref_ss_filter: SampleFilter,
@@ -366,6 +367,9 @@ impl KnobArgs {
             ref_ss_filter,
         } = self;
         let (view, frames, warmup, out) = common.parts();
+        let job = view.job()?;
+        let factor =
+            ref_supersample.unwrap_or(crate::render::supersample::reference_factor(job.width, job.height));
         let opts = ReportOptions {
             frames,
             warmup,
@@ -385,8 +389,8 @@ impl KnobArgs {
             },
             count_rays: !no_ray_counts,
             attribution_samples,
-            aa_reference: Supersample { factor: ref_supersample, filter: ref_ss_filter },
-            ..ReportOptions::new(view.job()?, out)
+            aa_reference: Supersample { factor, filter: ref_ss_filter },
+            ..ReportOptions::new(job, out)
         };
         super::report_command(gpu, &opts)
     }

@@ -98,6 +98,7 @@ pub struct ReportOptions {
 
 impl ReportOptions {
     pub fn new(job: RenderJob, out: impl Into<PathBuf>) -> ReportOptions {
+        let factor = crate::render::supersample::reference_factor(job.width, job.height);
         ReportOptions {
             job,
             frames: 10,
@@ -105,7 +106,7 @@ impl ReportOptions {
             knobs: knobs::parse_selection("").expect("every knob"),
             reference: ReferenceSettings::default(),
             count_rays: true,
-            aa_reference: Supersample { factor: 4, filter: SampleFilter::Box },
+            aa_reference: Supersample { factor, filter: SampleFilter::Box },
             truth_cache: None,
             attribution_samples: 256,
             out: out.into(),
