@@ -83,8 +83,8 @@ pub struct ReportOptions {
     pub warmup: usize,
     pub knobs: Vec<KnobSelection>,
     pub reference: ReferenceSettings,
-    /// Count rays by kind in one extra frame per setting (an extra
-    /// pipeline compile per setting).
+    /// Count rays by kind in one extra frame per setting (a frame uniform:
+    /// no extra pipeline).
     pub count_rays: bool,
     /// The `aa` knob's reference: the base settings supersampled like this.
     pub aa_reference: Supersample,

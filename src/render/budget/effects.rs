@@ -298,18 +298,18 @@ impl Pairs {
         pick
     }
 
-    /// What tracing the shadows `pick` leaves out would cost (ms), and whether every one could be traced
-    /// (none belongs to an object the heuristic never traces).
-    fn shadows_left_out(&self, pick: &Pick) -> (f64, bool) {
-        let (mut ms, mut traceable) = (0.0, true);
+    /// What tracing the shadows `pick` leaves out would cost (ms); `traceable`: only those of objects
+    /// the heuristic may trace (relevance K > 0).
+    fn shadows_left_out(&self, pick: &Pick, traceable: bool) -> f64 {
+        let mut ms = 0.0;
         for (i, p) in self.scored.iter().enumerate() {
             let share = traced_fraction(pick.bits[p.object / EFFECTS], EFFECT_BIT_SHADOWS as usize);
-            if self.effect(i) == EFFECT_BIT_SHADOWS as usize && p.pixels > 0 && share < 1.0 {
+            let counted = !traceable || paper::candidate(p);
+            if self.effect(i) == EFFECT_BIT_SHADOWS as usize && p.pixels > 0 && share < 1.0 && counted {
                 ms += (1.0 - share) * p.cost;
-                traceable &= paper::candidate(p);
             }
         }
-        (ms, traceable)
+        ms
     }
 }
 
@@ -357,18 +357,18 @@ pub fn select(
     let mut pick = pairs.pick(left, |_| false);
     let mut shadow_maps = false;
     let mut maps_ms = 0.0;
-    if shadow_fallback && pairs.shadows_left_out(&pick).0 > 0.0 {
+    if shadow_fallback && pairs.shadows_left_out(&pick, false) > 0.0 {
         let maps = model.shadow_maps_ms();
-        let shadows = |i: usize| pairs.effect(i) == EFFECT_BIT_SHADOWS as usize;
-        let (all_shadows_ms, traceable) =
-            pairs.shadows_left_out(&Pick { bits: vec![0; objects.len()], ..pick });
         let with_maps = pairs.pick(left - maps, |_| false);
-        let (replaced, _) = pairs.shadows_left_out(&with_maps);
+        let replaced = pairs.shadows_left_out(&with_maps, false);
+        let nothing = Pick { bits: vec![0; objects.len()], ..pick };
         if maps <= left && replaced > maps {
             (pick, shadow_maps, maps_ms) = (with_maps, true, maps);
-        } else if traceable && all_shadows_ms <= left {
-            // Tracing every shadow costs no more than the maps would, or the maps do not fit.
-            pick = pairs.pick(left, |i| shadows(i) && paper::candidate(&pairs.scored[i]));
+        } else if pairs.shadows_left_out(&nothing, true) <= left {
+            // The maps cost more than the rays they replace, or do not fit: trace every shadow that may
+            // be traced (an object of relevance 0 stays unshadowed).
+            let shadow = |i: usize| pairs.effect(i) == EFFECT_BIT_SHADOWS as usize;
+            pick = pairs.pick(left, |i| shadow(i) && paper::candidate(&pairs.scored[i]));
         }
     }
     let partial = pick.partial.map(|(i, share)| (pairs.scored[i].object / EFFECTS, pairs.effect(i), share));
@@ -617,9 +617,16 @@ mod tests {
         let dear = select(&objects, SCREEN, &p, &with_maps(m.clone(), 0.5), 6.15, None, true);
         assert_eq!((shadows(&dear), dear.shadow_maps), (vec![1, 1, 1], false));
         assert!(dear.predicted_ms <= 6.15 + 1e-3, "{}", dear.predicted_ms);
-        // Neither the maps (1 ms) nor every shadow (0.3 ms) fit 0.15 ms: no maps, T kept.
-        let tight = select(&objects, SCREEN, &p, &with_maps(m.clone(), 1.0), 4.15, None, true);
+        // Neither the maps (0.2 ms, less than the 0.3 ms of shadows left out) nor every shadow fit 0.15
+        // ms: no maps, T kept.
+        let tight = select(&objects, SCREEN, &p, &with_maps(m.clone(), 0.2), 4.15, None, true);
         assert!(!tight.shadow_maps && tight.predicted_ms <= 4.15 + 1e-3, "{tight:?}");
+        // An object the heuristic never traces (K = 0) keeps no shadow when the maps are too dear; the
+        // others' shadows are traced.
+        let mut k0 = objects;
+        k0[2].relevance = 0.0;
+        let dear_k0 = select(&k0, SCREEN, &p, &with_maps(m.clone(), 0.5), 6.15, None, true);
+        assert_eq!((shadows(&dear_k0), dear_k0.shadow_maps), (vec![1, 1, 0], false));
         // Nothing left out: no maps, whatever they cost.
         let all = select(&objects, SCREEN, &p, &with_maps(m, 0.01), f64::INFINITY, None, true);
         assert_eq!((shadows(&all), all.shadow_maps), (vec![1, 1, 1], false));
