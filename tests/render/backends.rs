@@ -106,11 +106,14 @@ fn sponza_with_spheres_agrees_across_backends() {
     assert_agree("sponza_spheres", &render_all(&scene, 160, 90, Mode::Hybrid, AaMode::Edge), Near);
 }
 
+/// GlassVaseFlowers: alpha-masked leaves seen through and beside a glass vase (a real asset where query
+/// and compute once differed on 0.2 % of pixels, max 77/255; 1/255 at 320x320 since).
 #[test]
 fn alpha_mask_and_transmission_models_agree_across_backends() {
     for rel in [
         "gltf/AlphaBlendModeTest/glTF/AlphaBlendModeTest.gltf",
         "gltf/TransmissionTest/glTF/TransmissionTest.gltf",
+        "gltf/GlassVaseFlowers/glTF/GlassVaseFlowers.gltf",
     ] {
         let scene = Scene::load(&common::shared_asset(rel)).unwrap();
         assert_agree(rel, &render_all(&scene, 160, 90, Mode::Hybrid, AaMode::Edge), Near);
