@@ -627,6 +627,9 @@ mod tests {
         k0[2].relevance = 0.0;
         let dear_k0 = select(&k0, SCREEN, &p, &with_maps(m.clone(), 0.5), 6.15, None, true);
         assert_eq!((shadows(&dear_k0), dear_k0.shadow_maps), (vec![1, 1, 0], false));
+        // Its shadows are left out under any T: maps cheaper than them are bought for it alone.
+        let k0_maps = select(&k0, SCREEN, &p, &with_maps(m.clone(), 0.05), f64::INFINITY, None, true);
+        assert_eq!((shadows(&k0_maps), k0_maps.shadow_maps), (vec![1, 1, 0], true));
         // Nothing left out: no maps, whatever they cost.
         let all = select(&objects, SCREEN, &p, &with_maps(m, 0.01), f64::INFINITY, None, true);
         assert_eq!((shadows(&all), all.shadow_maps), (vec![1, 1, 1], false));
