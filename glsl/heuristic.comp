@@ -17,7 +17,6 @@
 // No primary hit (object ids are indices, far below it).
 #define NO_OBJECT 0xffffffffu
 
-layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = SET_PASS, binding = GB_HIT) uniform usampler2D gb_hit;
 
 void add_stats(uint object, uint pixels, uvec2 lo, uvec2 hi) {
@@ -29,29 +28,67 @@ void add_stats(uint object, uint pixels, uvec2 lo, uvec2 hi) {
     atomicMax(budget_stats[base + 4u], hi.y);
 }
 
-uint object_at(uvec2 px) {
-    uint hit = all(lessThan(px, frame.resolution)) ? texelFetch(gb_hit, ivec2(px), 0).x : 0u;
+uint hit_at(uvec2 px) {
+    return all(lessThan(px, frame.resolution)) ? texelFetch(gb_hit, ivec2(px), 0).x : 0u;
+}
+
+uint object_of(uint hit) {
     return hit == 0u ? NO_OBJECT : instances[hit - 1u].object_id;
 }
 
 #ifndef HEURISTIC_SHARED
 
+// Each invocation takes a block of HEURISTIC_BLOCK_W x HEURISTIC_BLOCK_H pixels: on a CPU device the
+// pass's floor was one invocation, one object-id read and one subgroup round per pixel, 4 % of a
+// small scene's frame; a block's pixels usually share an instance and reduce in registers.
+#define BLOCK_W uint(HEURISTIC_BLOCK_W)
+#define BLOCK_H uint(HEURISTIC_BLOCK_H)
+#define BLOCK_PIXELS (BLOCK_W * BLOCK_H)
+// The pass dispatches a workgroup per 8 x 8 blocks (render/passes/heuristic.rs).
+layout(local_size_x = 8, local_size_y = 8) in;
+
+uvec2 in_block(uint i) { return uvec2(i % BLOCK_W, i / BLOCK_W); }
+
 void main() {
-    uvec2 px = gl_GlobalInvocationID.xy;
-    uint object = object_at(px);
-    if (object == NO_OBJECT) return;
-    // One round per distinct object among the active lanes (usually one): its lanes reduce together.
-    for (;;) {
-        if (object == subgroupBroadcastFirst(object)) {
-            uint pixels = subgroupAdd(1u);
-            uvec2 lo = subgroupMin(px), hi = subgroupMax(px);
-            if (subgroupElect()) add_stats(object, pixels, lo, hi);
-            break;
+    uvec2 origin = uvec2(BLOCK_W, BLOCK_H) * gl_GlobalInvocationID.xy;
+    uint objects[BLOCK_PIXELS];
+    uint remaining = 0u, previous_hit = 0u, previous_object = NO_OBJECT;
+    for (uint i = 0u; i < BLOCK_PIXELS; ++i) {
+        uint hit = hit_at(origin + in_block(i));
+        // Neighbours on one instance read its object id once.
+        if (hit != previous_hit) previous_object = object_of(hit);
+        previous_hit = hit;
+        objects[i] = previous_object;
+        if (previous_object != NO_OBJECT) remaining |= 1u << i;
+    }
+    // One round per distinct object in the block, and within it one per distinct object among the
+    // active lanes (usually one): its lanes reduce together and one adds the sum.
+    while (remaining != 0u) {
+        uint object = objects[findLSB(remaining)];
+        uint pixels = 0u;
+        uvec2 lo = uvec2(0xffffffffu), hi = uvec2(0u);
+        for (uint i = 0u; i < BLOCK_PIXELS; ++i) {
+            if ((remaining & (1u << i)) != 0u && objects[i] == object) {
+                pixels += 1u;
+                lo = min(lo, origin + in_block(i));
+                hi = max(hi, origin + in_block(i));
+                remaining &= ~(1u << i);
+            }
+        }
+        for (;;) {
+            if (object == subgroupBroadcastFirst(object)) {
+                uint sum = subgroupAdd(pixels);
+                uvec2 l = subgroupMin(lo), h = subgroupMax(hi);
+                if (subgroupElect()) add_stats(object, sum, l, h);
+                break;
+            }
         }
     }
 }
 
 #else
+
+layout(local_size_x = 8, local_size_y = 8) in;
 
 #define TILE_PIXELS 64u
 
@@ -71,7 +108,7 @@ void main() {
     s_max[lid] = uvec2(0u);
     barrier();
     uvec2 px = gl_GlobalInvocationID.xy;
-    uint object = object_at(px);
+    uint object = object_of(hit_at(px));
     if (object != NO_OBJECT) {
         uint slot = 0u;
         for (uint probe = 0u; probe < TILE_PIXELS; ++probe) {

@@ -61,6 +61,10 @@ shared! {
     // the instance transform (4 terms) and the traversal's own triangle test.
     float OFFSET_ULPS = 16.0;
     uint BUDGET_STAT_WORDS = 8;
+    // Pixels one `heuristic` invocation reduces in registers (glsl/heuristic.comp); its 8x8
+    // workgroups cover 8 times that, which the pass's dispatch counts.
+    id HEURISTIC_BLOCK_W = 2;
+    id HEURISTIC_BLOCK_H = 4;
     uint BUDGET_STAT_RAYS = 5;
     // Bits of the budget's selection: shadow rays at the primary hit; the reflection chain; the refraction
     // chain (a chain includes everything traced beyond its first ray, shadow rays too).

@@ -62,7 +62,8 @@ impl Kernel {
         }
     }
 
-    /// Binds the pipeline and `sets` (from set 0) and runs one invocation per pixel.
+    /// Binds the pipeline and `sets` (from set 0) and covers `extent`: a compute kernel's workgroup
+    /// covers `group` pixels (8x8 for one invocation per pixel), a ray-generation launch one per pixel.
     pub fn dispatch(
         &self,
         ctx: &Context,
@@ -70,13 +71,14 @@ impl Kernel {
         layout: vk::PipelineLayout,
         sets: &[vk::DescriptorSet],
         extent: vk::Extent2D,
+        group: [u32; 2],
     ) {
         self.bind(ctx, cmd, layout, sets);
         let d = &ctx.device;
         unsafe {
             match self {
                 Kernel::Compute(_) => {
-                    d.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1)
+                    d.cmd_dispatch(cmd, extent.width.div_ceil(group[0]), extent.height.div_ceil(group[1]), 1)
                 }
                 Kernel::RayTracing(rt) => rt.trace(ctx, cmd, extent.width, extent.height),
             }

@@ -98,7 +98,12 @@ pub struct FullScreen {
     traced: bool,
     /// The select kernel and header of a `Shader::Listed` pass.
     work: Option<WorkList>,
+    /// Pixels a compute workgroup covers.
+    group: [u32; 2],
 }
+
+/// The workgroup footprint of a kernel with one invocation per pixel (local size 8x8).
+pub const PIXEL_GROUP: [u32; 2] = [8, 8];
 
 impl FullScreen {
     /// Builds the pass (its set, layout and kernel) and binds its targets.
@@ -108,6 +113,19 @@ impl FullScreen {
         io: Vec<TargetBinding>,
         shader: Shader,
         spec: &Specialization,
+    ) -> Result<Box<dyn Pass>> {
+        Self::create_grouped(init, name, io, shader, spec, PIXEL_GROUP)
+    }
+
+    /// `create` for a compute kernel whose 8x8 workgroups cover `group` pixels (each invocation a
+    /// block of them).
+    pub fn create_grouped(
+        init: &Creation,
+        name: &'static str,
+        io: Vec<TargetBinding>,
+        shader: Shader,
+        spec: &Specialization,
+        group: [u32; 2],
     ) -> Result<Box<dyn Pass>> {
         let ctx = init.ctx;
         check_formats(name, &shader, &io)?;
@@ -142,6 +160,7 @@ impl FullScreen {
             sampler: vk::Sampler::null(),
             traced: tracer.is_some(),
             work: None,
+            group,
         };
         // Filled step by step; a failed step destroys what exists.
         let pass = built(ctx, pass, |p| {
@@ -190,7 +209,7 @@ impl Pass for FullScreen {
         }
         match &self.work {
             Some(w) => w.record(cx.ctx, cmd, &self.kernel, self.layout, &sets, cx.targets.extent),
-            None => self.kernel.dispatch(cx.ctx, cmd, self.layout, &sets, cx.targets.extent),
+            None => self.kernel.dispatch(cx.ctx, cmd, self.layout, &sets, cx.targets.extent, self.group),
         }
     }
 

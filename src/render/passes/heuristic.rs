@@ -4,7 +4,7 @@
 
 use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
 use super::{gbuffer, Creation, PassDesc};
-use crate::gpu::shared::GB_HIT;
+use crate::gpu::shared::{GB_HIT, HEURISTIC_BLOCK_H, HEURISTIC_BLOCK_W};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
 use crate::vk::pipeline::Specialization;
@@ -27,8 +27,14 @@ pub const PASS: PassDesc = PassDesc {
         u
     },
     create: |i: &Creation| {
-        // Per subgroup where the device reduces across lanes, else per tile in shared memory.
-        let shader = if i.ctx.caps.subgroup_arithmetic { "heuristic.comp" } else { "heuristic_shared" };
-        FullScreen::create(i, "heuristic", io(), Shader::Compute(shader), &Specialization::new(&[]))
+        // Per block and subgroup where the device reduces across lanes, else per pixel and tile in
+        // shared memory.
+        let (shader, group) = if i.ctx.caps.subgroup_arithmetic {
+            ("heuristic.comp", [8 * HEURISTIC_BLOCK_W, 8 * HEURISTIC_BLOCK_H])
+        } else {
+            ("heuristic_shared", fullscreen::PIXEL_GROUP)
+        };
+        let spec = Specialization::new(&[]);
+        FullScreen::create_grouped(i, "heuristic", io(), Shader::Compute(shader), &spec, group)
     },
 };
