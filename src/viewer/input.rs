@@ -355,6 +355,8 @@ mod tests {
             predicted_rays: None,
             measured_rays: [0.0; 2],
             shadow_maps: false,
+            traced: Vec::new(),
+            traced_maps: false,
         }
     }
 

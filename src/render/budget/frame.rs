@@ -35,32 +35,59 @@ pub struct BudgetReport {
     pub measured_rays: [f64; 2],
     /// The next frame may render the raster fallback's shadow maps (where it leaves shadows out).
     pub shadow_maps: bool,
+    /// What the measured frame itself traced (the previous selection): selection words per object,
+    /// and whether it rendered the shadow maps.
+    pub traced: Vec<u32>,
+    pub traced_maps: bool,
+}
+
+/// "N of M visible objects (n shadows, n reflections, n refractions[; a share of ...][; shadow maps])"
+/// for selection words.
+fn describe(words: &[u32], objects: &[ObjectStats], maps: bool) -> String {
+    let visible = objects.iter().filter(|o| o.pixels > 0).count();
+    let picked = words.iter().filter(|&&w| w != 0).count();
+    let per_effect: Vec<String> = (0..effects::EFFECTS)
+        .map(|e| {
+            let n = words.iter().filter(|w| (**w >> e) & 1 == 1).count();
+            format!("{n} {}", effects::EFFECT_NAMES[e])
+        })
+        .collect();
+    let mut s = format!("{picked} of {visible} visible objects ({}", per_effect.join(", "));
+    for (o, &w) in words.iter().enumerate() {
+        for e in 0..effects::EFFECTS {
+            let share = effects::traced_fraction(w, e);
+            if share > 0.0 && share < 1.0 {
+                s += &format!(
+                    "; {} of object {o} on {:.1} % of its pixels",
+                    effects::EFFECT_NAMES[e],
+                    100.0 * share
+                );
+            }
+        }
+    }
+    if maps {
+        s += "; shadow maps";
+    }
+    s + ")"
 }
 
 impl BudgetReport {
-    /// One line: how much was selected of what was visible.
+    /// One line: what the measured frame traced and what the next one will.
     pub fn summary(&self) -> String {
-        let visible = self.objects.iter().filter(|o| o.pixels > 0).count();
         let picked = self.selection.selected.len();
+        let visible = self.objects.iter().filter(|o| o.pixels > 0).count();
         match self.predicted_ms {
             Some(p) => {
-                let per_effect: Vec<String> = (0..effects::EFFECTS)
-                    .map(|e| {
-                        let n = self.effects.iter().filter(|b| (*b >> e) & 1 == 1).count();
-                        format!("{n} {}", effects::EFFECT_NAMES[e])
-                    })
-                    .collect();
                 // NaN: the frame measured nothing (its first, or a debug view).
                 let last = match self.measured_ms {
-                    m if m.is_nan() => "not measured".to_string(),
-                    m => format!("{m:.2} ms"),
+                    m if m.is_nan() => "ray stages not measured".to_string(),
+                    m => format!("ray stages {m:.2} ms"),
                 };
-                let maps = if self.shadow_maps { " and shadow maps" } else { "" };
                 format!(
-                    "budget {} ms: {picked} of {visible} visible objects ray-traced ({}), ray stages{maps} \
-                     predicted {p:.2} ms (last frame {last})",
+                    "budget {} ms: this frame traced {}, {last}; next selection {}, predicted {p:.2} ms",
                     self.settings.budget,
-                    per_effect.join(", "),
+                    describe(&self.traced, &self.objects, self.traced_maps),
+                    describe(&self.effects, &self.objects, self.shadow_maps),
                 )
             }
             None => format!(
@@ -258,6 +285,9 @@ impl BudgetState {
             predicted_rays,
             measured_rays,
             shadow_maps: self.shadow_fallback && maps,
+            traced: traced.to_vec(),
+            // The timings list the pass when it rendered; without them, what the frame was given.
+            traced_maps: shadow_maps_ms.is_some() || timings.is_none() && self.in_flight_maps,
         };
         log::debug!("{}", report.summary());
         self.last = Some(report);
@@ -312,4 +342,47 @@ pub fn object_stats(
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_summary_says_what_the_frame_traced_and_what_comes_next() {
+        let seen = |pixels| ObjectStats {
+            pixels,
+            bbox_min: [0.0; 2],
+            bbox_max: [1.0; 2],
+            distance: 1.0,
+            reflective: true,
+            refractive: false,
+            cost_factor: 1.0,
+            relevance: 1.0,
+            selected_last_frame: false,
+        };
+        let objects = vec![seen(100), seen(50), seen(0)];
+        let quarter = effects::selection_word(0b001, 0b010, 0.25);
+        let report = BudgetReport {
+            settings: BudgetSettings::effects(20.0),
+            objects,
+            selection: Selection { selected: vec![0], spent: 3.0, mask: vec![true, false, false] },
+            effects: vec![0b011, 0, 0],
+            predicted_ms: Some(19.5),
+            measured_ms: 21.25,
+            predicted_rays: None,
+            measured_rays: [0.0; 2],
+            shadow_maps: true,
+            traced: vec![0b001, quarter, 0],
+            traced_maps: false,
+        };
+        assert_eq!(
+            report.summary(),
+            "budget 20 ms: this frame traced 2 of 2 visible objects (2 shadows, 0 reflections, 0 refractions; \
+             reflections of object 1 on 25.0 % of its pixels), ray stages 21.25 ms; next selection 1 of 2 \
+             visible objects (1 shadows, 1 reflections, 0 refractions; shadow maps), predicted 19.50 ms"
+        );
+        let unmeasured = BudgetReport { measured_ms: f64::NAN, traced_maps: true, ..report };
+        assert!(unmeasured.summary().contains("of its pixels; shadow maps), ray stages not measured;"));
+    }
 }
