@@ -1,6 +1,6 @@
 #version 460
 // Pass `composite`: emission + direct light (`direct`) + ambient + the traced specular chain (variant
-// HAS_SPECULAR); the environment on a miss. Variant REFERENCE takes the ambient from `reference`'s
+// HAS_SPECULAR; a budget's partial share filled in, common/budget_fill.glsl); the environment on a miss. Variant REFERENCE takes the ambient from `reference`'s
 // accumulation; TERMS adds `terms`' (the report's attribution); DEBUG_VIEWS shows a G-buffer view
 // and reads neither light pass.
 #include "common/gbuffer_read.glsl"
@@ -13,6 +13,7 @@ layout(set = SET_PASS, binding = DIRECT_IN, rgba32f) uniform readonly image2D di
 #endif
 #ifdef HAS_SPECULAR
 layout(set = SET_PASS, binding = SPECULAR_IN, rgba32f) uniform readonly image2D specular_in;
+#include "common/budget_fill.glsl"
 #endif
 #ifdef TERMS
 layout(set = SET_PASS, binding = TERMS_IN, rgba32f) uniform readonly image2D terms_in;
@@ -72,6 +73,16 @@ void main() {
     g_effects = budget_effects(p.instance, px);
     vec3 v = -p.dir;
     face_viewer(s, v);
+#ifdef HAS_SPECULAR
+    vec3 specular = imageLoad(specular_in, px).rgb;
+    // A partial pair's untraced pixel shades as traced, from its traced neighbours.
+    uint missing = budget_partial_missing(p.instance, px);
+    vec3 filled;
+    if (missing != 0u && budget_fill(px, p, filled)) {
+        specular = filled;
+        g_effects |= missing;
+    }
+#endif
 #ifdef REFERENCE
     // The ray-traced reference replaces the ambient radiance.
     vec4 acc = imageLoad(reference_in, px);
@@ -84,7 +95,7 @@ void main() {
 #endif
     color = primary_emissive(px, p.instance, p.primitive, p.b) + imageLoad(direct_in, px).rgb + ambient;
 #ifdef HAS_SPECULAR
-    color += imageLoad(specular_in, px).rgb;
+    color += specular;
 #endif
 #ifdef TERMS
     // Noise in a term can take a dark pixel below zero.

@@ -22,26 +22,33 @@ layout(set = SET_SCENE, binding = SCENE_RAY_COUNTERS) buffer RayCounters { uint 
 layout(set = SET_SCENE, binding = SCENE_BUDGET_STATS) buffer BudgetStats { uint budget_stats[]; };
 layout(set = SET_SCENE, binding = SCENE_BUDGET_MASK) readonly buffer BudgetMask { uint budget_mask[]; };
 
-// PCG hash (Jarzynski & Olano 2020): budget tile hashing and reference random numbers.
+// PCG hash (Jarzynski & Olano 2020): reference random numbers and per-pixel filter rotations.
 uint pcg_hash(uint v) {
     uint state = v * 747796405u + 2891336453u;
     uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
     return (word >> 22u) ^ word;
 }
 
-// All effects without a budget; else the object's selection plus its partial effects where px's tile
-// falls within their share. The hash ignores the share, so a larger share keeps a smaller one's tiles.
+// px's rank in the 8x8 Bayer matrix (BUDGET_LATTICE = 8): the bit-reversed interleave of (x ^ y, y).
+// Ranks below 4^k are the multiples of 8 / 2^k: an even lattice for every share.
+uint budget_rank(ivec2 px) {
+    uint y = uint(px.y) & 7u, xy = (uint(px.x) ^ uint(px.y)) & 7u;
+    return ((xy & 1u) << 5) | ((y & 1u) << 4) | ((xy & 2u) << 2) | ((y & 2u) << 1) | ((xy & 4u) >> 1)
+        | ((y & 4u) >> 2);
+}
+
+// The partial effects of `word` traced at px.
+uint budget_partial_here(uint word, ivec2 px) {
+    return budget_rank(px) < (word >> EFFECT_FRACTION_SHIFT) ? (word >> EFFECT_PARTIAL_SHIFT) & EFFECT_ALL : 0u;
+}
+
+// All effects without a budget; else the object's selection plus its partial effects where px's rank
+// falls within their share. Pixel-scale: only the compacted specular chains get a share (the host never
+// gives one to shadows, whose `direct` pass would diverge per pixel).
 uint budget_effects(uint instance, ivec2 px) {
     if ((frame.flags & FRAME_BUDGET) == 0u) return EFFECT_ALL;
     uint word = budget_mask[instances[instance].object_id];
-    uint bits = word & EFFECT_ALL;
-    uint partial = (word >> EFFECT_PARTIAL_SHIFT) & EFFECT_ALL;
-    if (partial != 0u) {
-        uvec2 tile = uvec2(px) / BUDGET_TILE;
-        uint h = pcg_hash(tile.x ^ pcg_hash(tile.y)) & 0xFFFFu;
-        if (h < (word >> EFFECT_FRACTION_SHIFT)) bits |= partial;
-    }
-    return bits;
+    return (word & EFFECT_ALL) | budget_partial_here(word, px);
 }
 
 vec4 sample_tex(int index, vec2 uv, vec4 fallback) {

@@ -74,12 +74,13 @@ shared! {
     uint EFFECT_COUNT = 3;
     uint EFFECT_ALL = 7;
     // Partial effects (effects mode meets its budget continuously): bits EFFECT_PARTIAL_SHIFT +
-    // EFFECT_BIT_* trace on whole BUDGET_TILE² tiles whose 16-bit hash is below the fraction in the top
-    // 16 bits (EFFECT_FRACTION_SHIFT). Tiles keep neighbouring invocations coherent; a fixed hash makes a
-    // growing fraction add tiles without dropping traced ones.
+    // EFFECT_BIT_* trace where a pixel's rank in the BUDGET_LATTICE² ordered-dither (Bayer) matrix is
+    // below the count in the top bits (EFFECT_FRACTION_SHIFT; 0..BUDGET_LATTICE²). Ranks below 4^k lie
+    // on a lattice of period BUDGET_LATTICE / 2^k, which `composite` interpolates the untraced pixels
+    // from (common/budget_fill.glsl); a growing count adds pixels without dropping traced ones.
     uint EFFECT_PARTIAL_SHIFT = 4;
     uint EFFECT_FRACTION_SHIFT = 16;
-    uint BUDGET_TILE = 8;
+    uint BUDGET_LATTICE = 8;
     // Frame.flags. FRAME_FALLBACK_RASTER (with FRAME_BUDGET): `--fallback raster` instead of `none`.
     uint FRAME_BUDGET = 1;
     // The ambient term is the environment's SH irradiance

@@ -3,7 +3,8 @@
 //! exactly the raster-only image and an unlimited one exactly the full
 //! hybrid image, on every backend; each effect's selection bit gates
 //! exactly that effect; a partial effect traces its share of an object's
-//! pixels, in tiles that nest as the share grows; a K = 0 object is never
+//! pixels on an ordered-dither lattice that nests as the share grows, and
+//! the rest of the share is filled from it; a K = 0 object is never
 //! selected; stickiness keeps the selection steady over a slow pan.
 use crate::common;
 
@@ -111,56 +112,125 @@ fn each_effect_bit_gates_exactly_its_effect() {
     r.destroy(&ctx);
 }
 
-/// A partial effect (effects mode's leftover budget) traces its share of
-/// every pixel tile hash, so of an object's shadow rays; the tiles traced at
-/// a share are traced at every larger one, so a growing budget only adds
-/// shadows. Paper mode's settings carry the override (its report counts the
-/// rays of every frame, calibrated or not).
+/// The rank of a pixel in the 8x8 Bayer matrix (glsl/common/scene.glsl's
+/// `budget_rank`, written out here from its definition: the bit-reversed
+/// interleave of x ^ y and y).
+fn bayer_rank(x: u32, y: u32) -> u32 {
+    let (xy, y) = ((x ^ y) & 7, y & 7);
+    let bit = |v: u32, b: u32| (v >> b) & 1;
+    (bit(xy, 0) << 5)
+        | (bit(y, 0) << 4)
+        | (bit(xy, 1) << 3)
+        | (bit(y, 1) << 2)
+        | (bit(xy, 2) << 1)
+        | bit(y, 2)
+}
+
+/// A partial effect (effects mode's leftover budget) traces its share of an
+/// object's pixels, so of its reflection rays, on the pixels whose ordered-
+/// dither rank is below the word's count: the same pixels at every larger
+/// share (a growing budget only adds), an even lattice at every share.
+/// Paper mode's settings carry the override (its report counts the rays of
+/// every frame, calibrated or not).
 #[test]
-fn a_partial_effect_traces_its_share_of_the_pixels_in_nested_tiles() {
+fn a_partial_effect_traces_its_share_of_the_pixels_on_a_nested_lattice() {
+    use hybrid_rt::render::DebugView;
     let scene = default_scene();
     let ctx = common::validated_context();
     let n = scene.objects.len();
     let camera = scene.cameras[0].clone();
-    // 40x23 tiles: enough for the share of traced rays to be near the
-    // word's (binomial spread ~2% at share 0.5 over the lit tiles).
     let (w, h) = (320, 180);
     let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::paper(f64::INFINITY) };
     let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
-    let only_shadows =
-        Effects { shadows: true, reflections: false, refractions: false, ..Effects::default() };
-    // No anti-aliasing: it blends traced and untraced neighbours at tile edges.
+    let only_reflections =
+        Effects { shadows: false, reflections: true, refractions: false, ..Effects::default() };
     let settings =
-        RenderSettings { effects: only_shadows, budget: Some(b), aa: AaMode::None, ..Default::default() };
-    let mut shadow_rays = |word: u32| {
+        RenderSettings { effects: only_reflections, budget: Some(b), aa: AaMode::None, ..Default::default() };
+    let view = RenderSettings { debug_view: DebugView::Selection, ..settings };
+    let mut reflection_rays = |word: u32| {
         r.render(&ctx, &scene, &camera, &settings).unwrap();
         r.set_budget_selection(&b, vec![word; n]);
-        let out = r.render(&ctx, &scene, &camera, &settings).unwrap();
-        (r.budget_report().unwrap().measured_rays[0], out.rgb8())
+        r.render(&ctx, &scene, &camera, &settings).unwrap();
+        let rays = r.budget_report().unwrap().measured_rays[1];
+        r.set_budget_selection(&b, vec![word; n]);
+        let shown = r.render(&ctx, &scene, &camera, &view).unwrap().rgb8();
+        (rays, shown)
     };
-    let (all_rays, traced) = shadow_rays(1 << EFFECT_BIT_SHADOWS);
-    let (no_rays, untraced) = shadow_rays(0);
-    assert!(all_rays > 10_000.0 && no_rays == 0.0, "shadow rays: all {all_rays}, none {no_rays}");
+    let refl = 1 << EFFECT_BIT_REFLECTIONS;
+    let (all_rays, _) = reflection_rays(refl);
+    let (no_rays, _) = reflection_rays(0);
+    assert!(all_rays > 2_000.0 && no_rays == 0.0, "reflection rays: all {all_rays}, none {no_rays}");
     let mut last: Option<image::RgbImage> = None;
-    for share in [0.25, 0.5, 0.75] {
-        let word = selection_word(0, 1 << EFFECT_BIT_SHADOWS, share);
-        let (rays, img) = shadow_rays(word);
+    for ranks in [4u32, 16, 32, 48] {
+        let share = ranks as f64 / 64.0;
+        let word = selection_word(0, refl, share);
+        assert_eq!(traced_fraction(word, EFFECT_BIT_REFLECTIONS as usize), share);
+        let (rays, shown) = reflection_rays(word);
         let got = rays / all_rays;
-        eprintln!("share {share}: {got:.3} of the shadow rays");
-        assert!((got - traced_fraction(word, 0)).abs() < 0.08, "share {share}: traced {got:.3} of the rays");
-        // Each pixel is the traced or the untraced one; what a smaller
-        // share traced stays traced.
-        let shadowed = |img: &image::RgbImage, x, y| img.get_pixel(x, y) != untraced.get_pixel(x, y);
-        for (x, y, p) in img.enumerate_pixels() {
-            assert!(
-                p == traced.get_pixel(x, y) || p == untraced.get_pixel(x, y),
-                "pixel ({x}, {y}) is mixed"
-            );
+        eprintln!("share {share}: {got:.3} of the reflection rays");
+        assert!((got - share).abs() < 0.04, "share {share}: traced {got:.3} of the rays");
+        // The selection view: green where reflections are traced, grey where not, nothing mixed.
+        let traced = |img: &image::RgbImage, x, y| {
+            let p = img.get_pixel(x, y);
+            p[1] > p[0].saturating_add(20)
+        };
+        for (x, y, p) in shown.enumerate_pixels() {
+            if p[0] == 0 && p[1] == 0 && p[2] == 0 {
+                continue; // no primary hit
+            }
+            assert_eq!(traced(&shown, x, y), bayer_rank(x, y) < ranks, "share {share}: pixel ({x}, {y})");
             if let Some(prev) = &last {
-                assert!(!shadowed(prev, x, y) || shadowed(&img, x, y), "share {share} dropped ({x}, {y})");
+                assert!(!traced(prev, x, y) || traced(&shown, x, y), "share {share} dropped ({x}, {y})");
             }
         }
-        last = Some(img);
+        last = Some(shown);
+    }
+    r.destroy(&ctx);
+}
+
+/// A partial share reads as a lower-resolution effect, not as a pattern:
+/// `composite` fills the untraced pixels of the share from the traced
+/// lattice around them (common/budget_fill.glsl). Where reflections change
+/// the image, a quarter share (and a sixteenth) must come far closer to
+/// the fully traced image than the pixels it leaves to the fallback.
+#[test]
+fn a_partial_share_is_filled_from_the_traced_lattice() {
+    let scene = default_scene();
+    let ctx = common::validated_context();
+    let n = scene.objects.len();
+    let camera = scene.cameras[0].clone();
+    let (w, h) = (320, 180);
+    let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::paper(f64::INFINITY) };
+    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
+    let settings = RenderSettings { budget: Some(b), aa: AaMode::None, ..Default::default() };
+    let mut frame = |word: u32| {
+        r.set_budget_selection(&b, vec![word; n]);
+        r.render(&ctx, &scene, &camera, &settings).unwrap().rgb8()
+    };
+    let refl = 1 << EFFECT_BIT_REFLECTIONS;
+    let rest = EFFECT_ALL & !refl;
+    let full = frame(EFFECT_ALL);
+    let untraced = frame(rest);
+    let diff = |a: &image::Rgb<u8>, b: &image::Rgb<u8>| -> f64 {
+        (0..3).map(|c| (a[c] as f64 - b[c] as f64).abs()).sum::<f64>() / 3.0
+    };
+    // The pixels reflections change.
+    let changed: Vec<(u32, u32)> = full
+        .enumerate_pixels()
+        .filter(|(x, y, p)| diff(p, untraced.get_pixel(*x, *y)) > 4.0)
+        .map(|(x, y, _)| (x, y))
+        .collect();
+    assert!(changed.len() > 1000, "{} pixels show reflections", changed.len());
+    let error = |img: &image::RgbImage| -> f64 {
+        changed.iter().map(|&(x, y)| diff(img.get_pixel(x, y), full.get_pixel(x, y))).sum::<f64>()
+            / changed.len() as f64
+    };
+    let fallback = error(&untraced);
+    for (ranks, bound) in [(16u32, 0.4), (4, 0.6)] {
+        let img = frame(selection_word(rest, refl, ranks as f64 / 64.0));
+        let e = error(&img);
+        eprintln!("share {ranks}/64: mean error {e:.2} against {fallback:.2} untraced ({:.2})", e / fallback);
+        assert!(e < bound * fallback, "share {ranks}/64: error {e:.2}, untraced {fallback:.2}");
     }
     r.destroy(&ctx);
 }

@@ -13,14 +13,18 @@
 //! itself: if `k` is off, the next frame's rays show it, and `rays → T/(ms per ray)` has the budget as
 //! fixed point while the bases fit. `E` is unused: the cost is measured.
 //!
-//! The leftover budget goes to a partial pair: the most relevant pair that did not fit, traced on
-//! `left / cost` of its pixels (hashed whole tiles, EFFECT_PARTIAL_SHIFT). Otherwise the budget is met
-//! only in whole-object steps, and a scene whose cost sits in one object (Sponza's building) gets
-//! all or nothing.
+//! The leftover budget goes to a partial pair: the most relevant reflection or refraction pair that did
+//! not fit, traced on `left / cost` of its pixels, rounded down to whole ranks of an 8x8 ordered-dither
+//! lattice (EFFECT_PARTIAL_SHIFT); `composite` interpolates the untraced pixels from the traced lattice
+//! (glsl/common/budget_fill.glsl), so a share reads as a lower-resolution effect, not a pattern.
+//! Otherwise the budget is met only in whole-object steps, and a scene whose cost sits in one object
+//! (Sponza's building) gets all or nothing. Shadows are bought per whole object: `direct` traces them
+//! per pixel, uncompacted, where a pixel-scale share diverges and saves little on SIMD hardware (8x8
+//! tiles did, but read as a blocky pattern); the shadow maps are their fallback.
 
 use super::paper::{self, ObjectStats, Scored, Screen};
 use crate::gpu::shared::{
-    BUDGET_TILE, EFFECT_ALL, EFFECT_BIT_REFLECTIONS, EFFECT_BIT_REFRACTIONS, EFFECT_BIT_SHADOWS,
+    BUDGET_LATTICE, EFFECT_ALL, EFFECT_BIT_REFLECTIONS, EFFECT_BIT_REFRACTIONS, EFFECT_BIT_SHADOWS,
     EFFECT_COUNT, EFFECT_FRACTION_SHIFT, EFFECT_PARTIAL_SHIFT,
 };
 
@@ -96,26 +100,32 @@ impl StageFit {
     }
 }
 
-/// Pixels a partial pair must cover for its rays per pixel to be measured (fewer tiles make the
-/// hashed share noisy).
-const MIN_PARTIAL_PIXELS: f64 = 4.0 * (BUDGET_TILE * BUDGET_TILE) as f64;
+// glsl/common/scene.glsl's `budget_rank` is the 8x8 Bayer matrix.
+const _: () = assert!(BUDGET_LATTICE == 8);
+/// Ranks of the ordered-dither lattice: a share is a whole number of them.
+const RANKS: u32 = BUDGET_LATTICE * BUDGET_LATTICE;
 
-/// The budget mask's per-object word: `full` effects on every pixel, `partial` ones on `fraction`.
+/// Pixels a partial pair must cover for its rays per pixel to be measured (fewer leave the lattice's
+/// share of an object's pixels far from the word's).
+const MIN_PARTIAL_PIXELS: f64 = 4.0 * RANKS as f64;
+
+/// The budget mask's per-object word: `full` effects on every pixel, `partial` ones on `fraction` of
+/// them, rounded down to whole lattice ranks (so never more than asked).
 pub fn selection_word(full: u32, partial: u32, fraction: f64) -> u32 {
-    let q = ((fraction.clamp(0.0, 1.0) * 65536.0).floor() as u32).min(0xFFFF);
+    let q = ((fraction.clamp(0.0, 1.0) * RANKS as f64).floor() as u32).min(RANKS);
     if partial == 0 || q == 0 {
         return full & EFFECT_ALL;
     }
     (full & EFFECT_ALL) | ((partial & EFFECT_ALL) << EFFECT_PARTIAL_SHIFT) | (q << EFFECT_FRACTION_SHIFT)
 }
 
-/// Share of its pixels on which `word` traces `effect`: 1, the word's fraction (the tile hash is
-/// uniform), or 0.
+/// Share of its pixels on which `word` traces `effect`: 1, the word's ranks over all (each rank is one
+/// pixel of every 8x8 block), or 0.
 pub fn traced_fraction(word: u32, effect: usize) -> f64 {
     if (word >> effect) & 1 == 1 {
         1.0
     } else if (word >> (EFFECT_PARTIAL_SHIFT as usize + effect)) & 1 == 1 {
-        (word >> EFFECT_FRACTION_SHIFT) as f64 / 65536.0
+        (word >> EFFECT_FRACTION_SHIFT) as f64 / RANKS as f64
     } else {
         0.0
     }
@@ -286,11 +296,21 @@ impl Pairs {
         }
         let chosen_pair = |i: usize| taken[i] || in_rest(i);
         let left = left - pick.spent;
+        let shareable = |i: usize| self.effect(i) != EFFECT_BIT_SHADOWS as usize;
         let partial = (0..self.scored.len())
             .filter(|&i| paper::candidate(&self.scored[i]) && self.scored[i].cost > 0.0 && !chosen_pair(i))
+            .filter(|&i| shareable(i))
             .min_by(|&a, &b| paper::rank(&self.scored[a], &self.scored[b]))
             .filter(|_| left.is_finite() && left > 0.0)
-            .map(|i| (i, (left / self.scored[i].cost).min(1.0)));
+            // Whole ranks (a hair of slack so that a leftover of exactly n ranks is not n - 1).
+            .map(|i| {
+                (
+                    i,
+                    (left / self.scored[i].cost * RANKS as f64 + 1e-9).floor().min(RANKS as f64)
+                        / RANKS as f64,
+                )
+            })
+            .filter(|&(_, share)| share > 0.0);
         if let Some((i, share)) = partial {
             take(&mut pick, i, share);
         }
@@ -497,18 +517,22 @@ mod tests {
         // object's shadows and reflections (2.1 ms), the second's shadows,
         // not its reflections (2 ms more), the third's shadows.
         // The 0.05 ms left go to the best pair that did not fit, the second
-        // object's reflections, on 0.05 / 2 of its pixels.
+        // object's reflections, on 0.05 / 2 of its pixels, rounded down to
+        // whole lattice ranks: 1 of 64.
         let s = select(&objects, SCREEN, &params(0.0), &m, 6.35, None, false);
         assert_eq!(s.bits.iter().map(|b| b & EFFECT_ALL).collect::<Vec<_>>(), vec![0b011, 0b001, 0b001]);
         let (o, e, share) = s.partial.expect("a partial pair");
         assert_eq!((o, e), (1, EFFECT_BIT_REFLECTIONS as usize));
-        assert!((share - 0.025).abs() < 1e-12, "{share}");
-        assert!((traced_fraction(s.bits[1], e) - 0.025).abs() < 2.0 / 65536.0);
-        assert!((s.predicted_ms - 6.35).abs() < 2.0 * 2.0 / 65536.0, "{}", s.predicted_ms);
+        assert_eq!((share, traced_fraction(s.bits[1], e)), (1.0 / 64.0, 1.0 / 64.0));
+        assert!((s.predicted_ms - (6.3 + 2.0 / 64.0)).abs() < 1e-9, "{}", s.predicted_ms);
+        // With 0.5 ms left, a quarter: 16 ranks, T met exactly.
+        let s = select(&objects, SCREEN, &params(0.0), &m, 6.8, None, false);
+        assert_eq!(s.partial, Some((1, EFFECT_BIT_REFLECTIONS as usize, 0.25)));
+        assert!((s.predicted_ms - 6.8).abs() < 1e-9, "{}", s.predicted_ms);
         // Rays: 3 objects' shadows (100 each), 2 reflections per pixel of
-        // the first object and of 2.5% of the second's.
+        // the first object and of a quarter of the second's.
         assert!((s.predicted_rays[0] - 300.0).abs() < 1e-9, "{:?}", s.predicted_rays);
-        assert!((s.predicted_rays[1] - 205.0).abs() < 0.01, "{:?}", s.predicted_rays);
+        assert!((s.predicted_rays[1] - 250.0).abs() < 1e-9, "{:?}", s.predicted_rays);
         // Below the bases nothing; an unlimited budget everything possible.
         assert_eq!(select(&objects, SCREEN, &params(0.0), &m, 3.9, None, false).bits, vec![0; 3]);
         let all = select(&objects, SCREEN, &params(0.0), &m, f64::INFINITY, None, false);
@@ -522,14 +546,25 @@ mod tests {
         // bases (4 ms) and everything is met, not just 4 and 6.1 ms.
         let objects = [obj(100, 1.0, true)];
         let m = model(&[2]);
+        // Within one lattice rank of the reflections (2 ms / 64), never above.
         for t in [4.5, 5.0, 6.0] {
             let s = select(&objects, SCREEN, &params(0.0), &m, t, None, false);
-            assert!((s.predicted_ms - t).abs() < 2.0 * 2.1 / 65536.0, "T {t}: {}", s.predicted_ms);
+            let under = t - s.predicted_ms;
+            assert!((-1e-9..2.0 / 64.0).contains(&under), "T {t}: {}", s.predicted_ms);
         }
-        // 4.5 ms: shadows (0.1 ms) fit; reflections (2 ms) get 0.4 / 2.
+        // 4.5 ms: shadows (0.1 ms) fit; reflections (2 ms) get 0.4 / 2 = 12.8 ranks of 64: 12.
         let s = select(&objects, SCREEN, &params(0.0), &m, 4.5, None, false);
         assert_eq!(s.bits[0] & EFFECT_ALL, 0b001);
-        assert!((traced_fraction(s.bits[0], 1) - 0.2).abs() < 1.0 / 65536.0);
+        assert_eq!(traced_fraction(s.bits[0], 1), 12.0 / 64.0);
+        // Less than one rank left: no share.
+        let s = select(&objects, SCREEN, &params(0.0), &m, 4.12, None, false);
+        assert_eq!((s.bits[0], s.partial), (0b001, None));
+        // Shadows get no share: an object whose only effect is its shadows (0.1 ms) is bought whole.
+        let dull = [obj(100, 1.0, false)];
+        let m1 = model(&[0]);
+        let s = select(&dull, SCREEN, &params(0.0), &m1, 4.05, None, false);
+        assert_eq!((s.bits[0], s.partial), (0, None));
+        assert_eq!(select(&dull, SCREEN, &params(0.0), &m1, 4.2, None, false).bits[0], 0b001);
         // K = 0 gets no share either.
         let none = [ObjectStats { relevance: 0.0, ..objects[0] }];
         let s = select(&none, SCREEN, &params(0.0), &m, 5.0, None, false);
@@ -542,7 +577,10 @@ mod tests {
         assert_eq!(w & EFFECT_ALL, 0b001);
         assert_eq!(traced_fraction(w, 0), 1.0);
         assert_eq!(traced_fraction(w, 1), 0.0);
-        assert!((traced_fraction(w, 2) - 0.5).abs() < 1.0 / 65536.0);
+        assert_eq!(traced_fraction(w, 2), 0.5);
+        // Rounded down to whole ranks of 64; under one rank is no share.
+        assert_eq!(traced_fraction(selection_word(0, 0b010, 0.999), 1), 63.0 / 64.0);
+        assert_eq!(selection_word(0, 0b010, 0.5 / 64.0), 0);
         assert_eq!(selection_word(0b010, 0b001, 0.0), 0b010, "a zero share is no partial pair");
         assert_eq!(selection_word(0b010, 0, 0.7), 0b010);
         // Reflections traced on a quarter of 1000 pixels, 500 rays: 2 per
@@ -612,7 +650,8 @@ mod tests {
         // Maps of 0.01 ms replace the ~0.2 ms of shadow rays left out: bought, within T.
         let cheap = select(&objects, SCREEN, &p, &with_maps(m.clone(), 0.01), 6.15, None, true);
         assert_eq!((shadows(&cheap), cheap.shadow_maps), (vec![1, 0, 0], true));
-        assert!((cheap.predicted_ms - 6.15).abs() < 1e-3, "{}", cheap.predicted_ms);
+        // 2.14 ms left after the maps: 2.1 for the nearest object, a rank of the second's reflections.
+        assert!((cheap.predicted_ms - (6.1 + 2.0 / 64.0 + 0.01)).abs() < 1e-9, "{}", cheap.predicted_ms);
         // Maps of 0.5 ms cost more than tracing those shadows: every shadow traced, no maps, within T.
         let dear = select(&objects, SCREEN, &p, &with_maps(m.clone(), 0.5), 6.15, None, true);
         assert_eq!((shadows(&dear), dear.shadow_maps), (vec![1, 1, 1], false));
