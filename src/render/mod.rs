@@ -138,9 +138,22 @@ impl Renderer {
         self.choices.reference.reset(); // the scene moved
         let up = &mut self.slots.uploads("the scene update")?;
         let plan = self.update.plan(up, scene, &mut self.gpu, self.tracer.as_deref_mut())?;
-        self.slots.record_uploads(ctx, cmd)?;
-        self.update.record(ctx, cmd, scene, &self.gpu, self.tracer.as_deref_mut())?;
+        // A compiling frame sends its passes out in submissions of their own ahead of `cmd`
+        // (`record_with`): the update goes out first in one too, or those passes would run before it.
+        let compiling = self.compiling(ctx);
+        let target = if compiling { ctx.begin_spare(frame_passes::COMPILING)? } else { cmd };
+        self.slots.record_uploads(ctx, target)?;
+        self.update.record(ctx, target, scene, &self.gpu, self.tracer.as_deref_mut())?;
+        if compiling {
+            ctx.submit_spare(target)?;
+        }
         self.slots.download_update(&self.update, self.tracer.as_deref(), plan)
+    }
+
+    /// The next frame is the first of its passes on a device that compiles each pipeline on first use:
+    /// it goes out a pass per submission (`record_with`).
+    fn compiling(&self, ctx: &Context) -> bool {
+        self.frame.passes_new && ctx.caps.device_type == vk::PhysicalDeviceType::CPU
     }
 
     /// The baseline dynamic structures are measured against: skin, then
@@ -291,7 +304,7 @@ impl Renderer {
         let config = self.frame.config.context("prepare() must run before record()")?;
         // A software device compiles each pipeline inside the first frame that uses it: that frame goes
         // out a pass per submission, so the log can say how far the compile is.
-        let compiling = self.frame.passes_new && ctx.caps.device_type == vk::PhysicalDeviceType::CPU;
+        let compiling = self.compiling(ctx);
         let head = if compiling { ctx.begin_spare(frame_passes::COMPILING)? } else { cmd };
         self.slots.record_uploads(ctx, head)?;
         let frame = &self.frame;

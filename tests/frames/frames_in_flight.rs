@@ -4,8 +4,9 @@
 //! that frame's results, stages its host writes (uniforms, instances,
 //! joints, the tracer's top level) in the renderer's ring slot and records
 //! its scene update and passes while the other frame may still run. A
-//! skinned animation plays; the last frame must equal the same frame
-//! rendered with a wait after every frame (`update_scene` + `render`), and
+//! skinned animation plays; every frame must equal the same frame rendered
+//! with a wait after every frame (`update_scene` + `render`), some frame's
+//! whole host work must finish while the previous frame still runs, and
 //! synchronization validation (across submissions too) must stay clean.
 use crate::common;
 
@@ -27,10 +28,11 @@ fn time(i: usize) -> f32 {
     0.3 + i as f32 * 0.1
 }
 
-/// Renders FRAMES animated frames with SLOTS in flight; returns the last
-/// frame's final LDR image and how many frames were recorded while the
-/// previous one still ran.
-fn in_flight(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettings) -> (Vec<u8>, usize) {
+/// Renders FRAMES animated frames with SLOTS in flight; returns every
+/// frame's final LDR image and how many frames were recorded whole (the
+/// renderer's begin, prepare and record included) while the previous one
+/// still ran.
+fn in_flight(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettings) -> (Vec<Vec<u8>>, usize) {
     let dev = &ctx.device;
     let camera = loaded.cameras[0].clone();
     let mut scene = loaded.clone();
@@ -49,12 +51,14 @@ fn in_flight(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettin
         })
         .collect();
     let mut overlapped = 0;
+    let mut frames = vec![Vec::new(); FRAMES];
     for i in 0..FRAMES {
         let s = i % SLOTS;
         let (cmd, fence, ref readback) = slots[s];
         unsafe { dev.wait_for_fences(&[fence], true, u64::MAX) }.unwrap();
-        let other = slots[(s + SLOTS - 1) % SLOTS].1;
-        overlapped += (i > 0 && !unsafe { dev.get_fence_status(other) }.unwrap()) as usize;
+        if i >= SLOTS {
+            frames[i - SLOTS] = readback.read().unwrap().to_vec();
+        }
         r.finish_frame(s).unwrap();
         r.begin_frame(s).unwrap();
         scene.animate(anim, time(i));
@@ -63,6 +67,9 @@ fn in_flight(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettin
         r.record_scene_update(ctx, cmd, &scene).unwrap();
         let copies = [(r.output_ldr().unwrap(), readback.raw)];
         r.record_with(ctx, cmd, |rec, t| readback::record(ctx, rec, t, &copies)).unwrap();
+        // The previous frame still running now shows that nothing above waited for it.
+        let other = slots[(s + SLOTS - 1) % SLOTS].1;
+        overlapped += (i > 0 && !unsafe { dev.get_fence_status(other) }.unwrap()) as usize;
         unsafe {
             dev.end_command_buffer(cmd).unwrap();
             dev.reset_fences(&[fence]).unwrap();
@@ -75,7 +82,9 @@ fn in_flight(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettin
     for k in 0..SLOTS {
         r.finish_frame((FRAMES + k) % SLOTS).unwrap();
     }
-    let last = slots[(FRAMES - 1) % SLOTS].2.read().unwrap().to_vec();
+    for (i, frame) in frames.iter_mut().enumerate().skip(FRAMES - SLOTS) {
+        *frame = slots[i % SLOTS].2.read().unwrap().to_vec();
+    }
     for (cmd, fence, mut readback) in slots {
         unsafe {
             dev.destroy_fence(fence, None);
@@ -84,23 +93,23 @@ fn in_flight(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettin
         readback.destroy(ctx);
     }
     r.destroy(ctx);
-    (last, overlapped)
+    (frames, overlapped)
 }
 
 /// The same frames with the host waiting for each one.
-fn waited(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettings) -> Vec<u8> {
+fn waited(ctx: &Context, loaded: &Scene, anim: usize, settings: &RenderSettings) -> Vec<Vec<u8>> {
     let camera = loaded.cameras[0].clone();
     let mut scene = loaded.clone();
     scene.animate(anim, time(0));
     let mut r = Renderer::new(ctx, &scene, vk::Extent2D { width: W, height: H }).unwrap();
-    let mut last = Vec::new();
+    let mut frames = Vec::new();
     for i in 0..FRAMES {
         scene.animate(anim, time(i));
         r.update_scene(ctx, &scene).unwrap();
-        last = r.render(ctx, &scene, &camera, settings).unwrap().ldr;
+        frames.push(r.render(ctx, &scene, &camera, settings).unwrap().ldr);
     }
     r.destroy(ctx);
-    last
+    frames
 }
 
 #[test]
@@ -112,14 +121,17 @@ fn two_frames_in_flight_render_the_animation_like_waiting_frames() {
         let settings = RenderSettings { backend, ..Default::default() };
         let (flight, overlapped) = in_flight(&ctx, &loaded, anim, &settings);
         let reference = waited(&ctx, &loaded, anim, &settings);
-        let (max, frac) = diff_stats(&flight, &reference, 4, 0);
-        eprintln!(
-            "{backend:?}: {overlapped} of {} frames recorded while the previous one ran; last frame vs \
-             waited frames: max {max}, {:.3}% pixels differ",
-            FRAMES - 1,
-            frac * 100.0
-        );
-        assert!(max <= 2 && frac < 0.001, "{backend:?}: frames in flight differ (max {max}, {frac})");
+        eprintln!("{backend:?}: {overlapped} of {} frames recorded while the previous one ran", FRAMES - 1);
+        // A frame takes lavapipe tens of ms and its recording about one: a renderer that waited for
+        // the GPU anywhere in a frame's host work would show no overlap at all.
+        assert!(overlapped > 0, "{backend:?}: no frame was recorded while the previous one ran");
+        for (i, (f, w)) in flight.iter().zip(&reference).enumerate() {
+            let (max, frac) = diff_stats(f, w, 4, 0);
+            assert!(
+                max <= 2 && frac < 0.001,
+                "{backend:?} frame {i}: in flight vs waited: max {max}, {frac}"
+            );
+        }
     }
     ctx.finish().expect("validation (synchronization included) clean");
 }
