@@ -40,7 +40,7 @@ static SWAPCHAIN: TargetDesc = TargetDesc::new("swapchain image", vk::Format::UN
 impl Viewer {
     pub(super) fn about_to_wait(&mut self, el: &ActiveEventLoop) -> Result<Flow> {
         if let Some(t) = &mut self.resize_test {
-            t.tick(&self.window, self.presented, self.presenter.extent, self.paused);
+            self.needs_recreate |= t.tick(&self.window, self.presented, self.presenter.extent, self.paused);
         }
         if self.paused {
             // Not every window system sends a resize when a window is

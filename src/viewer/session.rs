@@ -202,6 +202,9 @@ impl Viewer {
     }
 
     fn window_extent(&self) -> vk::Extent2D {
+        if self.resize_test.as_ref().is_some_and(|t| t.minimized()) {
+            return vk::Extent2D { width: 0, height: 0 };
+        }
         let s = self.window.inner_size();
         vk::Extent2D { width: s.width, height: s.height }
     }
@@ -212,7 +215,10 @@ impl Viewer {
         self.finish_screenshots(None)?;
         self.last_recreate_try = Instant::now();
         let was_paused = self.paused;
-        let ok = self.presenter.recreate(&self.ctx, self.window_extent())?;
+        // A window with no area pauses whatever the surface still says (X11 keeps an iconified
+        // window's extent).
+        let window = self.window_extent();
+        let ok = window.width > 0 && window.height > 0 && self.presenter.recreate(&self.ctx, window)?;
         self.needs_recreate = false;
         self.paused = !ok;
         if !ok {
