@@ -86,13 +86,13 @@ fn stability_subset_meets_its_thresholds() {
         let what =
             format!("{} on {}: PSNR {:.2} dB, max 8-bit diff {}", r.case, r.backend, r.psnr, r.max_ldr_diff);
         match r.case {
-            "translate-1e3" | "scale-1e-3" => p.check(r.psnr >= 35.0, || format!("{what}, want >= 35 dB")),
+            "translate-1e3" | "scale-1e-3" => p.check(r.psnr >= 80.0, || format!("{what}, want >= 80 dB")),
             "ior-1.0" | "zero-area-triangles" => {
                 p.check(r.max_ldr_diff <= 2, || format!("{what}, want <= 2"))
             }
             "env-texel-1e5" => {
                 let base = row("env-map", &r.backend);
-                p.check(r.psnr >= 30.0, || format!("{what}, want >= 30 dB"));
+                p.check(r.psnr >= 40.0, || format!("{what}, want >= 40 dB"));
                 p.check(r.white_pct <= base.white_pct + 0.5, || {
                     format!("{what}: white {} % against {} % without the texel", r.white_pct, base.white_pct)
                 });
@@ -144,9 +144,9 @@ fn stability_subset_meets_its_thresholds() {
     for needle in [
         "## Thresholds",
         "finite 100 %",
-        "| translate-1e3 | origin | PSNR >= 35 dB |",
+        "| translate-1e3 | origin | PSNR >= 80 dB |",
         "| ior-1.0 | origin-rough | max 8-bit difference <= 2 |",
-        "| env-texel-1e5 | env-map | PSNR >= 30 dB, white % <= white % of env-map + 0.5 |",
+        "| env-texel-1e5 | env-map | PSNR >= 40 dB, white % <= white % of env-map + 0.5 |",
         "| zero-area-triangles | obj-panel | max 8-bit difference <= 2 |",
         "## Limits that remain",
     ] {

@@ -88,10 +88,20 @@ pub const CASE_NAMES: &[&str] = &[
 ];
 
 /// PSNR the translated and scaled scenes must reach against the origin
-/// (issue 18: "render like the origin").
-pub const INVARIANT_PSNR: f64 = 35.0;
-/// PSNR of hybrid against pure RT where that is the comparison.
-pub const MODE_PSNR: f64 = 35.0;
+/// (issue 18: "render like the origin"). Measured on lavapipe: 129-139 dB
+/// on the default scene (320x180; 136-151 at 64x36), 89 on Sponza. The
+/// frame is rebased; without the rebase translate-1e3 measured 69.7 dB
+/// (max 8-bit difference 4), which 35 dB, the old bar, let pass.
+pub const INVARIANT_PSNR: f64 = 80.0;
+/// A glass sphere of IOR 1.0001 against none: nearly invisible, not exactly
+/// (54.7 dB on Sponza, 57.4 on the default scene at 320x180).
+pub const NEAR_INVISIBLE_PSNR: f64 = 50.0;
+/// PSNR of hybrid against pure RT where that is the comparison (62.7 dB at
+/// the lowest, Sponza at 320x180; 160+ on the default scene at 64x36).
+pub const MODE_PSNR: f64 = 50.0;
+/// One 1e5 environment texel against the map without it (47.3 dB at 64x36,
+/// 69.0 at 320x180): a texel that blows out the frame falls far below.
+pub const HOT_TEXEL_PSNR: f64 = 40.0;
 /// An object that must not show: no 8-bit channel off by more than this.
 pub const INVISIBLE_MAX_DIFF: u8 = 2;
 
@@ -336,7 +346,7 @@ fn make(name: &'static str, base: &Scene, cam: &Camera, dir: &Path) -> Result<Ca
             let mut c = case(name, about, s, cam.clone(), Against::Case("origin-rough"));
             c.checks = match n {
                 "ior-1.0" => vec![Check::MaxLdrDiff(INVISIBLE_MAX_DIFF)],
-                "ior-1.0001" => vec![Check::PsnrAtLeast(INVARIANT_PSNR)],
+                "ior-1.0001" => vec![Check::PsnrAtLeast(NEAR_INVISIBLE_PSNR)],
                 _ => Vec::new(),
             };
             c
@@ -400,7 +410,7 @@ fn make(name: &'static str, base: &Scene, cam: &Camera, dir: &Path) -> Result<Ca
             };
             if hot {
                 let mut c = case(name, about, s, cam.clone(), Against::Case("env-map"));
-                c.checks = vec![Check::PsnrAtLeast(30.0), Check::WhiteNotAbove("env-map", 0.5)];
+                c.checks = vec![Check::PsnrAtLeast(HOT_TEXEL_PSNR), Check::WhiteNotAbove("env-map", 0.5)];
                 c
             } else {
                 psnr(case(name, about, s, cam.clone(), Against::Rt), MODE_PSNR)
