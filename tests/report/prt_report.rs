@@ -67,6 +67,18 @@ fn prt_report_rows_and_shadowed_beats_unshadowed() {
     );
     let files = hybrid_rt::report::prt_write::write_all(&report, &opts.out).unwrap();
     assert!(files.iter().any(|f| f.ends_with("prt_error_vs_time.png")));
+    // The plot draws the rows where their numbers say: the shadowed row's marker (blue, the second
+    // series colour) below the unshadowed one's (red), outside the legend (the top 120 rows).
+    let plot = image::open(opts.out.join("prt_error_vs_time.png")).unwrap().to_rgb8();
+    let centre_y = |is: fn(&image::Rgb<u8>) -> bool| {
+        let ys: Vec<u32> =
+            plot.enumerate_pixels().filter(|(_, y, p)| *y > 120 && is(p)).map(|(_, y, _)| y).collect();
+        assert!(ys.len() > 20, "{} marker pixels", ys.len());
+        ys.iter().sum::<u32>() as f64 / ys.len() as f64
+    };
+    let red = centre_y(|p| p[0] > 200 && p[1] < 80 && p[2] < 80);
+    let blue = centre_y(|p| p[2] > 150 && p[0] < 100);
+    assert!(blue > red, "the shadowed marker (y {blue}) is not drawn below the unshadowed one (y {red})");
     let csv = std::fs::read_to_string(opts.out.join("prt.csv")).unwrap();
     let lines: Vec<_> = csv.lines().collect();
     assert_eq!(lines.len(), 3, "{csv}");

@@ -31,6 +31,15 @@ fn decoded_size(path: &Path) -> (u32, u32) {
     (img.width(), img.height())
 }
 
+/// Pixels of a plot drawn in colour below its legend (the top 130 rows): the series' markers and
+/// lines (axes, grid and text are grey). An empty plot has none.
+fn plotted_pixels(path: &Path) -> usize {
+    let img = image::open(path).unwrap().to_rgb8();
+    img.enumerate_pixels()
+        .filter(|(_, y, p)| *y >= 130 && p.0.iter().max().unwrap() - p.0.iter().min().unwrap() > 60)
+        .count()
+}
+
 /// The report at 32x18 with max-depth 0 and 1 against the self reference
 /// (`--ref self`): its ꟻLIP is 0 for an image against itself and positive
 /// against a shifted copy, report.csv parses with the fixed header and one
@@ -105,6 +114,13 @@ fn tiny_report_checks_its_numbers_and_files() {
     assert_eq!(decoded_size(&map), (32, 18));
     let (w, h) = decoded_size(&dir.join("error_vs_time.png"));
     assert!(w > 0 && h > 0);
+    let drawn = plotted_pixels(&dir.join("error_vs_time.png"));
+    assert!(drawn > 100, "the plot draws no rows ({drawn} coloured pixels)");
+    // The map is the worst row's error: not black, not uniform.
+    let img = image::open(&map).unwrap().to_rgb8();
+    let colours: std::collections::HashSet<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+    let mean = img.as_raw().iter().map(|&v| v as f64).sum::<f64>() / img.as_raw().len() as f64;
+    assert!(colours.len() > 8 && mean > 5.0, "error map: {} colours, mean {mean}", colours.len());
 }
 
 /// The aa knob's rows are measured against the supersampled base, not the
@@ -132,6 +148,7 @@ fn aa_rows_have_their_own_table_and_plot() {
     let aa_plot = dir.join(report::AA_PLOT);
     assert!(files.contains(&aa_plot), "{files:?}");
     assert!(decoded_size(&aa_plot).0 > 0);
+    assert!(plotted_pixels(&aa_plot) > 100, "the aa plot draws no rows");
     let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
     assert!(!md.contains("NaN") && !md.contains("nan |"), "{md}");
     // Every table: its header, its separator, then only rows up to a blank line.
