@@ -126,22 +126,27 @@ fn bayer_rank(x: u32, y: u32) -> u32 {
         | bit(y, 2)
 }
 
+/// The default scene at 320x180 and a renderer whose selection the tests set
+/// (`set_budget_selection`): paper mode's settings carry the override (its
+/// report counts the rays of every frame, calibrated or not).
+fn overridden(ctx: &hybrid_rt::vk::Context) -> (Scene, Camera, BudgetSettings, Renderer) {
+    let scene = default_scene();
+    let camera = scene.cameras[0].clone();
+    let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::paper(f64::INFINITY) };
+    let r = Renderer::new(ctx, &scene, ash::vk::Extent2D { width: 320, height: 180 }).unwrap();
+    (scene, camera, b, r)
+}
+
 /// A partial effect (effects mode's leftover budget) traces its share of an
 /// object's pixels, so of its reflection rays, on the pixels whose ordered-
 /// dither rank is below the word's count: the same pixels at every larger
 /// share (a growing budget only adds), an even lattice at every share.
-/// Paper mode's settings carry the override (its report counts the rays of
-/// every frame, calibrated or not).
 #[test]
 fn a_partial_effect_traces_its_share_of_the_pixels_on_a_nested_lattice() {
     use hybrid_rt::render::DebugView;
-    let scene = default_scene();
     let ctx = common::validated_context();
+    let (scene, camera, b, mut r) = overridden(&ctx);
     let n = scene.objects.len();
-    let camera = scene.cameras[0].clone();
-    let (w, h) = (320, 180);
-    let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::paper(f64::INFINITY) };
-    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
     let only_reflections =
         Effects { shadows: false, reflections: true, refractions: false, ..Effects::default() };
     let settings =
@@ -195,13 +200,9 @@ fn a_partial_effect_traces_its_share_of_the_pixels_on_a_nested_lattice() {
 /// the fully traced image than the pixels it leaves to the fallback.
 #[test]
 fn a_partial_share_is_filled_from_the_traced_lattice() {
-    let scene = default_scene();
     let ctx = common::validated_context();
+    let (scene, camera, b, mut r) = overridden(&ctx);
     let n = scene.objects.len();
-    let camera = scene.cameras[0].clone();
-    let (w, h) = (320, 180);
-    let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::paper(f64::INFINITY) };
-    let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: w, height: h }).unwrap();
     let settings = RenderSettings { budget: Some(b), aa: AaMode::None, ..Default::default() };
     let mut frame = |word: u32| {
         r.set_budget_selection(&b, vec![word; n]);
