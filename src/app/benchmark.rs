@@ -134,7 +134,7 @@ fn bench_frame_inner(
     if i == warmup {
         log_frame_health(&out);
     }
-    let ray_ms = out.ray_stage_ms();
+    let ray_ms = out.budgeted_ms();
     Ok(BenchFrame {
         update,
         timings: out.timings,

@@ -59,7 +59,7 @@ impl FrameOutput {
 
     /// GPU ms of what effects mode's budget bounds: the ray stages (render/budget/effects.rs's STAGES)
     /// and the raster fallback's shadow maps.
-    pub fn ray_stage_ms(&self) -> f64 {
+    pub fn budgeted_ms(&self) -> f64 {
         use crate::render::budget::effects::{SHADOW_MAP_PASS, STAGES};
         STAGES.iter().flat_map(|s| s.iter()).chain([&SHADOW_MAP_PASS]).map(|p| self.pass_ms(p)).sum()
     }

@@ -76,7 +76,7 @@ fn frame_of(out: &FrameOutput) -> Frame {
         ldr: LdrImage { width: out.width, height: out.height, rgb: out.rgb8().into_raw() },
         hdr: HdrImage::from_rgba(out.width, out.height, &out.hdr).0,
         ms: out.frame_ms(),
-        ray_ms: out.ray_stage_ms(),
+        ray_ms: out.budgeted_ms(),
         heuristic_ms: out.pass_ms("heuristic"),
     }
 }

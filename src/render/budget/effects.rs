@@ -318,18 +318,22 @@ impl Pairs {
         pick
     }
 
-    /// What tracing the shadows `pick` leaves out would cost (ms); `traceable`: only those of objects
-    /// the heuristic may trace (relevance K > 0).
-    fn shadows_left_out(&self, pick: &Pick, traceable: bool) -> f64 {
-        let mut ms = 0.0;
-        for (i, p) in self.scored.iter().enumerate() {
-            let share = traced_fraction(pick.bits[p.object / EFFECTS], EFFECT_BIT_SHADOWS as usize);
-            let counted = !traceable || paper::candidate(p);
-            if self.effect(i) == EFFECT_BIT_SHADOWS as usize && p.pixels > 0 && share < 1.0 && counted {
-                ms += (1.0 - share) * p.cost;
-            }
-        }
-        ms
+    /// What tracing the shadows `pick` leaves out would cost (ms).
+    fn shadows_left_out(&self, pick: &Pick) -> f64 {
+        self.shadows_ms(|p| 1.0 - traced_fraction(pick.bits[p.object / EFFECTS], EFFECT_BIT_SHADOWS as usize))
+    }
+
+    /// What tracing every shadow the heuristic may trace (relevance K > 0) would cost (ms).
+    fn traceable_shadows(&self) -> f64 {
+        self.shadows_ms(|p| if paper::candidate(p) { 1.0 } else { 0.0 })
+    }
+
+    /// The visible shadow pairs' cost (ms), each times `share(pair)`.
+    fn shadows_ms(&self, share: impl Fn(&Scored) -> f64) -> f64 {
+        (0..self.scored.len())
+            .filter(|&i| self.effect(i) == EFFECT_BIT_SHADOWS as usize && self.scored[i].pixels > 0)
+            .map(|i| share(&self.scored[i]) * self.scored[i].cost)
+            .sum()
     }
 }
 
@@ -377,14 +381,13 @@ pub fn select(
     let mut pick = pairs.pick(left, |_| false);
     let mut shadow_maps = false;
     let mut maps_ms = 0.0;
-    if shadow_fallback && pairs.shadows_left_out(&pick, false) > 0.0 {
+    if shadow_fallback && pairs.shadows_left_out(&pick) > 0.0 {
         let maps = model.shadow_maps_ms();
         let with_maps = pairs.pick(left - maps, |_| false);
-        let replaced = pairs.shadows_left_out(&with_maps, false);
-        let nothing = Pick { bits: vec![0; objects.len()], ..pick };
+        let replaced = pairs.shadows_left_out(&with_maps);
         if maps <= left && replaced > maps {
             (pick, shadow_maps, maps_ms) = (with_maps, true, maps);
-        } else if pairs.shadows_left_out(&nothing, true) <= left {
+        } else if pairs.traceable_shadows() <= left {
             // The maps cost more than the rays they replace, or do not fit: trace every shadow that may
             // be traced (an object of relevance 0 stays unshadowed).
             let shadow = |i: usize| pairs.effect(i) == EFFECT_BIT_SHADOWS as usize;
