@@ -100,11 +100,10 @@ impl BudgetReport {
 
 #[derive(Default)]
 pub struct BudgetState {
-    /// EFFECT_* bits per object for the next frame, and the settings they were made under.
-    mask: Option<(BudgetSettings, Vec<u32>)>,
-    /// The next frame may render the raster fallback's shadow maps (effects mode leaves them out where
+    /// The selection for the next frame: the settings it was made under, EFFECT_* bits per object, and
+    /// whether the frame may render the raster fallback's shadow maps (effects mode leaves them out where
     /// they cost more than the shadows they replace or do not fit the budget).
-    maps_next: bool,
+    mask: Option<(BudgetSettings, Vec<u32>, bool)>,
     /// The bits the frame in flight traces, per object, and whether it may render shadow maps.
     in_flight: Vec<u32>,
     in_flight_maps: bool,
@@ -121,9 +120,13 @@ impl BudgetState {
         self.mask_for(settings).is_some()
     }
 
-    /// The selection made under `settings`, if the last one was.
+    /// The selection made under `settings` (bits, shadow maps), if the last one was.
+    fn next_for(&self, settings: &BudgetSettings) -> Option<(&[u32], bool)> {
+        self.mask.as_ref().filter(|(s, ..)| s == settings).map(|(_, m, maps)| (m.as_slice(), *maps))
+    }
+
     fn mask_for(&self, settings: &BudgetSettings) -> Option<&[u32]> {
-        self.mask.as_ref().filter(|(s, _)| s == settings).map(|(_, m)| m.as_slice())
+        self.next_for(settings).map(|(m, _)| m)
     }
 
     /// The last selection made, with what it was made from.
@@ -134,8 +137,7 @@ impl BudgetState {
     /// Overrides the heuristic's selection for the next frame under `settings` (EFFECT_* bits per
     /// object): to check the passes honour any selection, and to replay one.
     pub fn set_selection(&mut self, settings: &BudgetSettings, bits: Vec<u32>) {
-        self.mask = Some((*settings, bits));
-        self.maps_next = true;
+        self.mask = Some((*settings, bits, true));
     }
 
     /// Whether the frame in flight renders the raster fallback's shadow maps: its selection allows them
@@ -181,10 +183,8 @@ impl BudgetState {
             BudgetMode::Effects if !self.model.calibrated() => self.model.calibration_mask(),
             _ => EFFECT_ALL,
         };
-        (self.in_flight, self.in_flight_maps) = match self.mask_for(settings) {
-            Some(m) => {
-                ((0..objects.max(1)).map(|o| m.get(o).copied().unwrap_or(0)).collect(), self.maps_next)
-            }
+        (self.in_flight, self.in_flight_maps) = match self.next_for(settings) {
+            Some((m, maps)) => ((0..objects.max(1)).map(|o| m.get(o).copied().unwrap_or(0)).collect(), maps),
             None => (vec![measuring; objects.max(1)], true),
         };
         up.write(&gpu.budget_mask, 0, bytemuck::cast_slice(&self.in_flight))?;
@@ -273,8 +273,7 @@ impl BudgetState {
                 )
             }
         };
-        self.mask = Some((*settings, bits.clone()));
-        self.maps_next = maps;
+        self.mask = Some((*settings, bits.clone(), maps));
         let report = BudgetReport {
             settings: *settings,
             objects,
