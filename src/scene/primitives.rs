@@ -78,6 +78,79 @@ pub fn uv_sphere(radius: f32, slices: u32, stacks: u32) -> Primitive {
     Primitive { vertices, indices, material: 0, bounds, skin: None }
 }
 
+/// Most cells per side of a [`terrain`]: bounds its vertex allocation (4097² vertices, 1.5 GiB at 48
+/// bytes) for any input.
+pub const TERRAIN_MAX_CELLS: u32 = 4096;
+
+/// A `size_x` × `size_z` height field centred at the origin in the XZ plane, facing +Y:
+/// `cells_x` × `cells_z` quads (two triangles each, so `2 cx cz` unique triangles), heights within
+/// ±`height` from a fixed sum of sine octaves (rolling hills with finer ridges: every cell differs, so
+/// the geometry is as unique as a scanned terrain's and the same for every run). UVs span the whole
+/// field once, like [`plane`]'s. For scale tests: the triangle count is what the caller asks for.
+pub fn terrain(size_x: f32, size_z: f32, cells_x: u32, cells_z: u32, height: f32) -> Primitive {
+    let (cx, cz) = (cells_x.clamp(1, TERRAIN_MAX_CELLS), cells_z.clamp(1, TERRAIN_MAX_CELLS));
+    let (sx, sz) = (size_x.abs(), size_z.abs());
+    let row = cx + 1;
+    let mut vertices = Vec::with_capacity((row * (cz + 1)) as usize);
+    for j in 0..=cz {
+        let v = j as f32 / cz as f32;
+        for i in 0..=cx {
+            let u = i as f32 / cx as f32;
+            let (x, z) = ((u - 0.5) * sx, (v - 0.5) * sz);
+            let (h, dhdx, dhdz) = terrain_height(x / sx.max(sz), z / sx.max(sz));
+            let scale = height / sx.max(sz);
+            let (dhdx, dhdz) = (dhdx * scale, dhdz * scale);
+            let n = Vec3::new(-dhdx, 1.0, -dhdz).normalize();
+            // dP/du runs along +X (with the slope); dP/dv along +Z (the texture's top edge is at -Z).
+            let dpdu = Vec3::new(1.0, dhdx, 0.0);
+            let tangent = (dpdu - n * n.dot(dpdu)).normalize();
+            let dpdv = Vec3::new(0.0, dhdz, 1.0);
+            let w = if n.cross(tangent).dot(dpdv) < 0.0 { -1.0 } else { 1.0 };
+            vertices.push(Vertex {
+                position: [x, h * height, z],
+                normal: n.to_array(),
+                uv: [u, v],
+                tangent: tangent.extend(w).to_array(),
+            });
+        }
+    }
+    let mut indices = Vec::with_capacity((cx * cz * 6) as usize);
+    for j in 0..cz {
+        for i in 0..cx {
+            // a top-left, b bottom-left, c bottom-right, d top-right as seen from above (+Z is down).
+            let a = j * row + i;
+            let (b, c, d) = (a + row, a + row + 1, a + 1);
+            indices.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    let bounds = bounds_of(&vertices);
+    Primitive { vertices, indices, material: 0, bounds, skin: None }
+}
+
+/// Height in [-1, 1] at `(x, z)` in units of the terrain's larger side, with its derivatives there:
+/// six octaves of products of sines at irrational-ish frequency ratios and fixed phases.
+fn terrain_height(x: f32, z: f32) -> (f32, f32, f32) {
+    const OCTAVES: [(f32, f32, f32, f32); 6] = [
+        (3.1, 2.3, 0.4, 1.3),
+        (7.3, 5.9, 2.1, 0.2),
+        (13.7, 17.1, 4.0, 2.9),
+        (31.3, 27.7, 1.7, 5.1),
+        (61.9, 71.3, 3.3, 0.7),
+        (137.1, 119.3, 0.9, 4.4),
+    ];
+    let (mut h, mut dx, mut dz, mut amplitude, mut total) = (0.0, 0.0, 0.0, 1.0, 0.0);
+    for (fx, fz, px, pz) in OCTAVES {
+        let (sx, cx) = (fx * x + px).sin_cos();
+        let (sz, cz) = (fz * z + pz).sin_cos();
+        h += amplitude * sx * sz;
+        dx += amplitude * fx * cx * sz;
+        dz += amplitude * fz * sx * cz;
+        total += amplitude;
+        amplitude *= 0.55;
+    }
+    (h / total, dx / total, dz / total)
+}
+
 /// One sphere vertex with its analytic tangent (along +u), which stays
 /// defined at the poles where the UV derivatives degenerate.
 fn sphere_vertex(radius: f32, u: f32, v: f32, theta: f32, phi: f32) -> Vertex {
@@ -193,6 +266,48 @@ mod tests {
         let p = uv_sphere(1.0, 0, 0);
         check(&p);
         assert_eq!(p.indices.len() / 3, 3 * 2 * 2 - 2 * 3);
+    }
+
+    #[test]
+    fn terrain_has_two_triangles_per_cell_within_its_height() {
+        let p = terrain(40.0, 20.0, 64, 32, 3.0);
+        check(&p);
+        assert_eq!(p.indices.len() / 3, 2 * 64 * 32);
+        assert_eq!(p.vertices.len(), 65 * 33);
+        assert_eq!(
+            (p.bounds.min.x, p.bounds.max.x, p.bounds.min.z, p.bounds.max.z),
+            (-20.0, 20.0, -10.0, 10.0)
+        );
+        assert!(p.bounds.min.y >= -3.0 && p.bounds.max.y <= 3.0);
+        // Hills, not a plane: the heights use a good part of the range.
+        assert!(p.bounds.max.y - p.bounds.min.y > 2.0, "{:?}", p.bounds);
+        // Deterministic, and unique geometry: no two cells alike.
+        assert_eq!(p.vertices, terrain(40.0, 20.0, 64, 32, 3.0).vertices);
+        let mut heights: Vec<u32> = p.vertices.iter().map(|v| v.position[1].to_bits()).collect();
+        heights.sort_unstable();
+        heights.dedup();
+        assert!(heights.len() > p.vertices.len() * 9 / 10, "{} distinct heights", heights.len());
+        assert_eq!(terrain(1.0, 1.0, 0, 1 << 20, 1.0).indices.len() / 3, 2 * TERRAIN_MAX_CELLS as usize);
+    }
+
+    #[test]
+    fn terrain_normals_and_tangents_match_the_surface() {
+        let analytic = terrain(10.0, 10.0, 256, 256, 1.0);
+        let mut generated = analytic.clone();
+        generate_tangents(&mut generated.vertices, &generated.indices);
+        let row = 257;
+        for (k, (a, g)) in analytic.vertices.iter().zip(&generated.vertices).enumerate() {
+            let d = Vec3::from_slice(&a.tangent[..3]).dot(Vec3::from_slice(&g.tangent[..3]));
+            assert!(d > 0.99, "vertex {k}: {a:?} vs {g:?}");
+            assert_eq!(a.tangent[3], g.tangent[3], "vertex {k}");
+            // Inner vertices: the analytic normal agrees with the mesh's (central differences).
+            let (i, j) = (k % row, k / row);
+            if (1..row - 1).contains(&i) && (1..row - 1).contains(&j) {
+                let p = |k: usize| Vec3::from(analytic.vertices[k].position);
+                let n = (p(k + row) - p(k - row)).cross(p(k + 1) - p(k - 1)).normalize();
+                assert!(n.dot(Vec3::from(a.normal)) > 0.999, "vertex {k}: {n} vs {:?}", a.normal);
+            }
+        }
     }
 
     #[test]

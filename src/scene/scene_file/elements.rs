@@ -7,7 +7,7 @@ use anyhow::{bail, ensure, Context, Result};
 use glam::{DVec3, EulerRot, Quat, Vec3};
 
 use super::checks::{finite3, finite3_f64, non_negative, non_negative3, unit, unit_interval};
-use super::schema::{LightDef, LightType, MaterialDef, ObjectDef, PrimitiveKind, Scalar3, Size};
+use super::schema::{Cells, LightDef, LightType, MaterialDef, ObjectDef, PrimitiveKind, Scalar3, Size};
 use crate::scene::{primitives, AlphaMode, HdrImage, Light, LightKind, Material, Primitive, Transform};
 
 pub(super) fn light_from_def(l: LightDef, kind: LightType, name: String) -> Result<Light> {
@@ -126,6 +126,8 @@ pub(super) fn check_no_shape_parameters(o: &ObjectDef, what: &str) -> Result<()>
         ("radius", o.radius.is_some()),
         ("slices", o.slices.is_some()),
         ("stacks", o.stacks.is_some()),
+        ("cells", o.cells.is_some()),
+        ("height", o.height.is_some()),
     ];
     if let Some((key, _)) = set.iter().find(|(_, s)| *s) {
         bail!("`{key}` only applies to primitives; scale {what} with `scale`");
@@ -139,16 +141,17 @@ pub(super) fn procedural(o: &ObjectDef, kind: PrimitiveKind) -> Result<Primitive
         kind == PrimitiveKind::Sphere || !sphere_only,
         "`radius`, `slices` and `stacks` only apply to spheres"
     );
+    ensure!(
+        kind == PrimitiveKind::Terrain || (o.cells.is_none() && o.height.is_none()),
+        "`cells` and `height` only apply to terrains"
+    );
     let positive = |v: f32, what: &str| {
         ensure!(v > 0.0 && v.is_finite(), "{what} must be positive");
         Ok(v)
     };
     Ok(match kind {
         PrimitiveKind::Plane => {
-            let [x, z] = match o.size.unwrap_or(Size::Xz([10.0, 10.0])) {
-                Size::Uniform(s) => [s, s],
-                Size::Xz(xz) => xz,
-            };
+            let [x, z] = size_xz(o, 10.0);
             primitives::plane(positive(x, "size")?, positive(z, "size")?)
         }
         PrimitiveKind::Cube => match o.size.unwrap_or(Size::Uniform(1.0)) {
@@ -166,7 +169,30 @@ pub(super) fn procedural(o: &ObjectDef, kind: PrimitiveKind) -> Result<Primitive
             );
             primitives::uv_sphere(positive(o.radius.unwrap_or(0.5), "radius")?, slices, stacks)
         }
+        PrimitiveKind::Terrain => {
+            let [x, z] = size_xz(o, 100.0);
+            let [cx, cz] = match o.cells.unwrap_or(Cells::Uniform(64)) {
+                Cells::Uniform(c) => [c, c],
+                Cells::Xz(c) => c,
+            };
+            let max = primitives::TERRAIN_MAX_CELLS;
+            ensure!(
+                (1..=max).contains(&cx) && (1..=max).contains(&cz),
+                "a terrain has 1 to {max} cells per side (got {cx} x {cz})"
+            );
+            let height = o.height.unwrap_or(0.1 * x.max(z));
+            ensure!(height >= 0.0 && height.is_finite(), "height must be finite and >= 0");
+            primitives::terrain(positive(x, "size")?, positive(z, "size")?, cx, cz, height)
+        }
     })
+}
+
+/// A plane's or terrain's `size`: one number for a square, `default` when unset.
+fn size_xz(o: &ObjectDef, default: f32) -> [f32; 2] {
+    match o.size.unwrap_or(Size::Uniform(default)) {
+        Size::Uniform(s) => [s, s],
+        Size::Xz(xz) => xz,
+    }
 }
 
 /// A Radiance HDR environment map in `layout`, as equirect (an angular

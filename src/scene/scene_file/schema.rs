@@ -104,6 +104,7 @@ pub(super) enum PrimitiveKind {
     Plane,
     Cube,
     Sphere,
+    Terrain,
 }
 
 /// `scale = 2` or `scale = [1, 2, 1]`; `size = 2` or `size = [4, 3]`.
@@ -121,6 +122,14 @@ pub(super) enum Size {
     Xz([f32; 2]),
 }
 
+/// `cells = 512` or `cells = [1024, 512]` (a terrain's quads along X and Z).
+#[derive(Deserialize, Clone, Copy)]
+#[serde(untagged, expecting = "a whole number or an [x, z] array of whole numbers")]
+pub(super) enum Cells {
+    Uniform(u32),
+    Xz([u32; 2]),
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct ObjectDef {
@@ -132,6 +141,8 @@ pub(super) struct ObjectDef {
     pub(super) radius: Option<f32>,
     pub(super) slices: Option<u32>,
     pub(super) stacks: Option<u32>,
+    pub(super) cells: Option<Cells>,
+    pub(super) height: Option<f32>,
     pub(super) translation: Option<[f64; 3]>,
     pub(super) rotation_deg: Option<[f32; 3]>,
     pub(super) scale: Option<Scalar3>,

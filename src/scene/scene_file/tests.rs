@@ -463,11 +463,51 @@ fn semantic_errors_are_reported() {
         ("[environment]\nlayout = \"angular\"\n", "[environment]: `layout` needs an `hdr` map"),
         ("[environment]\nhdr = \"sky.hdr\"\nlayout = \"cube\"\n", "unknown variant `cube`"),
         ("[[object]]\nname = \"x\"\nprimitive = \"cube\"\nscale = 0\n", "scale must be finite and non-zero"),
+        (
+            "[[object]]\nname = \"s\"\nprimitive = \"sphere\"\ncells = 4\n",
+            "`cells` and `height` only apply to terrains",
+        ),
+        (
+            "[[object]]\nname = \"t\"\nprimitive = \"terrain\"\ncells = 0\n",
+            "1 to 4096 cells per side (got 0 x 0)",
+        ),
+        ("[[object]]\nname = \"t\"\nprimitive = \"terrain\"\ncells = [8, 5000]\n", "(got 8 x 5000)"),
+        (
+            "[[object]]\nname = \"t\"\nprimitive = \"terrain\"\nheight = -1\n",
+            "height must be finite and >= 0",
+        ),
+        (
+            "[[object]]\nname = \"t\"\nprimitive = \"terrain\"\ncells = 2.5\n",
+            "a whole number or an [x, z] array",
+        ),
     ];
     for (i, (text, expected)) in cases.iter().enumerate() {
         let err = error_of(&format!("semantic-{i}"), text);
         assert!(err.contains(expected), "expected '{expected}' in: {err}");
     }
+}
+
+/// `primitive = "terrain"`: two triangles per cell, the size and height asked for, deterministic.
+#[test]
+fn terrain_object_generates_its_cells() {
+    let text = "[[object]]\nname = \"hills\"\nprimitive = \"terrain\"\nsize = [40, 20]\ncells = [30, 10]\nheight = 2\n";
+    let scene = Scene::load(&write("terrain", "scene.toml", text)).unwrap();
+    assert_eq!(scene.objects.len(), 1);
+    let p = &scene.meshes[scene.instances[0].mesh].primitives[scene.instances[0].primitive];
+    assert_eq!(p.indices.len() / 3, 2 * 30 * 10);
+    assert_eq!((p.bounds.min.x, p.bounds.max.x, p.bounds.min.z, p.bounds.max.z), (-20.0, 20.0, -10.0, 10.0));
+    assert!(p.bounds.min.y >= -2.0 && p.bounds.max.y <= 2.0 && p.bounds.max.y > p.bounds.min.y);
+    // Defaults: 100 x 100 m, 64 x 64 cells, heights within a tenth of the side.
+    let scene = Scene::load(&write(
+        "terrain-default",
+        "scene.toml",
+        "[[object]]\nname = \"t\"\nprimitive = \"terrain\"\n",
+    ))
+    .unwrap();
+    let p = &scene.meshes[0].primitives[0];
+    assert_eq!(p.indices.len() / 3, 2 * 64 * 64);
+    assert_eq!((p.bounds.min.x, p.bounds.max.x), (-50.0, 50.0));
+    assert!(p.bounds.max.y <= 10.0 && p.bounds.max.y > 2.0);
 }
 
 #[test]
