@@ -1,7 +1,8 @@
 //! The compute backend's acceleration structure: our own BVHs laid out for glsl/trace/compute.glsl.
 //! Static instances (never skinned or animated) form one world-space tree with triangles in leaf order
-//! ([`FlatStatic`], traced first); the rest keep a two-level BVH: per primitive a 4-wide SBVH (rigid)
-//! or binned SAH (skinned, triangles read from the shared vertex/index buffer), and a top level.
+//! ([`FlatStatic`], traced first); the rest keep a two-level BVH: per primitive a 4-wide static tree
+//! (rigid: SBVH up to a size, `StaticBuilder`) or binned SAH (skinned, triangles read from the shared
+//! vertex/index buffer), and a top level.
 //!
 //! An update needs no host round-trip: [`ComputeBvh::prepare_update`] rebuilds policy-marked trees on
 //! the CPU (staged in the ring slot) and the top-level topology from bounds the host knows (refit
@@ -14,7 +15,7 @@ use anyhow::{Context as _, Result};
 use ash::vk;
 use glam::{DMat4, Mat4};
 
-use super::bvh::{triangle_aabbs, Bvh, BvhNode, WideBvh, DEFAULT_ALPHA};
+use super::bvh::{triangle_aabbs, Bvh, BvhNode, WideBvh};
 use super::compute_refit::ComputeRefit;
 use super::compute_top_level::{host_buffer, TopLevelRefit};
 use super::cpu_trace::triangle_positions;
@@ -183,7 +184,7 @@ impl ComputeBvh {
         let trees = crate::par::map(wanted.len(), &order, |k| {
             let (m, i) = wanted[k];
             let p = &scene.meshes[m].primitives[i];
-            Bvh::build_sbvh(&triangle_positions(&p.vertices, &p.indices), Some(DEFAULT_ALPHA))
+            Bvh::build_static(&triangle_positions(&p.vertices, &p.indices)).0
         })
         .context("building the static BLASes")?;
         let mut blas: Vec<Vec<Option<BlasRef>>> =
@@ -266,13 +267,16 @@ impl ComputeBvh {
         bvh.build_ms = t0.elapsed().as_secs_f64() * 1e3;
         let flattened = flat.flattened.iter().filter(|f| **f).count();
         log::info!(
-            "compute BVH: {} triangles; {} static instances flattened into one 4-wide SBVH ({} triangle references, {} wide nodes, SAH cost {:.1}, {:.0} ms); {} B of nodes + {} B of triangle order + {} B of flat triangles = {} B; per-primitive trees: SBVHs {:.0} ms (reference-weighted SAH cost {:.1}), skinned binned {:.0} ms; built in {:.0} ms ({:.2} Mtri/s); top level over {} of {} instances, {} refit each frame",
+            "compute BVH: {} triangles; {} static instances flattened into one 4-wide tree ({} over {} triangles: {} references, {} wide nodes, SAH cost {:.1}, {:.0} ms, {:.2} Mtri/s); {} B of nodes + {} B of triangle order + {} B of flat triangles = {} B; per-primitive trees: static {:.0} ms (reference-weighted SAH cost {:.1}), skinned binned {:.0} ms; built in {:.0} ms ({:.2} Mtri/s); top level over {} of {} instances, {} refit each frame",
             triangles,
             flattened,
+            flat.builder.name(),
+            flat.source_triangles,
             flat.triangles.len(),
             flat.wide.nodes.len(),
             bvh.flat_sah,
             flat_ms,
+            flat.source_triangles as f64 / (flat_ms.max(1e-3) * 1e3),
             nodes.len() * std::mem::size_of::<BvhNode>(),
             prims.len() * 4,
             flat.triangles.len() * std::mem::size_of::<FlatTriangle>(),

@@ -1,4 +1,4 @@
-//! The compute tracer's flattened static geometry: ONE split BVH, collapsed 4-wide, over the
+//! The compute tracer's flattened static geometry: ONE BVH (split BVH up to a size), collapsed 4-wide, over the
 //! world-space triangles of every instance that never moves, triangles in leaf order
 //! (glsl/trace/compute.glsl `FlatTri`).
 //!
@@ -9,7 +9,7 @@
 
 use glam::{DVec3, Vec3};
 
-use super::bvh::{Bvh, WideBvh, DEFAULT_ALPHA};
+use super::bvh::{Bvh, StaticBuilder, WideBvh};
 use super::instance_mask;
 use crate::gpu::origin::RenderOrigin;
 use crate::scene::Scene;
@@ -31,8 +31,10 @@ pub struct FlatTriangle {
 const _: () = assert!(std::mem::size_of::<FlatTriangle>() == 48);
 
 pub struct FlatStatic {
-    /// The binary SBVH over the triangles (for its SAH cost).
+    /// The binary tree over the triangles (for its SAH cost).
     pub bvh: Bvh,
+    /// Which builder made it (by size: [`StaticBuilder::for_triangles`]).
+    pub builder: StaticBuilder,
     /// Its 4-wide collapse; leaf ranges index `triangles` directly.
     pub wide: WideBvh,
     /// In leaf order: `triangles[k]` is reference `k` of `wide` (a
@@ -94,15 +96,18 @@ impl FlatStatic {
             // f64 until the end: one rounding per coordinate.
             let m = origin.relative(&inst.world);
             let p = &scene.meshes[inst.mesh].primitives[inst.primitive];
-            let world = |v: u32| {
-                m.transform_point3(DVec3::from(Vec3::from(p.vertices[v as usize].position))).as_vec3()
-            };
+            // Each vertex once (an indexed mesh shares each by about six triangles).
+            let world: Vec<Vec3> = p
+                .vertices
+                .iter()
+                .map(|v| m.transform_point3(DVec3::from(Vec3::from(v.position))).as_vec3())
+                .collect();
             for (prim, t) in p.indices.chunks_exact(3).enumerate() {
-                tris.push([world(t[0]), world(t[1]), world(t[2])]);
+                tris.push([world[t[0] as usize], world[t[1] as usize], world[t[2] as usize]]);
                 ids.push((i as u32, prim as u32, mask));
             }
         }
-        let bvh = if tris.is_empty() { Bvh::default() } else { Bvh::build_sbvh(&tris, Some(DEFAULT_ALPHA)) };
+        let (bvh, builder) = Bvh::build_static(&tris);
         let wide = WideBvh::from_binary(&bvh);
         let triangles = wide
             .prim_indices
@@ -112,7 +117,7 @@ impl FlatStatic {
                 FlatTriangle { p0: p0.into(), instance, p1: p1.into(), primitive, p2: p2.into(), mask }
             })
             .collect();
-        FlatStatic { bvh, wide, triangles, source_triangles: tris.len(), flattened }
+        FlatStatic { bvh, builder, wide, triangles, source_triangles: tris.len(), flattened }
     }
 
     /// Bytes on the GPU: wide nodes plus the triangles.

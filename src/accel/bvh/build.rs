@@ -1,5 +1,9 @@
 //! The builder: top-down binned SAH over all three axes, with object-median
-//! fallbacks, into the flat node layout described in the parent module.
+//! fallbacks, into the flat node layout described in the parent module. Boxes
+//! live in SIMD lanes (`Box4`: one `minps`/`maxps` per grow at the crate's
+//! opt-level 1) and large inputs build on every core.
+
+use glam::{Vec3, Vec4};
 
 use super::{Bvh, BvhNode, BINS, INTERSECTION_COST, MAX_DEPTH, MAX_LEAF, TRAVERSAL_COST};
 use crate::scene::Aabb;
@@ -52,15 +56,6 @@ impl Bounds {
         }
     }
 
-    #[inline(always)]
-    fn centroid(&self) -> [f32; 3] {
-        [
-            0.5 * (self.min[0] + self.max[0]),
-            0.5 * (self.min[1] + self.max[1]),
-            0.5 * (self.min[2] + self.max[2]),
-        ]
-    }
-
     pub(super) fn contains(&self, inner: &Bounds) -> bool {
         let empty = (0..3).any(|k| inner.min[k] > inner.max[k]);
         empty || (0..3).all(|k| self.min[k] <= inner.min[k] && self.max[k] >= inner.max[k])
@@ -71,20 +66,134 @@ impl Bounds {
     }
 }
 
+/// A box in SIMD lanes (x, y, z; w is not a coordinate). An empty box is inverted.
+#[derive(Clone, Copy, Debug)]
+struct Box4 {
+    lo: Vec4,
+    hi: Vec4,
+}
+
+impl Box4 {
+    const EMPTY: Box4 = Box4 { lo: Vec4::splat(f32::INFINITY), hi: Vec4::splat(f32::NEG_INFINITY) };
+
+    #[inline(always)]
+    fn grow(&mut self, b: &Box4) {
+        self.lo = self.lo.min(b.lo);
+        self.hi = self.hi.max(b.hi);
+    }
+
+    #[inline(always)]
+    fn grow_point(&mut self, p: Vec4) {
+        self.lo = self.lo.min(p);
+        self.hi = self.hi.max(p);
+    }
+
+    /// Surface area; 0 for empty (inverted) boxes.
+    #[inline(always)]
+    fn area(&self) -> f32 {
+        let d = self.hi - self.lo;
+        if d.x >= 0.0 && d.y >= 0.0 && d.z >= 0.0 {
+            2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
+        } else {
+            0.0
+        }
+    }
+
+    fn bounds(&self) -> Bounds {
+        Bounds { min: self.lo.truncate().to_array(), max: self.hi.truncate().to_array() }
+    }
+}
+
+/// A primitive's box, moved with it by every partition so each level streams through one array
+/// (32 bytes: the primitive's index rides in `lo.w`, which no result is read from).
+#[derive(Clone, Copy)]
+struct Ref(Box4);
+
+/// Added to a primitive index to make `lo.w`'s bits: a normal float in [1, f32::MAX] for every index
+/// below 2^30. The raw index would be a denormal, and every sum and difference the w lane goes through
+/// would take a microcode assist (a third of the build's time).
+const PRIM_BITS: u32 = 0x3f80_0000;
+
+impl Ref {
+    #[inline(always)]
+    fn new(b: &Aabb, prim: u32) -> Ref {
+        Ref(Box4 { lo: b.min.extend(f32::from_bits(prim + PRIM_BITS)), hi: b.max.extend(0.0) })
+    }
+
+    #[inline(always)]
+    fn prim(&self) -> u32 {
+        self.0.lo.w.to_bits() - PRIM_BITS
+    }
+
+    /// Twice the centroid (the bins scale it away; saves a multiply per reference and level).
+    #[inline(always)]
+    fn centroid2(&self) -> Vec4 {
+        self.0.lo + self.0.hi
+    }
+}
+
 #[derive(Clone, Copy)]
 struct Bin {
-    bounds: Bounds,
+    bounds: Box4,
     count: u32,
 }
 
-const EMPTY_BIN: Bin = Bin { bounds: Bounds::EMPTY, count: 0 };
+const EMPTY_BIN: Bin = Bin { bounds: Box4::EMPTY, count: 0 };
 
-/// Bin of a centroid coordinate. Used for both binning and partitioning, so
-/// the two always agree (a chosen split never leaves a side empty). NaN
-/// lands in bin 0 (saturating cast).
-#[inline(always)]
-fn bin_of(c: f32, cmin: f32, scale: f32, nbins: usize) -> usize {
-    (((c - cmin) * scale) as usize).min(nbins - 1)
+/// Per-thread working memory of `decide`, reused from node to node (filling fresh arrays per node
+/// was a fifth of the build).
+struct Scratch {
+    bins: [[Bin; BINS]; 3],
+    right: [Box4; BINS],
+    right_count: [usize; BINS],
+}
+
+impl Scratch {
+    fn new() -> Box<Scratch> {
+        Box::new(Scratch { bins: [[EMPTY_BIN; BINS]; 3], right: [Box4::EMPTY; BINS], right_count: [0; BINS] })
+    }
+}
+
+/// Bins of doubled centroid coordinates on all three axes: bin = (c - origin) * scale, clamped.
+/// Used for both binning and partitioning, so the two always agree (a chosen split never leaves a
+/// side empty). NaN lands in bin 0.
+#[derive(Clone, Copy)]
+struct Binning {
+    origin: Vec4,
+    scale: Vec4,
+    /// The last bin, as a float (the clamp happens before the conversion).
+    last: Vec4,
+}
+
+impl Binning {
+    /// Over the doubled-centroid bounds `cb`, `nbins` bins per axis.
+    fn new(cb: &Box4, nbins: usize) -> Binning {
+        let scale = Vec4::splat(nbins as f32) / (cb.hi - cb.lo);
+        Binning { origin: cb.lo, scale, last: Vec4::splat((nbins - 1) as f32) }
+    }
+
+    /// The bins of centroid `c` on x, y and z. Clamped in float, then converted in one SIMD
+    /// instruction: the per-lane saturating `as usize` casts were a third of the binning.
+    #[inline(always)]
+    fn bins(&self, c: Vec4) -> [usize; 3] {
+        // max(NaN, 0) is 0 with SSE's operand order (and the scalar f32::max).
+        let t = ((c - self.origin) * self.scale).max(Vec4::ZERO).min(self.last);
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{__m128, _mm_cvtsi128_si32, _mm_cvttps_epi32, _mm_shuffle_epi32};
+            // SAFETY: SSE2 is part of every x86_64 target; the lanes are in [0, last].
+            unsafe {
+                let v = _mm_cvttps_epi32(__m128::from(t));
+                let lane = |x| _mm_cvtsi128_si32(x) as usize;
+                [lane(v), lane(_mm_shuffle_epi32::<0b01>(v)), lane(_mm_shuffle_epi32::<0b10>(v))]
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let last = self.last.x as usize;
+            [(t.x as usize).min(last), (t.y as usize).min(last), (t.z as usize).min(last)]
+        }
+    }
 }
 
 /// Bins used for a node of `count` primitives: fewer for small nodes,
@@ -102,11 +211,12 @@ pub(super) fn levels_needed(count: usize) -> usize {
 
 struct Task {
     node: usize,
+    /// The task's references: `refs[first .. first + count]` of the whole build.
     first: usize,
     count: usize,
     depth: usize,
-    /// Bounds of the primitives' centroids.
-    cb: Bounds,
+    /// Bounds of the primitives' doubled centroids.
+    cb: Box4,
 }
 
 enum Decision {
@@ -115,157 +225,253 @@ enum Decision {
     Sah {
         axis: usize,
         bin: usize,
-        left: Bounds,
-        right: Bounds,
+        left: Box4,
+        right: Box4,
     },
     /// Object median along the largest centroid axis.
     Median,
 }
 
+/// Builds of at least this many primitives run on every core (below it, thread start-up is as dear
+/// as the build).
+const PAR_MIN_PRIMS: usize = 1 << 15;
+/// Serial splits (binning on every core) until this many subtrees remain, then each subtree on a
+/// core. Fixed, not the core count, so the tree does not depend on the machine.
+const PAR_SUBTREES: usize = 32;
+/// Nodes of at least twice this many primitives bin in parallel chunks of this size.
+const PAR_BIN_CHUNK: usize = 1 << 16;
+
 impl Bvh {
     /// Builds over `aabbs` (one per primitive). Empty input gives an empty
     /// BVH (no nodes): callers skip such primitives.
     pub fn build(aabbs: &[Aabb]) -> Bvh {
-        let n = aabbs.len();
+        Self::build_in(aabbs, PAR_MIN_PRIMS)
+    }
+
+    /// [`Bvh::build`] over the triangles' boxes, without a list of them.
+    pub fn build_triangles(tris: &[[Vec3; 3]]) -> Bvh {
+        let boxes =
+            tris.iter().map(|t| Aabb { min: t[0].min(t[1]).min(t[2]), max: t[0].max(t[1]).max(t[2]) });
+        Self::build_refs(boxes.enumerate().map(|(i, b)| Ref::new(&b, i as u32)).collect(), PAR_MIN_PRIMS)
+    }
+
+    /// The build, on every core for inputs of at least `par_min` primitives. The tree is the same
+    /// either way.
+    pub(super) fn build_in(aabbs: &[Aabb], par_min: usize) -> Bvh {
+        Self::build_refs(aabbs.iter().enumerate().map(|(i, a)| Ref::new(a, i as u32)).collect(), par_min)
+    }
+
+    fn build_refs(mut refs: Vec<Ref>, par_min: usize) -> Bvh {
+        let n = refs.len();
         if n == 0 {
             return Bvh::default();
         }
-        assert!(n < (u32::MAX / 2) as usize, "BVH over {n} primitives: node indices overflow u32");
-        let boxes: Vec<Bounds> = aabbs.iter().map(Bounds::from_aabb).collect();
-        let centroids: Vec<[f32; 3]> = boxes.iter().map(Bounds::centroid).collect();
-        let mut prims: Vec<u32> = (0..n as u32).collect();
+        // Below 2^30: node indices fit u32, and a primitive index fits `Ref`'s w lane.
+        assert!(n < 1 << 30, "BVH over {n} primitives: indices overflow");
+        let (mut root, mut root_cb) = (Box4::EMPTY, Box4::EMPTY);
+        for r in &refs {
+            root.grow(&r.0);
+            root_cb.grow_point(r.centroid2());
+        }
         // A binary tree with at least one primitive per leaf: <= 2n - 1 nodes.
         let mut nodes: Vec<BvhNode> = Vec::with_capacity(2 * n - 1);
-
-        let (mut root, mut root_cb) = (Bounds::EMPTY, Bounds::EMPTY);
-        for (b, c) in boxes.iter().zip(&centroids) {
-            root.grow(b);
-            root_cb.grow_point(c);
-        }
-        nodes.push(root.to_node(0, 0));
-        let mut stack = Vec::with_capacity(2 * MAX_DEPTH);
-        stack.push(Task { node: 0, first: 0, count: n, depth: 1, cb: root_cb });
-
-        while let Some(task) = stack.pop() {
-            let range = task.first..task.first + task.count;
-            let bounds = Bounds::of_node(&nodes[task.node]);
-            let decision = decide(&prims[range.clone()], &boxes, &centroids, &bounds, &task);
-            let slice = &mut prims[range];
-            let (m, lb, rb, lcb, rcb) = match decision {
-                Decision::Leaf => {
-                    nodes[task.node].left_or_first = task.first as u32;
-                    nodes[task.node].count = task.count as u32;
-                    continue;
-                }
-                Decision::Sah { axis, bin, left, right } => {
-                    let nbins = bin_count(task.count);
-                    let (cmin, scale) = axis_scale(&task.cb, axis, nbins);
-                    // Two-pointer partition by bin; gathers child centroid bounds.
-                    let (mut lcb, mut rcb) = (Bounds::EMPTY, Bounds::EMPTY);
-                    let (mut i, mut j) = (0, slice.len());
-                    while i < j {
-                        let c = &centroids[slice[i] as usize];
-                        if bin_of(c[axis], cmin, scale, nbins) <= bin {
-                            lcb.grow_point(c);
-                            i += 1;
-                        } else {
-                            rcb.grow_point(c);
-                            j -= 1;
-                            slice.swap(i, j);
-                        }
-                    }
-                    (i, left, right, lcb, rcb)
-                }
-                Decision::Median => {
-                    let e = extent(&task.cb);
-                    let axis = if e[0] >= e[1] && e[0] >= e[2] {
-                        0
-                    } else if e[1] >= e[2] {
-                        1
-                    } else {
-                        2
-                    };
-                    let m = slice.len() / 2;
-                    slice.select_nth_unstable_by(m, |&a, &b| {
-                        centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
-                    });
-                    let (mut lb, mut rb, mut lcb, mut rcb) =
-                        (Bounds::EMPTY, Bounds::EMPTY, Bounds::EMPTY, Bounds::EMPTY);
-                    for (i, &p) in slice.iter().enumerate() {
-                        let (b, cb) = if i < m { (&mut lb, &mut lcb) } else { (&mut rb, &mut rcb) };
-                        b.grow(&boxes[p as usize]);
-                        cb.grow_point(&centroids[p as usize]);
-                    }
-                    (m, lb, rb, lcb, rcb)
-                }
-            };
-            debug_assert!(m > 0 && m < task.count);
-            let left = nodes.len();
-            nodes.push(lb.to_node(0, 0));
-            nodes.push(rb.to_node(0, 0));
-            nodes[task.node].left_or_first = left as u32;
-            nodes[task.node].count = 0;
-            let depth = task.depth + 1;
-            // Left on top: depth-first, left subtree first.
-            stack.push(Task { node: left + 1, first: task.first + m, count: task.count - m, depth, cb: rcb });
-            stack.push(Task { node: left, first: task.first, count: m, depth, cb: lcb });
+        nodes.push(root.bounds().to_node(0, 0));
+        let root = Task { node: 0, first: 0, count: n, depth: 1, cb: root_cb };
+        if n < par_min {
+            grow(&mut nodes, &mut refs, 0, vec![root], false);
+        } else {
+            grow_parallel(&mut nodes, &mut refs, root);
         }
         nodes.shrink_to_fit();
-        Bvh { nodes, prim_indices: prims }
+        Bvh { nodes, prim_indices: refs.iter().map(Ref::prim).collect() }
     }
 }
 
-fn extent(b: &Bounds) -> [f32; 3] {
-    [b.max[0] - b.min[0], b.max[1] - b.min[1], b.max[2] - b.min[2]]
+/// Splits `task` (its references are `refs[task.first - base ..]`) or makes it a leaf (None).
+/// `par`: bin on every core.
+fn step(
+    nodes: &mut Vec<BvhNode>,
+    refs: &mut [Ref],
+    base: usize,
+    task: Task,
+    par: bool,
+    scratch: &mut Scratch,
+) -> Option<(Task, Task)> {
+    let slice = &mut refs[task.first - base..task.first - base + task.count];
+    let bounds = Bounds::of_node(&nodes[task.node]);
+    let (m, lb, rb, lcb, rcb) = match decide(slice, &bounds, &task, par, scratch) {
+        Decision::Leaf => {
+            nodes[task.node].left_or_first = task.first as u32;
+            nodes[task.node].count = task.count as u32;
+            return None;
+        }
+        Decision::Sah { axis, bin, left, right } => {
+            let binning = Binning::new(&task.cb, bin_count(task.count));
+            // Two-pointer partition by bin; gathers child centroid bounds.
+            let (mut lcb, mut rcb) = (Box4::EMPTY, Box4::EMPTY);
+            let (mut i, mut j) = (0, slice.len());
+            while i < j {
+                let c = slice[i].centroid2();
+                if binning.bins(c)[axis] <= bin {
+                    lcb.grow_point(c);
+                    i += 1;
+                } else {
+                    rcb.grow_point(c);
+                    j -= 1;
+                    slice.swap(i, j);
+                }
+            }
+            (i, left, right, lcb, rcb)
+        }
+        Decision::Median => {
+            let e = task.cb.hi - task.cb.lo;
+            let axis = if e.x >= e.y && e.x >= e.z {
+                0
+            } else if e.y >= e.z {
+                1
+            } else {
+                2
+            };
+            let m = slice.len() / 2;
+            slice.select_nth_unstable_by(m, |a, b| {
+                a.centroid2()[axis].total_cmp(&b.centroid2()[axis]).then(a.prim().cmp(&b.prim()))
+            });
+            let (mut lb, mut rb, mut lcb, mut rcb) = (Box4::EMPTY, Box4::EMPTY, Box4::EMPTY, Box4::EMPTY);
+            for (i, r) in slice.iter().enumerate() {
+                let (b, cb) = if i < m { (&mut lb, &mut lcb) } else { (&mut rb, &mut rcb) };
+                b.grow(&r.0);
+                cb.grow_point(r.centroid2());
+            }
+            (m, lb, rb, lcb, rcb)
+        }
+    };
+    debug_assert!(m > 0 && m < task.count);
+    let left = nodes.len();
+    nodes.push(lb.bounds().to_node(0, 0));
+    nodes.push(rb.bounds().to_node(0, 0));
+    nodes[task.node].left_or_first = left as u32;
+    nodes[task.node].count = 0;
+    let depth = task.depth + 1;
+    Some((
+        Task { node: left, first: task.first, count: m, depth, cb: lcb },
+        Task { node: left + 1, first: task.first + m, count: task.count - m, depth, cb: rcb },
+    ))
 }
 
-/// Bin origin and scale of `axis`: bin = (c - cmin) * scale.
-#[inline(always)]
-fn axis_scale(cb: &Bounds, axis: usize, nbins: usize) -> (f32, f32) {
-    (cb.min[axis], nbins as f32 / (cb.max[axis] - cb.min[axis]))
+/// Builds the subtrees of `stack`'s tasks, depth first, left child first. `refs` holds the references
+/// from index `base` of the whole build on.
+fn grow(nodes: &mut Vec<BvhNode>, refs: &mut [Ref], base: usize, mut stack: Vec<Task>, par: bool) {
+    let mut scratch = Scratch::new();
+    while let Some(task) = stack.pop() {
+        if let Some((left, right)) = step(nodes, refs, base, task, par, &mut scratch) {
+            stack.push(right);
+            stack.push(left);
+        }
+    }
 }
 
-/// Leaf, SAH split or median split for the node of `task` over `prims`.
-fn decide(prims: &[u32], boxes: &[Bounds], centroids: &[[f32; 3]], bounds: &Bounds, task: &Task) -> Decision {
-    let count = prims.len();
+/// Splits the largest task (binning on every core) until [`PAR_SUBTREES`] remain, then builds each
+/// remaining subtree on a core and links its nodes in after the top's. Same SAH choices as `grow`;
+/// only the node order differs.
+fn grow_parallel(nodes: &mut Vec<BvhNode>, refs: &mut [Ref], root: Task) {
+    let mut frontier = vec![root];
+    let mut scratch = Scratch::new();
+    while frontier.len() < PAR_SUBTREES {
+        let Some((k, _)) = frontier
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.count > MAX_LEAF)
+            .max_by_key(|(k, t)| (t.count, std::cmp::Reverse(*k)))
+        else {
+            break;
+        };
+        let task = frontier.remove(k);
+        if let Some((left, right)) = step(nodes, refs, 0, task, true, &mut scratch) {
+            frontier.insert(k, right);
+            frontier.insert(k, left);
+        }
+    }
+    // One disjoint reference range per subtree (the frontier is in reference order).
+    let mut slices = Vec::with_capacity(frontier.len());
+    let (mut rest, mut at) = (&mut refs[..], 0);
+    for t in &frontier {
+        let (_, tail) = std::mem::take(&mut rest).split_at_mut(t.first - at);
+        let (mine, tail) = tail.split_at_mut(t.count);
+        slices.push(std::sync::Mutex::new(Some(mine)));
+        (rest, at) = (tail, t.first + t.count);
+    }
+    let mut size_order: Vec<usize> = (0..frontier.len()).collect();
+    size_order.sort_by_key(|&k| std::cmp::Reverse(frontier[k].count));
+    let top = &nodes[..];
+    let subtrees = crate::par::map(frontier.len(), &size_order, |k| {
+        let t = &frontier[k];
+        let slice =
+            slices[k].lock().map(|mut s| s.take()).ok().flatten().expect("each subtree is built once");
+        let mut sub = Vec::with_capacity(2 * t.count);
+        sub.push(top[t.node]);
+        let task = Task { node: 0, first: t.first, count: t.count, depth: t.depth, cb: t.cb };
+        grow(&mut sub, slice, t.first, vec![task], false);
+        sub
+    })
+    .unwrap_or_else(|e| panic!("BVH build: {e}"));
+    for (t, sub) in frontier.iter().zip(subtrees) {
+        // Subtree node i > 0 lands at base + i - 1; leaves already index the whole build's references.
+        let base = nodes.len() as u32;
+        let link = |mut n: BvhNode| {
+            if n.count == 0 {
+                n.left_or_first = base + n.left_or_first - 1;
+            }
+            n
+        };
+        nodes[t.node] = link(sub[0]);
+        nodes.extend(sub[1..].iter().map(|&n| link(n)));
+    }
+}
+
+/// Leaf, SAH split or median split for the node of `task` over `refs`; `par`: bin on every core.
+fn decide(refs: &[Ref], bounds: &Bounds, task: &Task, par: bool, scratch: &mut Scratch) -> Decision {
+    let count = refs.len();
     if count <= 1 {
         return Decision::Leaf;
     }
     // (cost, axis, bin, left, right, left count)
-    let mut best: Option<(f32, usize, usize, Bounds, Bounds, usize)> = None;
-    let ext = extent(&task.cb);
-    // Bin on all three axes in one pass over the primitives (each box and
-    // centroid is read once); axes without centroid extent are ignored.
+    let mut best: Option<(f32, usize, usize, Box4, Box4, usize)> = None;
+    let ext = (task.cb.hi - task.cb.lo).to_array();
     let nbins = bin_count(count);
-    let mut bins = [[EMPTY_BIN; BINS]; 3];
-    let (mut cmin, mut scale) = ([0.0; 3], [0.0; 3]);
-    for a in 0..3 {
-        (cmin[a], scale[a]) = axis_scale(&task.cb, a, nbins);
-    }
-    for &p in prims {
-        let (c, b) = (&centroids[p as usize], &boxes[p as usize]);
-        for axis in 0..3 {
-            let bin = &mut bins[axis][bin_of(c[axis], cmin[axis], scale[axis], nbins)];
-            bin.count += 1;
-            bin.bounds.grow(b);
+    let binning = Binning::new(&task.cb, nbins);
+    let Scratch { bins, right, right_count } = scratch;
+    if par && count >= 2 * PAR_BIN_CHUNK {
+        let chunks: Vec<&[Ref]> = refs.chunks(PAR_BIN_CHUNK).collect();
+        let parts = crate::par::map(chunks.len(), &[], |k| {
+            let mut part = Scratch::new();
+            bin_refs(chunks[k], &binning, &mut part.bins);
+            part
+        })
+        .unwrap_or_else(|e| panic!("BVH build: {e}"));
+        bins.iter_mut().for_each(|b| b[..nbins].fill(EMPTY_BIN));
+        for part in parts {
+            for (all, part) in bins.iter_mut().flatten().zip(part.bins.iter().flatten()) {
+                all.count += part.count;
+                all.bounds.grow(&part.bounds);
+            }
         }
+    } else {
+        bin_refs(refs, &binning, bins);
     }
     for (axis, bins) in bins.iter().enumerate() {
-        // Also skips NaN and infinite extents.
+        // Axes without centroid extent are ignored; also skips NaN and infinite extents.
         if !(ext[axis] > 0.0 && ext[axis].is_finite()) {
             continue;
         }
         // Suffix sweep: bounds/count right of each plane, then prefix sweep.
-        let mut right = [Bounds::EMPTY; BINS];
-        let mut right_count = [0usize; BINS];
-        let (mut acc, mut n) = (Bounds::EMPTY, 0);
+        let (mut acc, mut n) = (Box4::EMPTY, 0);
         for i in (1..nbins).rev() {
             acc.grow(&bins[i].bounds);
             n += bins[i].count as usize;
             right[i] = acc;
             right_count[i] = n;
         }
-        let (mut acc, mut n) = (Bounds::EMPTY, 0);
+        let (mut acc, mut n) = (Box4::EMPTY, 0);
         for i in 0..nbins - 1 {
             acc.grow(&bins[i].bounds);
             n += bins[i].count as usize;
@@ -299,4 +505,19 @@ fn decide(prims: &[u32], boxes: &[Bounds], centroids: &[[f32; 3]], bounds: &Boun
         return if count <= MAX_LEAF { Decision::Leaf } else { Decision::Median };
     }
     Decision::Sah { axis, bin, left, right }
+}
+
+/// Counts and boxes of `refs` in their bins on each axis (the first `binning.last + 1` of `bins`), in
+/// one pass (each box read once).
+fn bin_refs(refs: &[Ref], binning: &Binning, bins: &mut [[Bin; BINS]; 3]) {
+    let nbins = binning.last.x as usize + 1;
+    bins.iter_mut().for_each(|b| b[..nbins].fill(EMPTY_BIN));
+    let [xs, ys, zs] = bins;
+    for r in refs {
+        let [x, y, z] = binning.bins(r.centroid2());
+        for bin in [&mut xs[x], &mut ys[y], &mut zs[z]] {
+            bin.count += 1;
+            bin.bounds.grow(&r.0);
+        }
+    }
 }

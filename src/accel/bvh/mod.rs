@@ -83,6 +83,53 @@ pub struct Bvh {
     pub prim_indices: Vec<u32>,
 }
 
+/// Largest static tree (triangles) built as a split BVH; larger ones use the binned builder.
+///
+/// Measured on the 2-core VM (bench/results/scale.md): on flattened Sponza (278 k triangles) spatial
+/// splits cut the SAH cost 77.6 -> 65.1 and raise shadow rays 1.06 -> 1.82 Mrays/s, for a 3.4 s build
+/// against 0.14 s; on the 4 M triangle terrain (small, evenly sized triangles) they buy 0.2 % SAH for
+/// a build of 20+ s against about 1.5 s. Above this size the split BVH's build (0.08-0.17 Mtri/s)
+/// would dominate the load.
+pub const SBVH_MAX_TRIANGLES: usize = 1 << 20;
+
+/// The builder of a static (built once, never refit) tree.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StaticBuilder {
+    /// Split BVH ([`DEFAULT_ALPHA`]): the best trees, slow to build.
+    Sbvh,
+    /// Binned SAH on every core: several Mtri/s.
+    Binned,
+}
+
+impl StaticBuilder {
+    pub fn for_triangles(n: usize) -> StaticBuilder {
+        if n <= SBVH_MAX_TRIANGLES {
+            StaticBuilder::Sbvh
+        } else {
+            StaticBuilder::Binned
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            StaticBuilder::Sbvh => "split BVH",
+            StaticBuilder::Binned => "binned SAH",
+        }
+    }
+}
+
+impl Bvh {
+    /// A static tree over `tris` by the builder their count calls for.
+    pub fn build_static(tris: &[[Vec3; 3]]) -> (Bvh, StaticBuilder) {
+        let builder = StaticBuilder::for_triangles(tris.len());
+        let bvh = match builder {
+            StaticBuilder::Sbvh => Bvh::build_sbvh(tris, Some(DEFAULT_ALPHA)),
+            StaticBuilder::Binned => Bvh::build_triangles(tris),
+        };
+        (bvh, builder)
+    }
+}
+
 /// One object-space box per triangle (`indices.len() / 3` boxes).
 pub fn triangle_aabbs(vertices: &[Vertex], indices: &[u32]) -> Vec<Aabb> {
     indices

@@ -191,3 +191,23 @@ fn quality_report_binned_sweep_sbvh() {
         }
     }
 }
+
+/// Static trees: a split BVH up to SBVH_MAX_TRIANGLES, binned SAH above (where the split BVH's build
+/// would dominate the load); both valid for the tracer.
+#[test]
+fn static_builder_by_size() {
+    assert_eq!(StaticBuilder::for_triangles(SBVH_MAX_TRIANGLES), StaticBuilder::Sbvh);
+    assert_eq!(StaticBuilder::for_triangles(SBVH_MAX_TRIANGLES + 1), StaticBuilder::Binned);
+    let tris = slivers(3000, 31);
+    let (bvh, builder) = Bvh::build_static(&tris);
+    assert_eq!(builder, StaticBuilder::Sbvh);
+    bvh.validate_split(&tris).unwrap();
+    assert!(bvh.prim_indices.len() > tris.len(), "the split BVH's spatial splits duplicate references");
+    let binned = Bvh::build_triangles(&tris);
+    binned.validate(&aabbs(&tris)).unwrap();
+    assert_eq!(binned.prim_indices.len(), tris.len());
+    assert_eq!(
+        bytemuck::cast_slice::<_, u8>(&binned.nodes),
+        bytemuck::cast_slice::<_, u8>(&Bvh::build(&aabbs(&tris)).nodes)
+    );
+}

@@ -188,6 +188,42 @@ fn refit_matches_a_fresh_build() {
     assert!(hits > 1000, "{hits} hits");
 }
 
+/// The parallel build (top splits binned on every core, then subtrees on the cores) makes the serial
+/// build's tree: same primitive order, same leaves, same node count; only the node order differs.
+#[test]
+fn parallel_build_makes_the_serial_tree() {
+    let leaves = |b: &Bvh| {
+        let mut l: Vec<(u32, u32, [u32; 6])> = b
+            .nodes
+            .iter()
+            .filter(|n| n.count > 0)
+            .map(|n| {
+                let c = [n.min, n.max].concat();
+                (n.left_or_first, n.count, std::array::from_fn(|k| c[k].to_bits()))
+            })
+            .collect();
+        l.sort_unstable();
+        l
+    };
+    let mut inputs = vec![tri_aabbs(&soup(150_000, 21)), tri_aabbs(&noisy_grid(200, 50.0, 22))];
+    inputs.extend([1, 2, 5, 33].map(|n| tri_aabbs(&soup(n, n as u64))));
+    for a in inputs {
+        let serial = Bvh::build_in(&a, usize::MAX);
+        let par = Bvh::build_in(&a, 0);
+        par.validate(&a).unwrap();
+        assert_eq!(par.prim_indices, serial.prim_indices, "{} primitives", a.len());
+        assert_eq!(par.nodes.len(), serial.nodes.len(), "{} primitives", a.len());
+        assert_eq!(leaves(&par), leaves(&serial), "{} primitives", a.len());
+        let (cs, cp) = (serial.sah_cost(), par.sah_cost());
+        assert!((cs - cp).abs() <= 1e-5 * cs, "{} primitives: SAH cost serial {cs}, parallel {cp}", a.len());
+        for (i, n) in par.nodes.iter().enumerate().filter(|(_, n)| n.count == 0) {
+            assert!(n.left_or_first as usize > i, "children after parents");
+        }
+        let again = Bvh::build_in(&a, 0);
+        assert_eq!(bytemuck::cast_slice::<_, u8>(&again.nodes), bytemuck::cast_slice::<_, u8>(&par.nodes));
+    }
+}
+
 /// ~1M triangles: build time and quality (release-like numbers need
 /// the dev profile's opt-level; see the eprintln).
 #[test]

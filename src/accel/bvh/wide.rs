@@ -156,24 +156,31 @@ impl WideBvh {
         w.nodes.push(WideNode::default());
         w.source.push([0; WIDTH]);
         while let Some((wi, bi)) = todo.pop() {
-            let mut kids: Vec<usize> = if bvh.nodes[bi].count > 0 {
-                vec![bi] // a leaf root: one leaf child
+            // Fixed arrays, not vectors: two allocations per node were a third of the collapse.
+            let (mut kids, mut n) = ([0usize; WIDTH], 2);
+            if bvh.nodes[bi].count > 0 {
+                (kids[0], n) = (bi, 1); // a leaf root: one leaf child
             } else {
                 let f = bvh.nodes[bi].left_or_first as usize;
-                vec![f, f + 1]
-            };
-            while kids.len() < WIDTH {
+                kids[..2].copy_from_slice(&[f, f + 1]);
+            }
+            while n < WIDTH {
                 let open =
-                    kids.iter().enumerate().filter(|(_, &c)| bvh.nodes[c].count == 0).max_by(|a, b| {
+                    kids[..n].iter().enumerate().filter(|(_, &c)| bvh.nodes[c].count == 0).max_by(|a, b| {
                         area(&node_bounds(bvh, *a.1)).total_cmp(&area(&node_bounds(bvh, *b.1)))
                     });
                 let Some((slot, &c)) = open else { break };
                 let f = bvh.nodes[c].left_or_first as usize;
                 kids[slot] = f;
-                kids.push(f + 1);
+                kids[n] = f + 1;
+                n += 1;
             }
-            let boxes: Vec<Aabb> = kids.iter().map(|&c| node_bounds(bvh, c)).collect();
-            let mut node = quantize(&boxes);
+            let kids = &kids[..n];
+            let mut boxes = [Aabb::EMPTY; WIDTH];
+            for (b, &c) in boxes.iter_mut().zip(kids) {
+                *b = node_bounds(bvh, c);
+            }
+            let mut node = quantize(&boxes[..n]);
             for (i, &c) in kids.iter().enumerate() {
                 let b = &bvh.nodes[c];
                 node.child[i] = if b.count > 0 {
