@@ -9,8 +9,21 @@ use std::path::{Path, PathBuf};
 /// Top-level modules, lowest first: dependency-free helpers, the Vulkan plumbing, the CPU scene, its
 /// GPU copy, acceleration data, PRT (it traces the CPU BVH and packs for the GPU), the frame, and the
 /// commands, report and viewer built on them.
-pub const LAYERS: &[&str] =
-    &["par", "csv", "image_diff", "vk", "scene", "gpu", "accel", "prt", "render", "app", "report", "viewer"];
+pub const LAYERS: &[&str] = &[
+    "par",
+    "disk_cache",
+    "csv",
+    "image_diff",
+    "vk",
+    "scene",
+    "gpu",
+    "accel",
+    "prt",
+    "render",
+    "app",
+    "report",
+    "viewer",
+];
 
 /// A source file: its path under src/ and its module path from the crate root.
 struct Source {

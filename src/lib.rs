@@ -10,6 +10,7 @@
 pub mod accel;
 pub mod app;
 pub mod csv;
+pub mod disk_cache;
 pub mod gpu;
 pub mod image_diff;
 #[cfg(test)]

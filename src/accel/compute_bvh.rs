@@ -15,12 +15,13 @@ use anyhow::{Context as _, Result};
 use ash::vk;
 use glam::{DMat4, Mat4};
 
-use super::bvh::{triangle_aabbs, Bvh, BvhNode, WideBvh};
+use super::bvh::{triangle_aabbs, Bvh, BvhNode, WideBvh, WideNode};
 use super::compute_refit::ComputeRefit;
 use super::compute_top_level::{host_buffer, TopLevelRefit};
 use super::cpu_trace::triangle_positions;
 use super::dynamic::{RebuildPolicy, RefitState, Update};
 use super::flat::{FlatStatic, FlatTriangle};
+use super::flat_cache;
 use super::{instance_mask, instance_opaque};
 use crate::gpu::origin::RenderOrigin;
 use crate::gpu::scene::GpuScene;
@@ -111,23 +112,26 @@ fn append(nodes: &mut Vec<BvhNode>, prims: &mut Vec<u32>, bvh: Bvh, capacity: us
 /// the shader indexes them as an array.
 fn append_wide(nodes: &mut Vec<BvhNode>, prims: &mut Vec<u32>, bvh: Bvh) -> BlasRef {
     let wide = WideBvh::from_binary(&bvh);
-    let r =
-        BlasRef { node_offset: push_wide_nodes(nodes, &bvh, &wide), prim_offset: prims.len() as u32, bvh };
+    let r = BlasRef {
+        node_offset: push_wide_nodes(nodes, bvh.nodes.first(), &wide.nodes),
+        prim_offset: prims.len() as u32,
+        bvh,
+    };
     prims.extend_from_slice(&wide.prim_indices);
     r
 }
 
 /// Appends `wide`'s header (at an odd slot) and nodes; returns the header's
 /// slot. An empty tree gets an unenterable header and no nodes.
-fn push_wide_nodes(nodes: &mut Vec<BvhNode>, bvh: &Bvh, wide: &WideBvh) -> u32 {
+fn push_wide_nodes(nodes: &mut Vec<BvhNode>, root: Option<&BvhNode>, wide: &[WideNode]) -> u32 {
     if nodes.len().is_multiple_of(2) {
         nodes.push(EMPTY_NODE);
     }
     let at = nodes.len() as u32;
-    match bvh.nodes.first() {
+    match root {
         Some(root) => {
             nodes.push(BvhNode { min: root.min, left_or_first: 0, max: root.max, count: BVH_WIDE_HEADER });
-            nodes.extend_from_slice(bytemuck::cast_slice(&wide.nodes));
+            nodes.extend_from_slice(bytemuck::cast_slice(wide));
         }
         None => nodes.push(EMPTY_NODE),
     }
@@ -148,8 +152,8 @@ impl ComputeBvh {
         let mut nodes: Vec<BvhNode> = Vec::new();
         let mut prims: Vec<u32> = Vec::new();
         // The flat tree first: its header at the fixed slot the shader reads.
-        let flat = FlatStatic::build(scene, gpu.origin);
-        let flat_at = push_wide_nodes(&mut nodes, &flat.bvh, &flat.wide);
+        let flat = FlatStatic::build(scene, gpu.origin, flat_cache::default_dir().as_deref());
+        let flat_at = push_wide_nodes(&mut nodes, flat.root.as_ref(), &flat.nodes);
         assert_eq!(flat_at, BVH_FLAT_ROOT, "the flat tree's header slot");
         let flat_ms = t0.elapsed().as_secs_f64() * 1e3;
         let mut triangles = flat.source_triangles;
@@ -230,7 +234,7 @@ impl ComputeBvh {
                 .zip(&flat.flattened)
                 .map(|(inst, &f)| f.then_some(inst.world))
                 .collect(),
-            flat_sah: flat.bvh.sah_cost(),
+            flat_sah: flat.sah,
             tlas_nodes: Buffer::null(),
             tlas_prims: Buffer::null(),
             instances: Buffer::null(),
@@ -267,16 +271,19 @@ impl ComputeBvh {
         bvh.build_ms = t0.elapsed().as_secs_f64() * 1e3;
         let flattened = flat.flattened.iter().filter(|f| **f).count();
         log::info!(
-            "compute BVH: {} triangles; {} static instances flattened into one 4-wide tree ({} over {} triangles: {} references, {} wide nodes, SAH cost {:.1}, {:.0} ms, {:.2} Mtri/s); {} B of nodes + {} B of triangle order + {} B of flat triangles = {} B; per-primitive trees: static {:.0} ms (reference-weighted SAH cost {:.1}), skinned binned {:.0} ms; built in {:.0} ms ({:.2} Mtri/s); top level over {} of {} instances, {} refit each frame",
+            "compute BVH: {} triangles; {} static instances flattened into one 4-wide tree ({} over {} triangles: {} references, {} wide nodes, SAH cost {:.1}, {}); {} B of nodes + {} B of triangle order + {} B of flat triangles = {} B; per-primitive trees: static {:.0} ms (reference-weighted SAH cost {:.1}), skinned binned {:.0} ms; built in {:.0} ms ({:.2} Mtri/s); top level over {} of {} instances, {} refit each frame",
             triangles,
             flattened,
             flat.builder.name(),
             flat.source_triangles,
             flat.triangles.len(),
-            flat.wide.nodes.len(),
+            flat.nodes.len(),
             bvh.flat_sah,
-            flat_ms,
-            flat.source_triangles as f64 / (flat_ms.max(1e-3) * 1e3),
+            if flat.cached {
+                format!("read from the disk cache in {flat_ms:.0} ms")
+            } else {
+                format!("{flat_ms:.0} ms, {:.2} Mtri/s", flat.source_triangles as f64 / (flat_ms.max(1e-3) * 1e3))
+            },
             nodes.len() * std::mem::size_of::<BvhNode>(),
             prims.len() * 4,
             flat.triangles.len() * std::mem::size_of::<FlatTriangle>(),

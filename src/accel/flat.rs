@@ -9,7 +9,10 @@
 
 use glam::{DVec3, Vec3};
 
-use super::bvh::{Bvh, StaticBuilder, WideBvh};
+use std::path::Path;
+
+use super::bvh::{Bvh, BvhNode, StaticBuilder, WideBvh, WideNode};
+use super::flat_cache::{self, CACHE_MIN_TRIANGLES};
 use super::instance_mask;
 use crate::gpu::origin::RenderOrigin;
 use crate::scene::Scene;
@@ -31,13 +34,15 @@ pub struct FlatTriangle {
 const _: () = assert!(std::mem::size_of::<FlatTriangle>() == 48);
 
 pub struct FlatStatic {
-    /// The binary tree over the triangles (for its SAH cost).
-    pub bvh: Bvh,
+    /// The root box of the binary tree the 4-wide one was collapsed from (None: no triangles).
+    pub root: Option<BvhNode>,
+    /// The binary tree's SAH cost.
+    pub sah: f32,
     /// Which builder made it (by size: [`StaticBuilder::for_triangles`]).
     pub builder: StaticBuilder,
-    /// Its 4-wide collapse; leaf ranges index `triangles` directly.
-    pub wide: WideBvh,
-    /// In leaf order: `triangles[k]` is reference `k` of `wide` (a
+    /// The 4-wide collapse; leaf ranges index `triangles` directly.
+    pub nodes: Vec<WideNode>,
+    /// In leaf order: `triangles[k]` is reference `k` of the wide tree (a
     /// spatial split may reference a triangle twice).
     pub triangles: Vec<FlatTriangle>,
     /// Distinct triangles in the tree.
@@ -45,6 +50,8 @@ pub struct FlatStatic {
     /// Per scene instance: whether it is in this tree (and so not in the
     /// top level).
     pub flattened: Vec<bool>,
+    /// Whether the tree was read from the disk cache (`flat_cache`) instead of built.
+    pub cached: bool,
 }
 
 /// Per node: whether an animation channel moves it or one of its ancestors.
@@ -84,15 +91,46 @@ pub fn static_instances(scene: &Scene) -> Vec<bool> {
 
 impl FlatStatic {
     /// In world space relative to `origin`; instances no ray can hit (mask 0) contribute no triangles.
-    pub fn build(scene: &Scene, origin: RenderOrigin) -> FlatStatic {
+    /// With a `cache` directory, a tree of at least [`CACHE_MIN_TRIANGLES`] is read from there when an
+    /// intact file for the same geometry exists, and written there when it is built.
+    pub fn build(scene: &Scene, origin: RenderOrigin, cache: Option<&Path>) -> FlatStatic {
         let flattened = static_instances(scene);
-        let mut tris: Vec<[Vec3; 3]> = Vec::new();
-        let mut ids: Vec<(u32, u32, u32)> = Vec::new();
-        for (i, inst) in scene.instances.iter().enumerate() {
-            let mask = instance_mask(scene, inst) as u32;
-            if !flattened[i] || mask == 0 {
-                continue;
+        let masks: Vec<u32> = scene.instances.iter().map(|inst| instance_mask(scene, inst) as u32).collect();
+        let members: Vec<usize> =
+            (0..scene.instances.len()).filter(|&i| flattened[i] && masks[i] != 0).collect();
+        let count: usize = members
+            .iter()
+            .map(|&i| {
+                scene.meshes[scene.instances[i].mesh].primitives[scene.instances[i].primitive].indices.len()
+                    / 3
+            })
+            .sum();
+        let file = cache.filter(|_| count >= CACHE_MIN_TRIANGLES).map(|dir| {
+            let key = flat_cache::key(scene, origin, &members, &masks);
+            (flat_cache::path(dir, key), key)
+        });
+        if let Some((path, key)) = &file {
+            if path.exists() {
+                let t = std::time::Instant::now();
+                match flat_cache::load(path, *key, flattened.clone()) {
+                    Ok(flat) => {
+                        log::info!(
+                            "compute BVH: flat tree of {count} triangles read from {} in {:.0} ms",
+                            path.display(),
+                            t.elapsed().as_secs_f64() * 1e3
+                        );
+                        return flat;
+                    }
+                    Err(e) => {
+                        log::warn!("compute BVH: ignoring cache file {}: {e:#}; rebuilding", path.display())
+                    }
+                }
             }
+        }
+        let mut tris: Vec<[Vec3; 3]> = Vec::with_capacity(count);
+        let mut ids: Vec<(u32, u32, u32)> = Vec::with_capacity(count);
+        for &i in &members {
+            let inst = &scene.instances[i];
             // f64 until the end: one rounding per coordinate.
             let m = origin.relative(&inst.world);
             let p = &scene.meshes[inst.mesh].primitives[inst.primitive];
@@ -104,7 +142,7 @@ impl FlatStatic {
                 .collect();
             for (prim, t) in p.indices.chunks_exact(3).enumerate() {
                 tris.push([world[t[0] as usize], world[t[1] as usize], world[t[2] as usize]]);
-                ids.push((i as u32, prim as u32, mask));
+                ids.push((i as u32, prim as u32, masks[i]));
             }
         }
         let (bvh, builder) = Bvh::build_static(&tris);
@@ -117,12 +155,28 @@ impl FlatStatic {
                 FlatTriangle { p0: p0.into(), instance, p1: p1.into(), primitive, p2: p2.into(), mask }
             })
             .collect();
-        FlatStatic { bvh, builder, wide, triangles, source_triangles: tris.len(), flattened }
+        let flat = FlatStatic {
+            root: bvh.nodes.first().copied(),
+            sah: bvh.sah_cost(),
+            builder,
+            nodes: wide.nodes,
+            triangles,
+            source_triangles: tris.len(),
+            flattened,
+            cached: false,
+        };
+        if let Some((path, key)) = &file {
+            // A cache that cannot be written costs a rebuild next time, not this run.
+            if let Err(e) = flat_cache::store(path, *key, &flat) {
+                log::warn!("compute BVH: cannot write cache file {}: {e:#}", path.display());
+            }
+        }
+        flat
     }
 
     /// Bytes on the GPU: wide nodes plus the triangles.
     pub fn bytes(&self) -> usize {
-        self.wide.nodes.len() * std::mem::size_of::<super::bvh::WideNode>()
+        self.nodes.len() * std::mem::size_of::<WideNode>()
             + self.triangles.len() * std::mem::size_of::<FlatTriangle>()
     }
 }
@@ -190,7 +244,7 @@ mod tests {
     fn flat_tree_holds_every_static_triangle_in_world_space_with_its_mask() {
         let s = scene();
         let origin = RenderOrigin(DVec3::new(1.0, 0.0, -1.0));
-        let flat = FlatStatic::build(&s, origin);
+        let flat = FlatStatic::build(&s, origin, None);
         // Instances: a/prim 0, a/prim 1, b/0, b/1, c/0, c/1; c is animated.
         assert_eq!(flat.flattened, vec![true, true, true, true, false, false]);
         let mut seen: HashMap<(u32, u32), FlatTriangle> = HashMap::new();
@@ -225,7 +279,7 @@ mod tests {
         // Every leaf range of the wide tree stays inside the triangles, and
         // all of them are covered (the SBVH may reference one twice).
         let mut covered = vec![false; flat.triangles.len()];
-        for n in &flat.wide.nodes {
+        for n in &flat.nodes {
             for c in 0..n.children() {
                 if let Some((first, count)) = n.leaf(c) {
                     covered[first..first + count].iter_mut().for_each(|v| *v = true);
@@ -233,5 +287,74 @@ mod tests {
             }
         }
         assert!(covered.iter().all(|&c| c), "a triangle no leaf reaches");
+    }
+
+    /// The disk cache: a second build of the same geometry reads the first one's tree; a damaged or
+    /// truncated file is rebuilt (and rewritten), never trusted; other geometry gets its own file;
+    /// small trees get none.
+    #[test]
+    fn flat_tree_cache_reads_back_and_rebuilds_damaged_files() {
+        let dir = std::env::temp_dir().join("hybrid-rt-tests").join("flat-cache");
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut s = Scene {
+            materials: vec![Material::default()],
+            // 182 x 182 cells: 66,248 triangles, just over the cache's lower bound.
+            meshes: vec![Mesh {
+                primitives: vec![crate::scene::primitives::terrain(50.0, 50.0, 182, 182, 5.0)],
+                ..Default::default()
+            }],
+            nodes: vec![Node { name: "t".into(), mesh: Some(0), ..Default::default() }],
+            roots: vec![0],
+            ..Default::default()
+        };
+        s.update_world();
+        let origin = RenderOrigin(DVec3::new(0.5, 0.0, -2.0));
+        let same = |a: &FlatStatic, b: &FlatStatic| {
+            assert_eq!(a.root, b.root);
+            assert_eq!(a.sah.to_bits(), b.sah.to_bits());
+            assert_eq!(a.builder, b.builder);
+            assert_eq!(a.nodes, b.nodes);
+            assert_eq!(a.triangles, b.triangles);
+            assert_eq!(a.source_triangles, b.source_triangles);
+            assert_eq!(a.flattened, b.flattened);
+        };
+        let built = FlatStatic::build(&s, origin, Some(&dir));
+        assert!(!built.cached);
+        assert!(built.source_triangles >= CACHE_MIN_TRIANGLES);
+        let files = || -> Vec<std::path::PathBuf> {
+            std::fs::read_dir(&dir).map(|d| d.map(|e| e.unwrap().path()).collect()).unwrap_or_default()
+        };
+        let [file] = files().try_into().expect("one cache file, no temporary left");
+        let read = FlatStatic::build(&s, origin, Some(&dir));
+        assert!(read.cached, "the second build reads the file");
+        same(&built, &read);
+        let whole = std::fs::read(&file).unwrap();
+        for (what, bad) in [
+            ("a flipped byte in the triangles", {
+                let mut b = whole.clone();
+                let at = b.len() - 100;
+                b[at] ^= 4;
+                b
+            }),
+            ("a truncated file", whole[..whole.len() / 3].to_vec()),
+            ("an empty file", Vec::new()),
+        ] {
+            std::fs::write(&file, &bad).unwrap();
+            let rebuilt = FlatStatic::build(&s, origin, Some(&dir));
+            assert!(!rebuilt.cached, "{what} was trusted");
+            same(&built, &rebuilt);
+            assert_eq!(std::fs::read(&file).unwrap(), whole, "{what}: the file is written again");
+        }
+        // Other geometry (the instance moved), other origin: other keys, new files.
+        let other = FlatStatic::build(&s, RenderOrigin(DVec3::ZERO), Some(&dir));
+        assert!(!other.cached);
+        s.nodes[0].local.translation.x += 1.0;
+        s.update_world();
+        assert!(!FlatStatic::build(&s, origin, Some(&dir)).cached);
+        assert_eq!(files().len(), 3);
+        // A tree under the lower bound is not worth a file.
+        let small = scene();
+        FlatStatic::build(&small, origin, Some(&dir));
+        assert_eq!(files().len(), 3);
     }
 }

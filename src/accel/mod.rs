@@ -14,6 +14,7 @@ pub mod compute_top_level;
 pub mod cpu_trace;
 pub mod dynamic;
 pub mod flat;
+pub mod flat_cache;
 
 use dynamic::{DynamicBlases, Update};
 

@@ -21,14 +21,7 @@ pub fn default_cache_dir() -> Option<PathBuf> {
     user_cache_dir(CACHE_DIR_ENV, "prt")
 }
 
-/// A cache directory by the platform convention: `$override_env`, else
-/// `$XDG_CACHE_HOME/hybrid-rt/<sub>`, else `~/.cache/hybrid-rt/<sub>`.
-pub fn user_cache_dir(override_env: &str, sub: &str) -> Option<PathBuf> {
-    let env = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty()).map(PathBuf::from);
-    env(override_env)
-        .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("hybrid-rt").join(sub)))
-        .or_else(|| env("HOME").map(|h| h.join(".cache/hybrid-rt").join(sub)))
-}
+pub use crate::disk_cache::user_cache_dir;
 
 /// How a transfer was obtained.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
