@@ -672,6 +672,12 @@ mod tests {
         // Its shadows are left out under any T: maps cheaper than them are bought for it alone.
         let k0_maps = select(&k0, SCREEN, &p, &with_maps(m.clone(), 0.05), f64::INFINITY, None, true);
         assert_eq!((shadows(&k0_maps), k0_maps.shadow_maps), (vec![1, 1, 0], true));
+        // Twelve shadow casters (0.1 ms each) and 1.05 ms left: ten traced, two left out. Neither the
+        // maps (1.1 ms) nor every shadow (1.2 ms) fit: the ten stay, T kept.
+        let many: Vec<ObjectStats> = (1..=12).map(|d| obj(100, d as f32, false)).collect();
+        let over = select(&many, SCREEN, &p, &with_maps(model(&[0; 12]), 1.1), 5.05, None, true);
+        assert_eq!((shadows(&over), over.shadow_maps), ([vec![1; 10], vec![0; 2]].concat(), false));
+        assert!(over.predicted_ms <= 5.05 + 1e-9, "{}", over.predicted_ms);
         // Nothing left out: no maps, whatever they cost.
         let all = select(&objects, SCREEN, &p, &with_maps(m, 0.01), f64::INFINITY, None, true);
         assert_eq!((shadows(&all), all.shadow_maps), (vec![1, 1, 1], false));
