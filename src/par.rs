@@ -46,6 +46,21 @@ pub fn map<R: Send>(n: usize, order: &[usize], f: impl Fn(usize) -> R + Sync) ->
         .collect()
 }
 
+/// Fills `out` on every core, `chunk` items at a time: `f(first, part)` writes `part`, which is
+/// `out[first .. first + part.len()]`. A panic in `f` is an error.
+pub fn fill<T: Send>(out: &mut [T], chunk: usize, f: impl Fn(usize, &mut [T]) + Sync) -> Result<()> {
+    let chunk = chunk.max(1);
+    let parts: Vec<std::sync::Mutex<Option<&mut [T]>>> =
+        out.chunks_mut(chunk).map(|c| std::sync::Mutex::new(Some(c))).collect();
+    map(parts.len(), &[], |k| {
+        let part = parts[k].lock().map(|mut p| p.take()).ok().flatten();
+        if let Some(part) = part {
+            f(k * chunk, part);
+        }
+    })?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -54,6 +69,22 @@ mod tests {
         let out = super::map(100, &order, |i| i * i).unwrap();
         assert_eq!(out, (0..100).map(|i| i * i).collect::<Vec<_>>());
         assert_eq!(super::map(0, &[], |i| i).unwrap(), Vec::<usize>::new());
+    }
+
+    #[test]
+    fn fill_writes_every_item_once_at_its_index() {
+        for (n, chunk) in [(0, 4), (1, 4), (10, 3), (1000, 64), (7, 0)] {
+            let mut out = vec![usize::MAX; n];
+            super::fill(&mut out, chunk, |first, part| {
+                for (j, v) in part.iter_mut().enumerate() {
+                    assert_eq!(*v, usize::MAX, "written twice");
+                    *v = (first + j) * 3;
+                }
+            })
+            .unwrap();
+            assert_eq!(out, (0..n).map(|i| i * 3).collect::<Vec<_>>(), "{n} items in chunks of {chunk}");
+        }
+        assert!(super::fill(&mut [0u8; 10], 2, |first, _| assert!(first != 4)).is_err());
     }
 
     #[test]

@@ -147,14 +147,15 @@ impl FlatStatic {
         }
         let (bvh, builder) = Bvh::build_static(&tris);
         let wide = WideBvh::from_binary(&bvh);
-        let triangles = wide
-            .prim_indices
-            .iter()
-            .map(|&k| {
+        // In leaf order, on every core (a random-access gather: 0.1 s of the 4 M terrain's load).
+        let mut triangles = vec![FlatTriangle::default(); wide.prim_indices.len()];
+        crate::par::fill(&mut triangles, 1 << 15, |first, part| {
+            for (t, &k) in part.iter_mut().zip(&wide.prim_indices[first..]) {
                 let ([p0, p1, p2], (instance, primitive, mask)) = (tris[k as usize], ids[k as usize]);
-                FlatTriangle { p0: p0.into(), instance, p1: p1.into(), primitive, p2: p2.into(), mask }
-            })
-            .collect();
+                *t = FlatTriangle { p0: p0.into(), instance, p1: p1.into(), primitive, p2: p2.into(), mask };
+            }
+        })
+        .unwrap_or_else(|e| panic!("flat tree: {e}"));
         let flat = FlatStatic {
             root: bvh.nodes.first().copied(),
             sah: bvh.sah_cost(),

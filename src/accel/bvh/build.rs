@@ -200,7 +200,7 @@ impl Binning {
 /// whose fixed binning cost would otherwise dominate the build.
 #[inline(always)]
 fn bin_count(count: usize) -> usize {
-    (2 * count).clamp(4, BINS)
+    count.clamp(4, BINS)
 }
 
 /// Levels a balanced subtree over `count` primitives needs below its root.

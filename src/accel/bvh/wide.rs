@@ -33,6 +33,11 @@ use glam::Vec3;
 
 /// Children per wide node.
 pub const WIDTH: usize = 4;
+/// Binary trees of at least this many nodes collapse on every core.
+const PAR_MIN_NODES: usize = 1 << 16;
+/// Subtrees the top of a large tree is opened into before they collapse in parallel (fixed: the
+/// tree does not depend on the machine).
+const PAR_SUBTREES: usize = 32;
 pub const LEAF_BIT: u32 = crate::gpu::shared::BVH_WIDE_LEAF;
 const _: () = assert!(LEAF_BIT == 1 << 30);
 const FIRST_MASK: u32 = 0x07FF_FFFF;
@@ -145,8 +150,14 @@ fn quantize(boxes: &[Aabb]) -> WideNode {
 
 impl WideBvh {
     /// Each wide node takes up to [`WIDTH`] children by opening its largest-area interior child (SAH's
-    /// most visited).
+    /// most visited). Large trees collapse their top breadth first, then the subtrees below it on every
+    /// core, linked in after the top (node order differs from a serial collapse, nothing else).
     pub fn from_binary(bvh: &Bvh) -> WideBvh {
+        Self::from_binary_in(bvh, PAR_MIN_NODES)
+    }
+
+    /// The collapse, on every core for trees of at least `par_min` nodes.
+    pub(super) fn from_binary_in(bvh: &Bvh, par_min: usize) -> WideBvh {
         let mut w = WideBvh { prim_indices: bvh.prim_indices.clone(), ..Default::default() };
         if bvh.nodes.is_empty() {
             return w;
@@ -155,53 +166,97 @@ impl WideBvh {
         let mut todo = vec![(0usize, 0usize)];
         w.nodes.push(WideNode::default());
         w.source.push([0; WIDTH]);
-        while let Some((wi, bi)) = todo.pop() {
-            // Fixed arrays, not vectors: two allocations per node were a third of the collapse.
-            let (mut kids, mut n) = ([0usize; WIDTH], 2);
-            if bvh.nodes[bi].count > 0 {
-                (kids[0], n) = (bi, 1); // a leaf root: one leaf child
-            } else {
-                let f = bvh.nodes[bi].left_or_first as usize;
-                kids[..2].copy_from_slice(&[f, f + 1]);
+        if bvh.nodes.len() < par_min {
+            while let Some((wi, bi)) = todo.pop() {
+                w.expand(bvh, wi, bi, &mut todo);
             }
-            while n < WIDTH {
-                let open =
-                    kids[..n].iter().enumerate().filter(|(_, &c)| bvh.nodes[c].count == 0).max_by(|a, b| {
-                        area(&node_bounds(bvh, *a.1)).total_cmp(&area(&node_bounds(bvh, *b.1)))
-                    });
-                let Some((slot, &c)) = open else { break };
-                let f = bvh.nodes[c].left_or_first as usize;
-                kids[slot] = f;
-                kids[n] = f + 1;
-                n += 1;
+            return w;
+        }
+        let mut head = 0;
+        while head < todo.len() && todo.len() - head < PAR_SUBTREES {
+            let (wi, bi) = todo[head];
+            head += 1;
+            w.expand(bvh, wi, bi, &mut todo);
+        }
+        let pending = &todo[head..];
+        let subtrees = crate::par::map(pending.len(), &[], |k| {
+            let mut sub =
+                WideBvh { nodes: vec![WideNode::default()], source: vec![[0; WIDTH]], ..Default::default() };
+            let mut stack = vec![(0, pending[k].1)];
+            while let Some((wi, bi)) = stack.pop() {
+                sub.expand(bvh, wi, bi, &mut stack);
             }
-            let kids = &kids[..n];
-            let mut boxes = [Aabb::EMPTY; WIDTH];
-            for (b, &c) in boxes.iter_mut().zip(kids) {
-                *b = node_bounds(bvh, c);
-            }
-            let mut node = quantize(&boxes[..n]);
-            for (i, &c) in kids.iter().enumerate() {
-                let b = &bvh.nodes[c];
-                node.child[i] = if b.count > 0 {
-                    assert!(
-                        b.left_or_first <= FIRST_MASK,
-                        "wide BVH: primitive index {} overflows",
-                        b.left_or_first
-                    );
-                    LEAF_BIT | (b.count << COUNT_SHIFT) | b.left_or_first
-                } else {
-                    let next = w.nodes.len();
-                    w.nodes.push(WideNode::default());
-                    w.source.push([0; WIDTH]);
-                    todo.push((next, c));
-                    next as u32
-                };
-                w.source[wi][i] = c as u32;
-            }
-            w.nodes[wi] = node;
+            sub
+        })
+        .unwrap_or_else(|e| panic!("wide BVH: {e}"));
+        for (&(at, _), sub) in pending.iter().zip(subtrees) {
+            // Subtree node j > 0 lands at base + j - 1; its root fills the slot the top reserved.
+            let base = w.nodes.len() as u32;
+            let link = |mut n: WideNode| {
+                let children = n.children();
+                for c in &mut n.child[..children] {
+                    if *c & LEAF_BIT == 0 {
+                        *c = base + *c - 1;
+                    }
+                }
+                n
+            };
+            w.nodes[at] = link(sub.nodes[0]);
+            w.source[at] = sub.source[0];
+            w.nodes.extend(sub.nodes[1..].iter().map(|&n| link(n)));
+            w.source.extend_from_slice(&sub.source[1..]);
         }
         w
+    }
+
+    /// Fills wide node `wi` for binary node `bi`, appending its interior children as new nodes to fill
+    /// (pushed on `todo`).
+    fn expand(&mut self, bvh: &Bvh, wi: usize, bi: usize, todo: &mut Vec<(usize, usize)>) {
+        // Fixed arrays, not vectors: two allocations per node were a third of the collapse.
+        let (mut kids, mut n) = ([0usize; WIDTH], 2);
+        if bvh.nodes[bi].count > 0 {
+            (kids[0], n) = (bi, 1); // a leaf root: one leaf child
+        } else {
+            let f = bvh.nodes[bi].left_or_first as usize;
+            kids[..2].copy_from_slice(&[f, f + 1]);
+        }
+        while n < WIDTH {
+            let open = kids[..n]
+                .iter()
+                .enumerate()
+                .filter(|(_, &c)| bvh.nodes[c].count == 0)
+                .max_by(|a, b| area(&node_bounds(bvh, *a.1)).total_cmp(&area(&node_bounds(bvh, *b.1))));
+            let Some((slot, &c)) = open else { break };
+            let f = bvh.nodes[c].left_or_first as usize;
+            kids[slot] = f;
+            kids[n] = f + 1;
+            n += 1;
+        }
+        let kids = &kids[..n];
+        let mut boxes = [Aabb::EMPTY; WIDTH];
+        for (b, &c) in boxes.iter_mut().zip(kids) {
+            *b = node_bounds(bvh, c);
+        }
+        let mut node = quantize(&boxes[..n]);
+        for (i, &c) in kids.iter().enumerate() {
+            let b = &bvh.nodes[c];
+            node.child[i] = if b.count > 0 {
+                assert!(
+                    b.left_or_first <= FIRST_MASK,
+                    "wide BVH: primitive index {} overflows",
+                    b.left_or_first
+                );
+                LEAF_BIT | (b.count << COUNT_SHIFT) | b.left_or_first
+            } else {
+                let next = self.nodes.len();
+                self.nodes.push(WideNode::default());
+                self.source.push([0; WIDTH]);
+                todo.push((next, c));
+                next as u32
+            };
+            self.source[wi][i] = c as u32;
+        }
+        self.nodes[wi] = node;
     }
 
     /// Bytes on the GPU: nodes plus primitive indices.

@@ -160,3 +160,38 @@ fn wide_decode_is_conservative_and_closest_hits_match() {
     }
     assert!(WideBvh::from_binary(&Bvh::default()).nodes.is_empty());
 }
+
+/// The parallel collapse (top breadth first, subtrees on the cores) gives the serial collapse's tree:
+/// the same nodes in a depth-first walk, with their sources; only the node order differs.
+#[test]
+fn parallel_collapse_makes_the_serial_tree() {
+    let canonical = |w: &WideBvh| {
+        let (mut out, mut stack) = (Vec::new(), vec![0usize]);
+        while let Some(i) = stack.pop() {
+            let mut n = w.nodes[i];
+            for c in 0..n.children() {
+                if n.child[c] & super::wide::LEAF_BIT == 0 {
+                    stack.push(n.child[c] as usize);
+                    n.child[c] = 0;
+                }
+            }
+            out.push((n, w.source[i]));
+        }
+        out
+    };
+    let tris = soup(30_000, 41, Vec3::ZERO);
+    for bvh in [Bvh::build(&aabbs(&tris)), Bvh::build_sbvh(&tris, Some(DEFAULT_ALPHA))] {
+        let serial = WideBvh::from_binary_in(&bvh, usize::MAX);
+        let par = WideBvh::from_binary_in(&bvh, 0);
+        assert_eq!(par.nodes.len(), serial.nodes.len());
+        assert_eq!(canonical(&par), canonical(&serial));
+        assert_eq!(par.prim_indices, serial.prim_indices);
+        check_conservative(&bvh, &par);
+    }
+    // Trees smaller than the top's frontier collapse all in the top.
+    let small = Bvh::build(&aabbs(&soup(20, 42, Vec3::ZERO)));
+    assert_eq!(
+        canonical(&WideBvh::from_binary_in(&small, 0)),
+        canonical(&WideBvh::from_binary_in(&small, usize::MAX))
+    );
+}
