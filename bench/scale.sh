@@ -13,7 +13,7 @@ bin=${HYBRID_RT:-target/debug/hybrid-rt}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 echo "triangles,backend,wall_s,peak_rss_mb,upload_ms,scene_gpu_mib,bvh_ms,bvh_bytes,gbuffer_ms" | tee "$csv"
-for cells in 71 224 707 1000 1414 2236; do
+for cells in 71 224 500 707 1000 1414 2236; do
   [ "$cells" -le "$max_cells" ] || continue
   scene=$work/terrain_$cells.toml
   sed "s/^cells = .*/cells = $cells/" bench/scenes/terrain_4m.toml > "$scene"

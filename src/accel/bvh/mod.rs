@@ -87,10 +87,11 @@ pub struct Bvh {
 ///
 /// Measured on the 2-core VM (bench/results/scale.md): on flattened Sponza (278 k triangles) spatial
 /// splits cut the SAH cost 77.6 -> 65.1 and raise shadow rays 1.06 -> 1.82 Mrays/s, for a 3.4 s build
-/// against 0.14 s; on the 4 M triangle terrain (small, evenly sized triangles) they buy 0.2 % SAH for
-/// a build of 20+ s against about 1.5 s. Above this size the split BVH's build (0.08-0.17 Mtri/s)
-/// would dominate the load.
-pub const SBVH_MAX_TRIANGLES: usize = 1 << 20;
+/// against 0.14 s; on the 4 M triangle terrain (small, evenly sized triangles) they buy 0.4 % SAH for
+/// a build of 23 s against about 1.9 s. The line bounds the split BVH's build (0.08-0.17 Mtri/s) to
+/// about 3 s here (a 1 M triangle terrain took 6.4 s under a line at 2^20, the 2 M one 0.9 s above
+/// it); the disk cache (`flat_cache`) spares the second load either way.
+pub const SBVH_MAX_TRIANGLES: usize = 1 << 19;
 
 /// The builder of a static (built once, never refit) tree.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
