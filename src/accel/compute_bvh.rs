@@ -270,8 +270,11 @@ impl ComputeBvh {
         })?;
         bvh.build_ms = t0.elapsed().as_secs_f64() * 1e3;
         let flattened = flat.flattened.iter().filter(|f| **f).count();
+        let tree_bytes = nodes.len() * std::mem::size_of::<BvhNode>()
+            + prims.len() * 4
+            + flat.triangles.len() * std::mem::size_of::<FlatTriangle>();
         log::info!(
-            "compute BVH: {} triangles; {} static instances flattened into one 4-wide tree ({} over {} triangles: {} references, {} wide nodes, SAH cost {:.1}, {}); {} B of nodes + {} B of triangle order + {} B of flat triangles = {} B; per-primitive trees: static {:.0} ms (reference-weighted SAH cost {:.1}), skinned binned {:.0} ms; built in {:.0} ms ({:.2} Mtri/s); top level over {} of {} instances, {} refit each frame",
+            "compute BVH: {} triangles; {} static instances flattened into one 4-wide tree ({} over {} triangles: {} references, {} wide nodes, SAH cost {:.1}, {}); {} B of nodes + {} B of triangle order + {} B of flat triangles = {} B; per-primitive trees: static {:.0} ms (reference-weighted SAH cost {:.1}), skinned binned {:.0} ms; built in {:.0} ms ({:.2} Mtri/s); top level over {} of {} instances, {} refit each frame; with the scene's vertices and indices {:.1} B per triangle",
             triangles,
             flattened,
             flat.builder.name(),
@@ -287,9 +290,7 @@ impl ComputeBvh {
             nodes.len() * std::mem::size_of::<BvhNode>(),
             prims.len() * 4,
             flat.triangles.len() * std::mem::size_of::<FlatTriangle>(),
-            nodes.len() * std::mem::size_of::<BvhNode>()
-                + prims.len() * 4
-                + flat.triangles.len() * std::mem::size_of::<FlatTriangle>(),
+            tree_bytes,
             static_ms,
             bvh.mean_sah_cost(),
             blas_ms - static_ms - flat_ms,
@@ -297,7 +298,8 @@ impl ComputeBvh {
             triangles as f64 / (blas_ms.max(1e-3) * 1e3),
             scene.instances.len() - flattened,
             scene.instances.len(),
-            bvh.skinned.len()
+            bvh.skinned.len(),
+            (tree_bytes as u64 + gpu.vertices.size + gpu.indices.size) as f64 / triangles.max(1) as f64
         );
         Ok(bvh)
     }

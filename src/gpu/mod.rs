@@ -18,4 +18,4 @@ pub mod shared;
 pub mod split_sum;
 pub mod types;
 
-pub use scene::{Draw, GpuScene, PrimitiveRange};
+pub use scene::{Draw, GpuScene, PrimitiveRange, SceneMemory};
