@@ -1,5 +1,5 @@
-//! The compute tracer's flattened static geometry: ONE BVH (split BVH up to a size), collapsed 4-wide, over the
-//! world-space triangles of every instance that never moves, triangles in leaf order
+//! The compute tracer's flattened static geometry: ONE BVH (a split BVH up to a size), collapsed
+//! 4-wide, over the world-space triangles of every instance that never moves, triangles in leaf order
 //! (glsl/trace/compute.glsl `FlatTri`).
 //!
 //! Why: Sponza's ~160 static instances overlap, so a two-level ray enters many BLASes, each costing

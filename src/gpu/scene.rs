@@ -126,8 +126,8 @@ impl SceneMemory {
     pub fn describe(&self, triangles: usize) -> String {
         let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
         format!(
-            "scene GPU memory in use: {:.1} MiB = vertices {:.1} + indices {:.1} + textures {:.1} + environment {:.1} + \
-             PRT {:.1} + shadow maps {:.1} + other {:.1}; geometry {:.1} B per triangle",
+            "scene GPU memory in use: {:.1} MiB = vertices {:.1} + indices {:.1} + textures {:.1} + \
+             environment {:.1} + PRT {:.1} + shadow maps {:.1} + other {:.1}; geometry {:.1} B per triangle",
             mib(self.total()),
             mib(self.vertices),
             mib(self.indices),
