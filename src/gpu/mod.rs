@@ -10,6 +10,7 @@ pub mod env_prefilter;
 pub mod env_sampling;
 pub mod env_sh;
 pub mod environment;
+mod memory;
 pub mod origin;
 pub mod prt_buffer;
 pub mod scene;
@@ -18,4 +19,5 @@ pub mod shared;
 pub mod split_sum;
 pub mod types;
 
-pub use scene::{Draw, GpuScene, PrimitiveRange, SceneMemory};
+pub use memory::SceneMemory;
+pub use scene::{Draw, GpuScene, PrimitiveRange};

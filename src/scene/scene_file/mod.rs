@@ -14,6 +14,8 @@ mod merge;
 mod orbit;
 mod schema;
 #[cfg(test)]
+mod terrain_tests;
+#[cfg(test)]
 mod tests;
 
 use std::collections::HashMap;
