@@ -29,16 +29,37 @@ layout(set = SET_TRACE, binding = BVH_TLAS_NODES, scalar) readonly buffer TlasNo
 layout(set = SET_TRACE, binding = BVH_TLAS_PRIMS, scalar) readonly buffer TlasPrims { uint tlas_prims[]; };
 layout(set = SET_TRACE, binding = BVH_INSTANCES, scalar) readonly buffer BvhInstances { BvhInstance bvh_instances[]; };
 
-// World space relative to the render origin.
+// World space relative to the render origin. `id`: FLAT_ID_* bits (accel/flat.rs `FlatTriangle`).
 struct FlatTri {
     vec3 p0;
-    uint instance;
     vec3 p1;
-    uint primitive;
     vec3 p2;
-    uint mask;
+    uint id;
 };
 layout(set = SET_TRACE, binding = BVH_FLAT_TRIS, scalar) readonly buffer FlatTris { FlatTri flat_tris[]; };
+// Per member instance, by triangle number: (first number, instance).
+layout(set = SET_TRACE, binding = BVH_FLAT_MEMBERS, scalar) readonly buffer FlatMembers { uvec2 flat_members[]; };
+
+// A flat-tree hit's instance until flat_resolve: its primitive word holds the triangle's id.
+#define FLAT_HIT 0xFFFFFFFFu
+
+// (instance, primitive) of a flat-tree hit: the last member whose first number is <= the triangle's.
+// Searched once per accepted hit, not per triangle tested.
+void flat_resolve(inout uint inst, inout uint prim) {
+    if (inst != FLAT_HIT) return;
+    uint index = prim & FLAT_ID_INDEX;
+    uint lo = 0u, hi = uint(flat_members.length());
+    while (hi - lo > 1u) {
+        uint mid = (lo + hi) / 2u;
+        if (flat_members[mid].x <= index) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    inst = flat_members[lo].y;
+    prim = index - flat_members[lo].x;
+}
 
 #define BVH_STACK 32
 
@@ -144,6 +165,10 @@ void object_triangle(Instance inst, uint prim, out vec3 p0, out vec3 p1, out vec
 
 // 0 = ignore, 1 = accept. Shadow rays also fold transmittance into `tr`.
 uint candidate(bool shadow, uint inst, uint prim, vec2 b, float hit_t, inout vec3 tr) {
+    if (inst == FLAT_HIT) {
+        if (((prim >> FLAT_ID_OPAQUE_SHIFT) & 1u) != 0u) return 1u;
+        flat_resolve(inst, prim);
+    }
     if (bvh_instances[inst].opaque != 0u) return 1u;
     if (!shadow) return hit_alpha_passes(inst, prim, b, hit_t) ? 1u : 0u;
     vec3 t = occluder_transmittance(inst, prim, b);
@@ -152,18 +177,18 @@ uint candidate(bool shadow, uint inst, uint prim, vec2 b, float hit_t, inout vec
     return 0u;
 }
 
-// Flat-tree entries are world-space triangles with their own instance and mask; BLAS entries are in
-// object space (the top level already checked the mask).
+// Flat-tree entries are world-space triangles with their own id (instance FLAT_HIT until resolved) and
+// mask; BLAS entries are in object space (the top level already checked the mask).
 void leaf_triangle(bool in_flat, Instance inst, uint inst_index, uint entry, out uint ti, out uint prim, out vec3 p0,
                    out vec3 p1, out vec3 p2, out uint tmask) {
     if (in_flat) {
         FlatTri f = flat_tris[entry];
-        ti = f.instance;
-        prim = f.primitive;
+        ti = FLAT_HIT;
+        prim = f.id;
         p0 = f.p0;
         p1 = f.p1;
         p2 = f.p2;
-        tmask = f.mask;
+        tmask = f.id >> FLAT_ID_MASK_SHIFT;
     } else {
         ti = inst_index;
         prim = blas_prims[entry];
@@ -371,7 +396,10 @@ bool trace_ray(vec3 o, vec3 d, float tmax, bool shadow, out RayHit hit, out vec3
     tr = vec3(1.0);
     uint mask = shadow ? MASK_SHADOW : MASK_VISIBLE;
     bool packet = (TRACE_PACKET & (shadow ? TRACE_PACKET_SHADOW : TRACE_PACKET_CLOSEST)) != 0u;
-    return packet ? trace_packet(o, d, tmax, mask, shadow, hit, tr) : trace_bvh(o, d, tmax, mask, shadow, hit, tr);
+    bool found =
+        packet ? trace_packet(o, d, tmax, mask, shadow, hit, tr) : trace_bvh(o, d, tmax, mask, shadow, hit, tr);
+    flat_resolve(hit.instance, hit.primitive);
+    return found;
 }
 
 #endif

@@ -78,6 +78,8 @@ pub struct ComputeBvh {
     blas_prims: Buffer,
     /// The flat tree's triangles (`FlatTriangle`, leaf order).
     flat_tris: Buffer,
+    /// The flat tree's [first triangle number, instance] per member (`FlatStatic::members`).
+    flat_members: Buffer,
     /// Per scene instance: whether the flat tree holds it (then it is not
     /// in the top level), with the world matrix it was flattened at.
     flattened: Vec<Option<DMat4>>,
@@ -144,6 +146,7 @@ struct TreeData<'a> {
     nodes: &'a [BvhNode],
     prims: &'a [u32],
     flat_tris: &'a [FlatTriangle],
+    flat_members: &'a [[u32; 2]],
 }
 
 impl ComputeBvh {
@@ -152,7 +155,8 @@ impl ComputeBvh {
         let mut nodes: Vec<BvhNode> = Vec::new();
         let mut prims: Vec<u32> = Vec::new();
         // The flat tree first: its header at the fixed slot the shader reads.
-        let flat = FlatStatic::build(scene, gpu.origin, flat_cache::default_dir().as_deref());
+        let flat = FlatStatic::build(scene, gpu.origin, flat_cache::default_dir().as_deref())
+            .context("the compute BVH's flat tree")?;
         let flat_at = push_wide_nodes(&mut nodes, flat.root.as_ref(), &flat.nodes);
         assert_eq!(flat_at, BVH_FLAT_ROOT, "the flat tree's header slot");
         let flat_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -228,6 +232,7 @@ impl ComputeBvh {
             blas_nodes: Buffer::null(),
             blas_prims: Buffer::null(),
             flat_tris: Buffer::null(),
+            flat_members: Buffer::null(),
             flattened: scene
                 .instances
                 .iter()
@@ -246,7 +251,12 @@ impl ComputeBvh {
             top_level_ms: 0.0,
             origin: gpu.origin,
         };
-        let data = TreeData { nodes: &nodes, prims: &prims, flat_tris: &flat.triangles };
+        let data = TreeData {
+            nodes: &nodes,
+            prims: &prims,
+            flat_tris: &flat.triangles,
+            flat_members: &flat.members,
+        };
         let mut bvh = built(ctx, bvh, |bvh| {
             bvh.create_buffers(ctx, scene, gpu, data)?;
             // Fit the skinned trees and top level to the GPU's vertices (the CPU pose may differ in the
@@ -272,9 +282,10 @@ impl ComputeBvh {
         let flattened = flat.flattened.iter().filter(|f| **f).count();
         let tree_bytes = nodes.len() * std::mem::size_of::<BvhNode>()
             + prims.len() * 4
-            + flat.triangles.len() * std::mem::size_of::<FlatTriangle>();
+            + flat.triangles.len() * std::mem::size_of::<FlatTriangle>()
+            + flat.members.len() * 8;
         log::info!(
-            "compute BVH: {} triangles; {} static instances flattened into one 4-wide tree ({} over {} triangles: {} references, {} wide nodes, SAH cost {:.1}, {}); {} B of nodes + {} B of triangle order + {} B of flat triangles = {} B; per-primitive trees: static {:.0} ms (reference-weighted SAH cost {:.1}), skinned binned {:.0} ms; built in {:.0} ms ({:.2} Mtri/s); top level over {} of {} instances, {} refit each frame; with the scene's vertices and indices {:.1} B per triangle",
+            "compute BVH: {} triangles; {} static instances flattened into one 4-wide tree ({} over {} triangles: {} references, {} wide nodes, SAH cost {:.1}, {}); {} B of nodes + {} B of triangle order + {} B of flat triangles + {} B of flat members = {} B; per-primitive trees: static {:.0} ms (reference-weighted SAH cost {:.1}), skinned binned {:.0} ms; built in {:.0} ms ({:.2} Mtri/s); top level over {} of {} instances, {} refit each frame; with the scene's vertices and indices {:.1} B per triangle",
             triangles,
             flattened,
             flat.builder.name(),
@@ -290,6 +301,7 @@ impl ComputeBvh {
             nodes.len() * std::mem::size_of::<BvhNode>(),
             prims.len() * 4,
             flat.triangles.len() * std::mem::size_of::<FlatTriangle>(),
+            flat.members.len() * 8,
             tree_bytes,
             static_ms,
             bvh.mean_sah_cost(),
@@ -490,7 +502,7 @@ impl ComputeBvh {
     /// The GPU half of `build`: node and triangle-order buffers, refit
     /// passes, top-level buffers and the trace set.
     fn create_buffers(&mut self, ctx: &Context, scene: &Scene, gpu: &GpuScene, data: TreeData) -> Result<()> {
-        let TreeData { nodes, prims, flat_tris } = data;
+        let TreeData { nodes, prims, flat_tris, flat_members } = data;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         self.blas_nodes = Buffer::with_data(ctx, "BVH BLAS nodes", bytemuck::cast_slice(nodes), storage)?;
         self.blas_prims =
@@ -500,6 +512,9 @@ impl ComputeBvh {
         let flat_tris = if flat_tris.is_empty() { &placeholder[..] } else { flat_tris };
         self.flat_tris =
             Buffer::with_data(ctx, "BVH flat static triangles", bytemuck::cast_slice(flat_tris), storage)?;
+        let flat_members = if flat_members.is_empty() { &[[0u32; 2]][..] } else { flat_members };
+        self.flat_members =
+            Buffer::with_data(ctx, "BVH flat tree members", bytemuck::cast_slice(flat_members), storage)?;
         if !self.skinned.is_empty() {
             let refs: Vec<_> =
                 self.skinned.iter().map(|s| (&s.blas.bvh, s.blas.node_offset, s.blas.prim_offset)).collect();
@@ -520,7 +535,7 @@ impl ComputeBvh {
             )?);
         }
         let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
-        self.set = DescriptorSet::new(ctx, "trace set (compute BVH)", &[sb, sb, sb, sb, sb, sb])?;
+        self.set = DescriptorSet::new(ctx, "trace set (compute BVH)", &[sb; 7])?;
         for (i, b) in [
             &self.blas_nodes,
             &self.blas_prims,
@@ -528,6 +543,7 @@ impl ComputeBvh {
             &self.tlas_prims,
             &self.instances,
             &self.flat_tris,
+            &self.flat_members,
         ]
         .iter()
         .enumerate()
@@ -542,6 +558,7 @@ impl ComputeBvh {
             &mut self.blas_nodes,
             &mut self.blas_prims,
             &mut self.flat_tris,
+            &mut self.flat_members,
             &mut self.tlas_nodes,
             &mut self.tlas_prims,
             &mut self.instances,

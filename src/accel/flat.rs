@@ -13,25 +13,48 @@ use std::path::Path;
 
 use super::bvh::{Bvh, BvhNode, StaticBuilder, WideBvh, WideNode};
 use super::flat_cache::{self, CACHE_MIN_TRIANGLES};
-use super::instance_mask;
+use super::{instance_mask, instance_opaque};
 use crate::gpu::origin::RenderOrigin;
 use crate::scene::Scene;
 
-/// One triangle of the flat tree, 48 bytes; mirrors `FlatTri` in
-/// glsl/trace/compute.glsl.
+/// One triangle of the flat tree, 40 bytes; mirrors `FlatTri` in glsl/trace/compute.glsl.
+///
+/// Why no instance and primitive words (48 bytes before): the triangle's number in the tree's
+/// triangle numbering (`FLAT_ID_INDEX` bits) names both through [`FlatStatic::members`], which the
+/// tracer searches once per accepted hit, and the two flags a leaf test needs per triangle ride in the
+/// top bits. 8 bytes per triangle: 32 MB of the 4 M triangle terrain.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FlatTriangle {
     /// Relative to the render origin, like every GPU position.
     pub p0: [f32; 3],
-    pub instance: u32,
     pub p1: [f32; 3],
-    pub primitive: u32,
     pub p2: [f32; 3],
-    /// The ray mask bits (MASK_VISIBLE / MASK_SHADOW) its instance answers to.
-    pub mask: u32,
+    /// Tree triangle number | opaque << FLAT_ID_OPAQUE_SHIFT | ray mask << FLAT_ID_MASK_SHIFT.
+    pub id: u32,
 }
-const _: () = assert!(std::mem::size_of::<FlatTriangle>() == 48);
+const _: () = assert!(std::mem::size_of::<FlatTriangle>() == 40);
+
+/// The `id` bits below the flags: at most 2^29 triangles in the tree (more than 50 GB of them).
+pub const FLAT_ID_INDEX: u32 = crate::gpu::shared::FLAT_ID_INDEX;
+pub const FLAT_ID_OPAQUE_SHIFT: u32 = crate::gpu::shared::FLAT_ID_OPAQUE_SHIFT;
+pub const FLAT_ID_MASK_SHIFT: u32 = crate::gpu::shared::FLAT_ID_MASK_SHIFT;
+
+/// A member instance's flag bits of `FlatTriangle::id`: its ray mask and whether it is opaque.
+pub fn member_flags(scene: &Scene, instance: usize) -> u32 {
+    let inst = &scene.instances[instance];
+    (instance_mask(scene, inst) as u32) << FLAT_ID_MASK_SHIFT
+        | (instance_opaque(scene, inst) as u32) << FLAT_ID_OPAQUE_SHIFT
+}
+
+/// What a `FlatTriangle::id` names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct FlatId {
+    pub instance: u32,
+    pub primitive: u32,
+    pub mask: u32,
+    pub opaque: bool,
+}
 
 pub struct FlatStatic {
     /// The root box of the binary tree the 4-wide one was collapsed from (None: no triangles).
@@ -42,6 +65,9 @@ pub struct FlatStatic {
     pub builder: StaticBuilder,
     /// The 4-wide collapse; leaf ranges index `triangles` directly.
     pub nodes: Vec<WideNode>,
+    /// Per member instance with triangles, by tree triangle number: [first number, instance]. The
+    /// tracer's lookup from a triangle's `id` to its (instance, primitive) (`flat_members`).
+    pub members: Vec<[u32; 2]>,
     /// In leaf order: `triangles[k]` is reference `k` of the wide tree (a
     /// spatial split may reference a triangle twice).
     pub triangles: Vec<FlatTriangle>,
@@ -93,33 +119,42 @@ impl FlatStatic {
     /// In world space relative to `origin`; instances no ray can hit (mask 0) contribute no triangles.
     /// With a `cache` directory, a tree of at least [`CACHE_MIN_TRIANGLES`] is read from there when an
     /// intact file for the same geometry exists, and written there when it is built.
-    pub fn build(scene: &Scene, origin: RenderOrigin, cache: Option<&Path>) -> FlatStatic {
+    pub fn build(scene: &Scene, origin: RenderOrigin, cache: Option<&Path>) -> anyhow::Result<FlatStatic> {
         let flattened = static_instances(scene);
-        let masks: Vec<u32> = scene.instances.iter().map(|inst| instance_mask(scene, inst) as u32).collect();
-        let members: Vec<usize> =
-            (0..scene.instances.len()).filter(|&i| flattened[i] && masks[i] != 0).collect();
-        let count: usize = members
-            .iter()
-            .map(|&i| {
-                scene.meshes[scene.instances[i].mesh].primitives[scene.instances[i].primitive].indices.len()
-                    / 3
-            })
-            .sum();
+        let flags: Vec<u32> = (0..scene.instances.len()).map(|i| member_flags(scene, i)).collect();
+        let triangles_of = |i: usize| {
+            let inst = &scene.instances[i];
+            scene.meshes[inst.mesh].primitives[inst.primitive].indices.len() / 3
+        };
+        let members: Vec<usize> = (0..scene.instances.len())
+            .filter(|&i| flattened[i] && flags[i] >> FLAT_ID_MASK_SHIFT != 0 && triangles_of(i) > 0)
+            .collect();
+        let mut table = Vec::with_capacity(members.len());
+        let mut count = 0usize;
+        for &i in &members {
+            table.push([count as u32, i as u32]);
+            count += triangles_of(i);
+        }
+        anyhow::ensure!(
+            count <= FLAT_ID_INDEX as usize + 1,
+            "{count} static triangles: more than the {} the compute BVH's flat tree can number",
+            FLAT_ID_INDEX as usize + 1
+        );
         let file = cache.filter(|_| count >= CACHE_MIN_TRIANGLES).map(|dir| {
-            let key = flat_cache::key(scene, origin, &members, &masks);
+            let key = flat_cache::key(scene, origin, &members, &flags);
             (flat_cache::path(dir, key), key)
         });
         if let Some((path, key)) = &file {
             if path.exists() {
                 let t = std::time::Instant::now();
-                match flat_cache::load(path, *key, flattened.clone()) {
+                match flat_cache::load(path, *key, flattened.clone(), table.clone()) {
                     Ok(flat) => {
                         log::info!(
                             "compute BVH: flat tree of {count} triangles read from {} in {:.0} ms",
                             path.display(),
                             t.elapsed().as_secs_f64() * 1e3
                         );
-                        return flat;
+                        return Ok(flat);
                     }
                     Err(e) => {
                         log::warn!("compute BVH: ignoring cache file {}: {e:#}; rebuilding", path.display())
@@ -128,7 +163,7 @@ impl FlatStatic {
             }
         }
         let mut tris: Vec<[Vec3; 3]> = Vec::with_capacity(count);
-        let mut ids: Vec<(u32, u32, u32)> = Vec::with_capacity(count);
+        let mut ids: Vec<u32> = Vec::with_capacity(count);
         for &i in &members {
             let inst = &scene.instances[i];
             // f64 until the end: one rounding per coordinate.
@@ -140,9 +175,9 @@ impl FlatStatic {
                 .iter()
                 .map(|v| m.transform_point3(DVec3::from(Vec3::from(v.position))).as_vec3())
                 .collect();
-            for (prim, t) in p.indices.chunks_exact(3).enumerate() {
+            for t in p.indices.chunks_exact(3) {
                 tris.push([world[t[0] as usize], world[t[1] as usize], world[t[2] as usize]]);
-                ids.push((i as u32, prim as u32, masks[i]));
+                ids.push(ids.len() as u32 | flags[i]);
             }
         }
         let (bvh, builder) = Bvh::build_static(&tris);
@@ -151,8 +186,8 @@ impl FlatStatic {
         let mut triangles = vec![FlatTriangle::default(); wide.prim_indices.len()];
         crate::par::fill(&mut triangles, 1 << 15, |first, part| {
             for (t, &k) in part.iter_mut().zip(&wide.prim_indices[first..]) {
-                let ([p0, p1, p2], (instance, primitive, mask)) = (tris[k as usize], ids[k as usize]);
-                *t = FlatTriangle { p0: p0.into(), instance, p1: p1.into(), primitive, p2: p2.into(), mask };
+                let [p0, p1, p2] = tris[k as usize];
+                *t = FlatTriangle { p0: p0.into(), p1: p1.into(), p2: p2.into(), id: ids[k as usize] };
             }
         })
         .unwrap_or_else(|e| panic!("flat tree: {e}"));
@@ -161,6 +196,7 @@ impl FlatStatic {
             sah: bvh.sah_cost(),
             builder,
             nodes: wide.nodes,
+            members: table,
             triangles,
             source_triangles: tris.len(),
             flattened,
@@ -172,13 +208,27 @@ impl FlatStatic {
                 log::warn!("compute BVH: cannot write cache file {}: {e:#}", path.display());
             }
         }
-        flat
+        Ok(flat)
     }
 
-    /// Bytes on the GPU: wide nodes plus the triangles.
+    /// Bytes on the GPU: wide nodes, the triangles and the member table.
     pub fn bytes(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<WideNode>()
             + self.triangles.len() * std::mem::size_of::<FlatTriangle>()
+            + self.members.len() * 8
+    }
+
+    /// What a triangle's `id` names: the member whose numbers hold it (the tracer's `flat_resolve`).
+    pub fn resolve(&self, id: u32) -> FlatId {
+        let index = id & FLAT_ID_INDEX;
+        let k = self.members.partition_point(|m| m[0] <= index) - 1;
+        let [first, instance] = self.members[k];
+        FlatId {
+            instance,
+            primitive: index - first,
+            mask: id >> FLAT_ID_MASK_SHIFT,
+            opaque: (id >> FLAT_ID_OPAQUE_SHIFT) & 1 != 0,
+        }
     }
 }
 
@@ -205,7 +255,10 @@ mod tests {
     /// does not), the third under an animated parent.
     fn scene() -> Scene {
         let mut s = Scene {
-            materials: vec![Material::default(), Material { casts_shadows: false, ..Default::default() }],
+            materials: vec![
+                Material::default(),
+                Material { casts_shadows: false, transmission: 0.5, ..Default::default() },
+            ],
             meshes: vec![Mesh { primitives: vec![quad(0), quad(1)], ..Default::default() }],
             ..Default::default()
         };
@@ -245,17 +298,20 @@ mod tests {
     fn flat_tree_holds_every_static_triangle_in_world_space_with_its_mask() {
         let s = scene();
         let origin = RenderOrigin(DVec3::new(1.0, 0.0, -1.0));
-        let flat = FlatStatic::build(&s, origin, None);
+        let flat = FlatStatic::build(&s, origin, None).unwrap();
         // Instances: a/prim 0, a/prim 1, b/0, b/1, c/0, c/1; c is animated.
         assert_eq!(flat.flattened, vec![true, true, true, true, false, false]);
-        let mut seen: HashMap<(u32, u32), FlatTriangle> = HashMap::new();
+        let mut seen: HashMap<(u32, u32), (FlatTriangle, FlatId)> = HashMap::new();
         for t in &flat.triangles {
+            let id = flat.resolve(t.id);
             // A spatial split may reference a triangle from two leaves, but
             // always as the same record.
-            if let Some(before) = seen.insert((t.instance, t.primitive), *t) {
-                assert_eq!(before, *t, "two different records of one triangle");
+            if let Some(before) = seen.insert((id.instance, id.primitive), (*t, id)) {
+                assert_eq!(before.0, *t, "two different records of one triangle");
             }
         }
+        // Member table: (first number, instance) with each member's triangle count between them.
+        assert_eq!(flat.members, vec![[0, 0], [2, 1], [4, 2], [6, 3]]);
         let mut expected = 0;
         for (i, inst) in s.instances.iter().enumerate().filter(|(i, _)| flat.flattened[*i]) {
             let p = &s.meshes[inst.mesh].primitives[inst.primitive];
@@ -263,8 +319,9 @@ mod tests {
             let mask = if inst.primitive == 0 { MASK_VISIBLE | MASK_SHADOW } else { MASK_VISIBLE };
             for (prim, idx) in p.indices.chunks_exact(3).enumerate() {
                 expected += 1;
-                let t = seen[&(i as u32, prim as u32)];
-                assert_eq!(t.mask, mask as u32, "instance {i} triangle {prim}: mask");
+                let (t, id) = seen[&(i as u32, prim as u32)];
+                assert_eq!(id.mask, mask as u32, "instance {i} triangle {prim}: mask");
+                assert_eq!(id.opaque, inst.primitive == 0, "instance {i} triangle {prim}: opacity");
                 for (k, got) in [t.p0, t.p1, t.p2].iter().enumerate() {
                     let want =
                         m.transform_point3(DVec3::from(Vec3::from(p.vertices[idx[k] as usize].position)));
@@ -319,14 +376,14 @@ mod tests {
             assert_eq!(a.source_triangles, b.source_triangles);
             assert_eq!(a.flattened, b.flattened);
         };
-        let built = FlatStatic::build(&s, origin, Some(&dir));
+        let built = FlatStatic::build(&s, origin, Some(&dir)).unwrap();
         assert!(!built.cached);
         assert!(built.source_triangles >= CACHE_MIN_TRIANGLES);
         let files = || -> Vec<std::path::PathBuf> {
             std::fs::read_dir(&dir).map(|d| d.map(|e| e.unwrap().path()).collect()).unwrap_or_default()
         };
         let [file] = files().try_into().expect("one cache file, no temporary left");
-        let read = FlatStatic::build(&s, origin, Some(&dir));
+        let read = FlatStatic::build(&s, origin, Some(&dir)).unwrap();
         assert!(read.cached, "the second build reads the file");
         same(&built, &read);
         let whole = std::fs::read(&file).unwrap();
@@ -341,21 +398,27 @@ mod tests {
             ("an empty file", Vec::new()),
         ] {
             std::fs::write(&file, &bad).unwrap();
-            let rebuilt = FlatStatic::build(&s, origin, Some(&dir));
+            let rebuilt = FlatStatic::build(&s, origin, Some(&dir)).unwrap();
             assert!(!rebuilt.cached, "{what} was trusted");
             same(&built, &rebuilt);
             assert_eq!(std::fs::read(&file).unwrap(), whole, "{what}: the file is written again");
         }
         // Other geometry (the instance moved), other origin: other keys, new files.
-        let other = FlatStatic::build(&s, RenderOrigin(DVec3::ZERO), Some(&dir));
+        let other = FlatStatic::build(&s, RenderOrigin(DVec3::ZERO), Some(&dir)).unwrap();
         assert!(!other.cached);
         s.nodes[0].local.translation.x += 1.0;
         s.update_world();
-        assert!(!FlatStatic::build(&s, origin, Some(&dir)).cached);
+        assert!(!FlatStatic::build(&s, origin, Some(&dir)).unwrap().cached);
         assert_eq!(files().len(), 3);
+        // The triangles' opacity bits are in the file: a material turned transmissive is a new key.
+        s.materials[0].transmission = 0.5;
+        let clear = FlatStatic::build(&s, origin, Some(&dir)).unwrap();
+        assert!(!clear.cached);
+        assert!(!clear.resolve(clear.triangles[0].id).opaque);
+        assert_eq!(files().len(), 4);
         // A tree under the lower bound is not worth a file.
         let small = scene();
-        FlatStatic::build(&small, origin, Some(&dir));
-        assert_eq!(files().len(), 3);
+        FlatStatic::build(&small, origin, Some(&dir)).unwrap();
+        assert_eq!(files().len(), 4);
     }
 }

@@ -2,8 +2,9 @@
 //! static geometry reads its compute BVH instead of building it (a split BVH over Sponza takes ~3 s
 //! on the 2-core VM, the binned tree over a 4 M triangle terrain ~2 s). The key hashes the format
 //! version (bump it when a builder, the node layout or `FlatTriangle` changes), the builder choice
-//! line, the render origin and each flattened instance's index, ray mask, world matrix, vertices and
-//! indices; the file is checked whole (`disk_cache`) and a bad one is rebuilt with a warning.
+//! line, the render origin and each flattened instance's index, ray mask and opacity, world matrix,
+//! vertices and indices; the file is checked whole (`disk_cache`) and a bad one is rebuilt with a
+//! warning.
 //!
 //! Directory: `$HYBRID_RT_BVH_CACHE`, else `$XDG_CACHE_HOME/hybrid-rt/bvh`, else
 //! `~/.cache/hybrid-rt/bvh`; `HYBRID_RT_BVH_CACHE=off` turns it off.
@@ -23,8 +24,8 @@ pub const CACHE_DIR_ENV: &str = "HYBRID_RT_BVH_CACHE";
 /// Trees over fewer triangles build in well under 0.1 s: not worth a file.
 pub const CACHE_MIN_TRIANGLES: usize = 1 << 16;
 /// The builders' and layouts' version: part of the key and the magic.
-const FORMAT_VERSION: u64 = 1;
-const MAGIC: &[u8; 8] = b"HRTBVH\0\x01";
+const FORMAT_VERSION: u64 = 2;
+const MAGIC: &[u8; 8] = b"HRTBVH\0\x02";
 
 /// The directory by the platform convention, `None` when turned off (or no home).
 pub fn default_dir() -> Option<PathBuf> {
@@ -38,8 +39,9 @@ pub fn path(dir: &Path, key: u64) -> PathBuf {
     dir.join(format!("{key:016x}.bvh"))
 }
 
-/// The key of the flat tree over `members` (instance indices) of `scene` with ray `masks`.
-pub fn key(scene: &Scene, origin: RenderOrigin, members: &[usize], masks: &[u32]) -> u64 {
+/// The key of the flat tree over `members` (instance indices) of `scene` with triangle id `flags`
+/// (ray mask and opacity: `flat::member_flags`).
+pub fn key(scene: &Scene, origin: RenderOrigin, members: &[usize], flags: &[u32]) -> u64 {
     let mut h = Hash64::default();
     for v in [FORMAT_VERSION, SBVH_MAX_TRIANGLES as u64, DEFAULT_ALPHA.to_bits() as u64, members.len() as u64]
     {
@@ -50,7 +52,7 @@ pub fn key(scene: &Scene, origin: RenderOrigin, members: &[usize], masks: &[u32]
         let inst = &scene.instances[i];
         let p = &scene.meshes[inst.mesh].primitives[inst.primitive];
         h.u64(i as u64);
-        h.u64(masks[i] as u64);
+        h.u64(flags[i] as u64);
         h.bytes(bytemuck::cast_slice(&inst.world.to_cols_array()));
         // Lengths first: the hash streams, so the field boundaries must be in it.
         h.u64(p.vertices.len() as u64);
@@ -86,9 +88,9 @@ pub fn store(path: &Path, key: u64, flat: &FlatStatic) -> Result<()> {
     disk_cache::write(path, MAGIC, key, &parts)
 }
 
-/// The tree in the file at `path`, with `flattened` (which the key covers) as its instance list. Read
-/// straight into the tree's vectors.
-pub fn load(path: &Path, key: u64, flattened: Vec<bool>) -> Result<FlatStatic> {
+/// The tree in the file at `path`, with `flattened` and `members` (which the key covers) as its
+/// instance lists. Read straight into the tree's vectors.
+pub fn load(path: &Path, key: u64, flattened: Vec<bool>, members: Vec<[u32; 2]>) -> Result<FlatStatic> {
     let mut r = disk_cache::Reader::open(path, MAGIC, key)?;
     let mut header = [0u8; HEADER];
     r.read(&mut header)?;
@@ -115,6 +117,7 @@ pub fn load(path: &Path, key: u64, flattened: Vec<bool>) -> Result<FlatStatic> {
         sah: f32::from_bits(word(3) as u32),
         builder,
         nodes: wide,
+        members,
         triangles,
         source_triangles: word(2) as usize,
         flattened,

@@ -217,6 +217,14 @@ shared! {
     id BVH_TLAS_PRIMS = 3;
     id BVH_INSTANCES = 4;
     id BVH_FLAT_TRIS = 5;
+    id BVH_FLAT_MEMBERS = 6;
+    // A flat-tree triangle's id word (accel/flat.rs `FlatTriangle`): its
+    // number in the tree below FLAT_ID_INDEX (2^29 - 1), its instance's opacity and
+    // ray mask above. The members table maps the number to (instance,
+    // primitive).
+    uint FLAT_ID_INDEX = 536870911;
+    uint FLAT_ID_OPAQUE_SHIFT = 29;
+    uint FLAT_ID_MASK_SHIFT = 30;
 
     // The animation compute passes' own single set (SET_ANIM): skinning
     // (render/skinning.rs), BLAS refit (accel/compute_refit.rs) and the
