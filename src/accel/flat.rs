@@ -6,6 +6,11 @@
 //! an instance fetch, ray transform, watertight setup and root test; here a leaf is one contiguous
 //! read. Each triangle keeps its (instance, primitive), so hits shade as on the two-level path, and
 //! its instance's ray mask bits (shadow-only and invisible-to-shadow instances).
+//!
+//! Not every static instance: a mesh placed many times (a forest of one rock) would be copied once
+//! per placement, so a primitive's static copies are flattened only while they cost at most
+//! [`FLAT_MAX_COPIES`] times its own triangles or [`FLAT_ALWAYS_TRIANGLES`] in all; the rest stay
+//! instances of one BLAS in the two-level BVH (`flatten_choice`).
 
 use glam::{DVec3, Vec3};
 
@@ -15,7 +20,8 @@ use super::bvh::{Bvh, BvhNode, StaticBuilder, WideBvh, WideNode};
 use super::flat_cache::{self, CACHE_MIN_TRIANGLES};
 use super::{instance_mask, instance_opaque};
 use crate::gpu::origin::RenderOrigin;
-use crate::scene::Scene;
+use crate::scene::{Instance, Scene};
+use std::collections::HashMap;
 
 /// One triangle of the flat tree, 40 bytes; mirrors `FlatTri` in glsl/trace/compute.glsl.
 ///
@@ -115,12 +121,33 @@ pub fn static_instances(scene: &Scene) -> Vec<bool> {
         .collect()
 }
 
+/// A primitive's static copies are flattened while they hold at most this many times its triangles ...
+pub const FLAT_MAX_COPIES: usize = 4;
+/// ... or at most this many triangles in all (a small mesh placed a few thousand times).
+pub const FLAT_ALWAYS_TRIANGLES: usize = 1 << 16;
+
+/// Per instance: whether it goes into the flat tree: static (`static_instances`) and of a primitive
+/// whose static copies pass the [`FLAT_MAX_COPIES`] / [`FLAT_ALWAYS_TRIANGLES`] rule.
+pub fn flatten_choice(scene: &Scene) -> Vec<bool> {
+    let statics = static_instances(scene);
+    let mut copies: HashMap<(usize, usize), usize> = HashMap::new();
+    for inst in scene.instances.iter().zip(&statics).filter(|(_, s)| **s).map(|(i, _)| i) {
+        *copies.entry((inst.mesh, inst.primitive)).or_default() += 1;
+    }
+    let flatten = |inst: &Instance| {
+        let n = copies.get(&(inst.mesh, inst.primitive)).copied().unwrap_or(0);
+        let tris = scene.meshes[inst.mesh].primitives[inst.primitive].indices.len() / 3;
+        n <= FLAT_MAX_COPIES || n.saturating_mul(tris) <= FLAT_ALWAYS_TRIANGLES
+    };
+    scene.instances.iter().zip(statics).map(|(inst, s)| s && flatten(inst)).collect()
+}
+
 impl FlatStatic {
     /// In world space relative to `origin`; instances no ray can hit (mask 0) contribute no triangles.
     /// With a `cache` directory, a tree of at least [`CACHE_MIN_TRIANGLES`] is read from there when an
     /// intact file for the same geometry exists, and written there when it is built.
     pub fn build(scene: &Scene, origin: RenderOrigin, cache: Option<&Path>) -> anyhow::Result<FlatStatic> {
-        let flattened = static_instances(scene);
+        let flattened = flatten_choice(scene);
         let flags: Vec<u32> = (0..scene.instances.len()).map(|i| member_flags(scene, i)).collect();
         let triangles_of = |i: usize| {
             let inst = &scene.instances[i];
@@ -345,6 +372,55 @@ mod tests {
             }
         }
         assert!(covered.iter().all(|&c| c), "a triangle no leaf reaches");
+    }
+
+    /// A primitive placed many times stays instanced (one BLAS) past the copy rule; few copies, or a
+    /// small total, are flattened. The flat tree then holds only the flattened ones.
+    #[test]
+    fn heavily_instanced_primitives_stay_out_of_the_flat_tree() {
+        // 100 x 100 cells: 20,000 triangles per copy; the quad: 2.
+        let build = |big: usize, small: usize| {
+            let mut s = Scene {
+                materials: vec![Material::default()],
+                meshes: vec![
+                    Mesh {
+                        primitives: vec![crate::scene::primitives::terrain(10.0, 10.0, 100, 100, 1.0)],
+                        ..Default::default()
+                    },
+                    Mesh { primitives: vec![quad(0)], ..Default::default() },
+                ],
+                ..Default::default()
+            };
+            for (mesh, n) in [(0, big), (1, small)] {
+                for k in 0..n {
+                    let mut local = Transform::default();
+                    local.translation.x = 20.0 * k as f64;
+                    s.roots.push(s.nodes.len());
+                    s.nodes.push(Node {
+                        name: format!("{mesh}/{k}"),
+                        local,
+                        mesh: Some(mesh),
+                        ..Default::default()
+                    });
+                }
+            }
+            s.update_world();
+            s
+        };
+        let by_mesh = |s: &Scene, f: &[bool], mesh: usize| {
+            s.instances.iter().zip(f).filter(|(i, _)| i.mesh == mesh).map(|(_, f)| *f).collect::<Vec<_>>()
+        };
+        // 4 copies of 20,000: at the copy limit, flattened; 5 (100,000 > 2^16): instanced.
+        let s = build(FLAT_MAX_COPIES, 40);
+        assert!(flatten_choice(&s).iter().all(|f| *f));
+        let s = build(FLAT_MAX_COPIES + 1, 40);
+        let f = flatten_choice(&s);
+        assert_eq!(by_mesh(&s, &f, 0), vec![false; FLAT_MAX_COPIES + 1]);
+        // 40 quads = 80 triangles: far past the copy limit, under the total.
+        assert_eq!(by_mesh(&s, &f, 1), vec![true; 40]);
+        let flat = FlatStatic::build(&s, RenderOrigin::default(), None).unwrap();
+        assert_eq!(flat.flattened, f);
+        assert_eq!(flat.source_triangles, 80);
     }
 
     /// The disk cache: a second build of the same geometry reads the first one's tree; a damaged or
