@@ -278,6 +278,23 @@ pub fn render_command(
     })
 }
 
+/// The ray backends the device offers: compute where compute shaders have subgroup ballots, query and
+/// pipeline where the driver's extensions are enabled.
+pub fn offered_backends(gpu: &GpuOptions) -> Result<Vec<Backend>> {
+    with_context(gpu, |ctx| {
+        let accel = ctx.rt.acceleration_structure;
+        Ok([
+            (Backend::Compute, ctx.caps.subgroup_ops),
+            (Backend::Query, accel && ctx.rt.ray_query),
+            (Backend::Pipeline, accel && ctx.rt.ray_tracing_pipeline),
+        ]
+        .into_iter()
+        .filter(|(_, on)| *on)
+        .map(|(b, _)| b)
+        .collect())
+    })
+}
+
 /// Runs `f` with a new context, then destroys it and fails if the validation layer reported anything
 /// during its life or teardown (objects leaked at vkDestroyDevice), on the error path too: an error exit
 /// must leave nothing behind either.

@@ -97,6 +97,28 @@ enum Command {
         /// rays walk one node sequence together).
         #[arg(long, value_enum, default_value_t = Traversal::Default, requires = "rays")]
         ray_traversal: Traversal,
+        /// Cost against size: generated scenes of 1e4 to 1e7 unique triangles and of 1 to
+        /// 1e6 instances of one mesh, each size and backend in its own process (load stages,
+        /// per-pass frame ms, peak RSS, GPU memory by category, bytes per triangle); prints a
+        /// table, writes scale.csv and log-log plots to --scale-out. Backends: --backend, else
+        /// compute and (where offered) query. Other settings (size, effects, budget) apply.
+        #[arg(long, conflicts_with_all = ["rays", "compare_modes", "compare_backends", "compare_accel_updates", "csv", "capture_frame", "scene"])]
+        scale: bool,
+        /// With --scale: the unique series' largest size (0 skips the series).
+        #[arg(long, default_value_t = 10_000_000, requires = "scale")]
+        scale_max_triangles: u64,
+        /// With --scale: the instanced series' largest count (0 skips the series).
+        #[arg(long, default_value_t = 1_000_000, requires = "scale")]
+        scale_max_instances: u64,
+        /// With --scale: measured frames per size (after the first and two unmeasured).
+        #[arg(long, default_value_t = 3, value_parser = parse_count, allow_hyphen_values = true)]
+        scale_frames: usize,
+        /// With --scale: the folder for scale.csv and the plots.
+        #[arg(long, default_value = "out/scale", requires = "scale")]
+        scale_out: PathBuf,
+        /// One size of --scale, measured in this process (what --scale runs per size).
+        #[arg(long, hide = true, conflicts_with = "scale")]
+        scale_point: Option<report::scale::Point>,
         /// Capture frame N (0-based, in the order rendered: per variant the ray-counting
         /// frame and the warm-up, then the measured frames) with RenderDoc's in-application API
         /// (under `renderdoccmd capture`, or with librenderdoc.so loadable);
@@ -220,8 +242,36 @@ fn run(cli: Cli) -> Result<()> {
             rays,
             ray_reps,
             ray_traversal,
+            scale,
+            scale_max_triangles,
+            scale_max_instances,
+            scale_frames,
+            scale_out,
+            scale_point,
             capture_frame,
         }) => {
+            if let Some(point) = scale_point {
+                let job = RenderJob {
+                    settings: view.job()?.settings,
+                    ..RenderJob::new("", view.width, view.height)
+                };
+                return report::scale::measure_point(&gpu, point, &job, scale_frames);
+            }
+            if scale {
+                let backends = match view.backend {
+                    Backend::Auto => {
+                        app::offered_backends(&gpu)?.into_iter().filter(|b| *b != Backend::Pipeline).collect()
+                    }
+                    b => vec![b],
+                };
+                let opts = report::scale::ScaleOptions {
+                    max_triangles: scale_max_triangles,
+                    max_instances: scale_max_instances,
+                    out: scale_out,
+                    backends,
+                };
+                return report::scale::scale_command(&opts).map(|_| ());
+            }
             if rays {
                 return app::rays_command(&gpu, &view.job()?, ray_reps, ray_traversal, view.backend);
             }

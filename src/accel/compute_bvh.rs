@@ -489,6 +489,23 @@ impl ComputeBvh {
 
     /// SAH cost of the static per-primitive BVHs, averaged with reference
     /// counts (triangles, plus the SBVH's duplicates) as weights.
+    /// Bytes of the tracer's buffers: nodes, triangle order, flat triangles and members, top level and
+    /// instance records.
+    pub fn bytes(&self) -> u64 {
+        [
+            &self.blas_nodes,
+            &self.blas_prims,
+            &self.flat_tris,
+            &self.flat_members,
+            &self.tlas_nodes,
+            &self.tlas_prims,
+            &self.instances,
+        ]
+        .iter()
+        .map(|b| b.size)
+        .sum()
+    }
+
     pub fn mean_sah_cost(&self) -> f32 {
         let (mut sum, mut weight) = (0.0f64, 0.0f64);
         for b in self.blas.iter().flatten().flatten() {

@@ -96,6 +96,14 @@ pub struct DynamicBlases {
     scratch_address: u64,
 }
 
+impl DynamicBlases {
+    /// The structures' and the shared scratch buffer's bytes.
+    pub fn bytes(&self) -> u64 {
+        self.blases.iter().map(|b| b.accel.buffer.size).sum::<u64>()
+            + self.scratch.as_ref().map_or(0, |s| s.size)
+    }
+}
+
 const FLAGS: vk::BuildAccelerationStructureFlagsKHR = vk::BuildAccelerationStructureFlagsKHR::from_raw(
     vk::BuildAccelerationStructureFlagsKHR::ALLOW_UPDATE.as_raw()
         | vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_BUILD.as_raw(),

@@ -365,6 +365,14 @@ impl SceneAccel {
         Ok(())
     }
 
+    /// Bytes of every structure's buffer, the instance records and the scratch kept for updates.
+    pub fn bytes(&self) -> u64 {
+        let blases: u64 = self.blases.iter().flatten().flatten().map(|b| b.buffer.size).sum();
+        let scratch = self.scratch.buffer.as_ref().map_or(0, |b| b.size);
+        let dynamic = self.dynamic.as_ref().map_or(0, |d| d.bytes());
+        blases + self.tlas.buffer.size + self.instances.size + scratch + dynamic
+    }
+
     /// Writes the instance records and (re)builds the TLAS, waiting for it.
     pub fn build_tlas(&mut self, ctx: &Context, scene: &Scene) -> Result<()> {
         upload_now(ctx, "TLAS instances", |up| self.write_instances(up, scene))?;

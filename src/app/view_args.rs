@@ -59,7 +59,8 @@ pub struct ViewArgs {
     pub backend: Backend,
     /// Hybrid mode's primary hits: raster (visibility buffer), traced
     /// (camera rays) or auto (view and bench: measure both per view, keep
-    /// the cheaper; render: raster, so images do not depend on timing).
+    /// the cheaper; render: a size model, raster but traced for dense frames of
+    /// large scenes on a software device, so images do not depend on timing).
     #[arg(long, value_enum, default_value_t = PrimaryVisibility::Auto)]
     pub primary_visibility: PrimaryVisibility,
     /// Two-phase occlusion culling of the raster G-buffer's clusters (the

@@ -44,7 +44,7 @@ use frame_passes::FramePasses;
 use frame_slots::{FrameReads, FrameSlots};
 use passes::{antialias::final_ldr, composite::HDR, Recording};
 use scene_update::SceneUpdate;
-use shading::{SceneNeeds, ShadingConfig};
+use shading::{Backend, SceneNeeds, ShadingConfig};
 use targets::Targets;
 use tracer::Tracer;
 
@@ -195,6 +195,24 @@ impl Renderer {
         (d.draws.len(), d.culled)
     }
 
+    /// The current tracer's load-time build cost and GPU bytes (None before the first frame that
+    /// traces, or in a frame that traces nothing).
+    pub fn accel_stats(&self) -> Option<tracer::AccelStats> {
+        self.tracer.as_ref().map(|t| t.accel_stats())
+    }
+
+    /// The scene's GPU memory by category (`GpuScene::memory`).
+    pub fn scene_memory(&self) -> crate::gpu::SceneMemory {
+        self.gpu.memory()
+    }
+
+    /// Bytes of the current frame's render targets (after `prepare`).
+    pub fn target_bytes(&self) -> u64 {
+        let e = self.frame.extent;
+        let per_pixel: u64 = self.frame.targets.describe().iter().map(|(_, b)| *b as u64).sum();
+        per_pixel * e.width as u64 * e.height as u64
+    }
+
     /// The triangles of the draws the last prepared frame records (before
     /// occlusion culling).
     pub fn raster_triangles(&self) -> u64 {
@@ -226,10 +244,40 @@ impl Renderer {
         self.frame.names(&self.choices.frame_state())
     }
 
+    /// Auto's primary visibility for a renderer that does not measure (`visibility::model`): the scene's
+    /// draws against the frame's pixels, on this device with the tracer `settings` resolve to.
+    fn modelled_visibility(&self, ctx: &Context, settings: &RenderSettings) -> settings::PrimaryVisibility {
+        let raster = RenderSettings { primary_visibility: settings::PrimaryVisibility::Raster, ..*settings };
+        let backend = ShadingConfig::resolve(ctx, self.frame.needs, &raster).ok().and_then(|c| c.backend);
+        let e = self.frame.extent;
+        let load = visibility::RasterLoad {
+            triangles: self.gpu.draws.iter().map(|d| d.range.index_count as u64 / 3).sum(),
+            draws: self.gpu.draws.len() as u64,
+            pixels: e.width as u64 * e.height as u64,
+        };
+        let software = ctx.caps.device_type == vk::PhysicalDeviceType::CPU;
+        let pick = visibility::model(load, software, backend == Some(Backend::Compute));
+        if pick == settings::PrimaryVisibility::Traced && self.frame.config.is_none() {
+            log::info!(
+                "primary visibility: traced (auto, not measured: {} triangles + {} draws x {} = {:.1} per pixel, \
+                 at least {} and {} in all on a software device with the compute tracer)",
+                load.triangles,
+                load.draws,
+                visibility::MODEL_TRIANGLES_PER_DRAW,
+                load.per_pixel(),
+                visibility::MODEL_TRACED_PER_PIXEL,
+                visibility::MODEL_MIN_LOAD
+            );
+        }
+        pick
+    }
+
     /// Makes the frame's passes, tracer and targets match `settings`. Waits
     /// for the GPU when it has to rebuild.
     fn ensure_frame(&mut self, ctx: &Context, scene: &Scene, settings: &RenderSettings) -> Result<()> {
-        let settings = &visibility::effective(settings, self.choices.visibility.measure);
+        let settings = &visibility::effective(settings, self.choices.visibility.measure, || {
+            self.modelled_visibility(ctx, settings)
+        });
         let config = ShadingConfig {
             inject: !self.frame.injection.is_empty(),
             ..ShadingConfig::resolve(ctx, self.frame.needs, settings)?

@@ -99,7 +99,9 @@ pub enum PrimaryVisibility {
     /// cheaper, re-measuring when the view changes a lot or every few
     /// hundred frames. Only a renderer told to measure (the viewer and
     /// `bench` set `choices.visibility.measure`) does; elsewhere (`render`,
-    /// tests, goldens: images must not depend on timing) auto is raster.
+    /// tests, goldens: images must not depend on timing) auto follows a size
+    /// model (`visibility::model`): raster, but traced for dense frames of
+    /// large scenes on a software device with the compute tracer.
     #[default]
     Auto,
     /// The raster visibility buffer (pass `gbuffer`).

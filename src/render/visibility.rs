@@ -45,13 +45,64 @@ const REPROBE_TURN: f32 = 0.35;
 const REPROBE_MOVE: f32 = 0.1;
 
 /// `settings` as a renderer that does (`measure`) or does not measure sees them: without measuring auto
-/// is raster, so `render`, tests and golden images never depend on timing.
-pub fn effective(settings: &RenderSettings, measure: bool) -> RenderSettings {
+/// is what `model` says (a function of the scene's and frame's size, never of timing), so `render`,
+/// tests and golden images never depend on timing.
+pub fn effective(
+    settings: &RenderSettings,
+    measure: bool,
+    model: impl FnOnce() -> PrimaryVisibility,
+) -> RenderSettings {
     match settings.primary_visibility {
-        PrimaryVisibility::Auto if !measure => {
-            RenderSettings { primary_visibility: PrimaryVisibility::Raster, ..*settings }
-        }
+        PrimaryVisibility::Auto if !measure => RenderSettings { primary_visibility: model(), ..*settings },
         _ => *settings,
+    }
+}
+
+/// What a frame rasterizes, for [`model`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RasterLoad {
+    pub triangles: u64,
+    pub draws: u64,
+    pub pixels: u64,
+}
+
+/// A draw's fixed cost on lavapipe in triangles' worth: ~3 us a draw against ~90 ns a triangle
+/// (bench/results/scale.md: 10,000 and 100,000 instances of a 12-triangle box).
+pub const MODEL_TRIANGLES_PER_DRAW: u64 = 32;
+/// The raster's load per pixel above which camera rays through the compute BVH cost less on a software
+/// device: measured crossings between 1.7 and 5.2 (320x180) and between 3.3 and 10.9 (1280x720) triangles
+/// per pixel on generated terrains (bench/results/scale.md).
+pub const MODEL_TRACED_PER_PIXEL: u64 = 4;
+/// ... and only at scale: below this load (triangles plus the draws' worth) lavapipe rasterizes a frame in
+/// under ~0.1 s, so the model would save tens of ms while changing the images of ordinary scenes: the
+/// techniques differ slightly at alpha-tested and silhouette pixels (Sponza's plants: texture LOD from
+/// ray cones against raster derivatives), beyond the shipped goldens' bounds. The viewer and `bench`
+/// measure per view at any size.
+pub const MODEL_MIN_LOAD: u64 = 1 << 20;
+
+impl RasterLoad {
+    /// Triangles plus the draws' fixed cost.
+    pub fn load(&self) -> u64 {
+        self.triangles + MODEL_TRIANGLES_PER_DRAW * self.draws
+    }
+
+    /// [`RasterLoad::load`] per pixel.
+    pub fn per_pixel(&self) -> f64 {
+        self.load() as f64 / self.pixels.max(1) as f64
+    }
+}
+
+/// Auto's choice where nothing is measured: traced where a CPU rasterizes (`software`) and the compute BVH
+/// traces the frame anyway (`compute`), once the raster's load passes [`MODEL_MIN_LOAD`] and
+/// [`MODEL_TRACED_PER_PIXEL`]; raster
+/// otherwise (a GPU's rasterizer keeps up with any of these loads; lavapipe's ray queries only
+/// overtake it at ~50 triangles per pixel).
+pub fn model(load: RasterLoad, software: bool, compute: bool) -> PrimaryVisibility {
+    let dense = load.load() >= MODEL_MIN_LOAD && load.per_pixel() >= MODEL_TRACED_PER_PIXEL as f64;
+    if software && compute && dense {
+        PrimaryVisibility::Traced
+    } else {
+        PrimaryVisibility::Raster
     }
 }
 
@@ -394,7 +445,32 @@ mod tests {
             assert_eq!(c.technique(), None, "no technique chosen: every pass records");
         }
         let s = RenderSettings::default();
-        assert_eq!(effective(&s, false).primary_visibility, PrimaryVisibility::Raster);
-        assert_eq!(effective(&s, true).primary_visibility, PrimaryVisibility::Auto);
+        let raster = || PrimaryVisibility::Raster;
+        assert_eq!(effective(&s, false, raster).primary_visibility, PrimaryVisibility::Raster);
+        assert_eq!(effective(&s, true, raster).primary_visibility, PrimaryVisibility::Auto);
+        let traced = || PrimaryVisibility::Traced;
+        assert_eq!(effective(&s, false, traced).primary_visibility, PrimaryVisibility::Traced);
+        let fixed = RenderSettings { primary_visibility: PrimaryVisibility::Raster, ..s };
+        assert_eq!(effective(&fixed, false, traced).primary_visibility, PrimaryVisibility::Raster);
+    }
+
+    #[test]
+    fn the_model_traces_only_dense_frames_on_a_software_device_with_the_compute_tracer() {
+        let px = 1 << 18;
+        let load = |triangles: u64, draws: u64| RasterLoad { triangles, draws, pixels: px };
+        use PrimaryVisibility::{Raster, Traced};
+        // 4 triangles per pixel is the line; draws count 32 triangles each.
+        assert_eq!(model(load(4 * px - 1, 0), true, true), Raster);
+        assert_eq!(model(load(4 * px, 0), true, true), Traced);
+        assert_eq!(model(load(4 * px - 32, 1), true, true), Traced);
+        assert_eq!(model(load(4 * px - 33, 1), true, true), Raster);
+        // Dense but small: raster.
+        let small = RasterLoad { triangles: MODEL_MIN_LOAD - 1, draws: 0, pixels: 1000 };
+        assert_eq!(model(small, true, true), Raster);
+        assert_eq!(model(RasterLoad { triangles: MODEL_MIN_LOAD, ..small }, true, true), Traced);
+        // A GPU, or another tracer: raster.
+        assert_eq!(model(load(1 << 30, 0), false, true), Raster);
+        assert_eq!(model(load(1 << 30, 0), true, false), Raster);
+        assert_eq!(RasterLoad { triangles: 1000, draws: 10, pixels: 1000 }.per_pixel(), 1.32);
     }
 }

@@ -17,6 +17,7 @@ pub mod metrics;
 pub mod plot;
 pub mod prt;
 pub mod prt_write;
+pub mod scale;
 pub mod stability;
 pub mod tone_sheet;
 pub mod truth;

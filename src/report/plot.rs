@@ -304,6 +304,67 @@ fn draw_curves(
     finish(&root, &mut chart)
 }
 
+/// [`curves`] on log-log axes (positive points only, each axis spanning them with a margin), for cost
+/// against size: a straight line of slope 1 is linear growth.
+pub fn log_curves(path: &Path, title: &str, x_desc: &str, y_desc: &str, series: &[Series]) -> Result<()> {
+    register_font()?;
+    let positive: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|s| &s.points)
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite())
+        .map(|p| (p.0, p.1))
+        .collect();
+    let span = |v: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = v.fold((f64::MAX, f64::MIN), |(lo, hi), x| (lo.min(x), hi.max(x)));
+        if lo > hi {
+            (1.0, 10.0)
+        } else {
+            // A margin around the points, at least a decade wide.
+            (lo / 1.4, (hi * 1.4).max(lo * 10.0))
+        }
+    };
+    let xs = span(&mut positive.iter().map(|p| p.0));
+    let ys = span(&mut positive.iter().map(|p| p.1));
+    save_png(path, |buf| draw_log_curves(buf, title, (x_desc, y_desc), (xs, ys), series))
+}
+
+fn draw_log_curves(
+    buf: &mut [u8],
+    title: &str,
+    (x_desc, y_desc): (&str, &str),
+    ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64)),
+    series: &[Series],
+) -> DrawResult {
+    let root = BitMapBackend::with_buffer(buf, (W, H)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 24))
+        .margin(16)
+        .x_label_area_size(56)
+        .y_label_area_size(80)
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .axis_desc_style(("sans-serif", 18))
+        .label_style(("sans-serif", 14))
+        .x_label_formatter(&|v| significant(*v, 2))
+        .y_label_formatter(&|v| significant(*v, 2))
+        .draw()?;
+    for (k, s) in series.iter().enumerate() {
+        let mut pts: Vec<(f64, f64, &str)> = s
+            .points
+            .iter()
+            .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite())
+            .map(|p| (p.0, p.1, p.2.as_str()))
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        draw_series(&mut chart, k, &s.label, &pts)?;
+    }
+    finish(&root, &mut chart)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,6 +8,7 @@
 pub mod animation;
 pub mod camera;
 pub mod env_layout;
+pub mod generated;
 pub mod gltf_import;
 mod hdr_image;
 pub mod obj;

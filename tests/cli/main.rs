@@ -9,6 +9,7 @@ mod cli;
 mod cli_numbers;
 mod hostile_input;
 mod renderdoc;
+mod scale;
 mod setup_script;
 mod stability;
 mod viewer;

@@ -40,6 +40,10 @@ impl Tracer for ComputeTracer {
         Backend::Compute
     }
 
+    fn accel_stats(&self) -> super::AccelStats {
+        super::AccelStats { build_ms: self.bvh.build_ms, bytes: self.bvh.bytes() }
+    }
+
     fn kernel(
         &self,
         ctx: &Context,

@@ -58,6 +58,10 @@ impl Tracer for HardwareTracer {
         self.backend
     }
 
+    fn accel_stats(&self) -> super::AccelStats {
+        super::AccelStats { build_ms: self.accel.build_ms, bytes: self.accel.bytes() }
+    }
+
     fn kernel(
         &self,
         ctx: &Context,

@@ -28,8 +28,19 @@ pub struct UpdateCounts {
     pub rebuilds: usize,
 }
 
+/// What building a tracer's structures cost at load: wall ms and the bytes of its GPU buffers.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AccelStats {
+    pub build_ms: f64,
+    pub bytes: u64,
+}
+
 pub trait Tracer {
     fn backend(&self) -> Backend;
+
+    /// The load-time build's cost and the structures' GPU bytes (nodes, triangles, instances,
+    /// scratch kept for updates).
+    fn accel_stats(&self) -> AccelStats;
 
     /// The pipeline of tracing pass `pass`, from its shader for this
     /// backend (`{pass}_query`, `{pass}_compute` or `{pass}.rgen`).
