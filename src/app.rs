@@ -195,6 +195,8 @@ pub fn resolve_shading(ctx: &Context, scene: &Scene, settings: &RenderSettings) 
 }
 
 pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
+    // Progress for a long load: scene, upload, structures, the first frame's shaders.
+    let mut load = Some(crate::progress::begin());
     let extent = job.extent()?;
     let (scene, _) = load_posed(job)?;
     let camera = job.camera.resolve(&scene)?;
@@ -212,6 +214,7 @@ pub fn render_once(ctx: &Context, job: &RenderJob) -> Result<FrameOutput> {
             // (Without --reference-samples one frame.)
             crate::render::reference::render_converged(&mut renderer, ctx, &scene, &camera, &job.settings)
         });
+        load.take();
         if out.is_err() {
             break;
         }

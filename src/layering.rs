@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 /// GPU copy, acceleration data, PRT (it traces the CPU BVH and packs for the GPU), the frame, and the
 /// commands, report and viewer built on them.
 pub const LAYERS: &[&str] = &[
+    "progress",
     "par",
     "disk_cache",
     "csv",

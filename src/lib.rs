@@ -16,6 +16,7 @@ pub mod image_diff;
 #[cfg(test)]
 mod layering;
 pub mod par;
+pub mod progress;
 pub mod prt;
 pub mod render;
 pub mod report;

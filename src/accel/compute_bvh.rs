@@ -152,6 +152,7 @@ struct TreeData<'a> {
 impl ComputeBvh {
     pub fn build(ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<ComputeBvh> {
         let t0 = std::time::Instant::now();
+        crate::progress::stage("building the compute BVH");
         let mut nodes: Vec<BvhNode> = Vec::new();
         let mut prims: Vec<u32> = Vec::new();
         // The flat tree first: its header at the fixed slot the shader reads.
@@ -251,6 +252,7 @@ impl ComputeBvh {
             top_level_ms: 0.0,
             origin: gpu.origin,
         };
+        crate::progress::stage("uploading the compute BVH");
         let data = TreeData {
             nodes: &nodes,
             prims: &prims,

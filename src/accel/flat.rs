@@ -207,7 +207,9 @@ impl FlatStatic {
                 ids.push(ids.len() as u32 | flags[i]);
             }
         }
+        crate::progress::stage(format!("building the compute BVH over {count} triangles"));
         let (bvh, builder) = Bvh::build_static(&tris);
+        crate::progress::stage("collapsing the compute BVH 4-wide");
         let wide = WideBvh::from_binary(&bvh);
         // In leaf order, on every core (a random-access gather: 0.1 s of the 4 M terrain's load).
         let mut triangles = vec![FlatTriangle::default(); wide.prim_indices.len()];

@@ -190,6 +190,7 @@ pub struct SceneAccel {
 
 impl SceneAccel {
     pub fn build(ctx: &Context, scene: &Scene, gpu: &GpuScene) -> Result<SceneAccel> {
+        crate::progress::stage("building the acceleration structures");
         // Everything created lands in `accel` at once, so an error half-way destroys what exists.
         let accel = SceneAccel {
             tlas: AccelStruct {

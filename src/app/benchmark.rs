@@ -163,6 +163,7 @@ pub fn bench(
     variants: &[BenchVariant],
 ) -> Result<Vec<BenchReport>> {
     let extent = job.extent()?;
+    let mut load = Some(crate::progress::begin());
     let (mut scene, anim) = load_posed(job)?;
     let base_camera = job.camera.resolve(&scene)?;
     // An explicit --look-from/--look-at holds the camera there: the scene's path is for the default run.
@@ -235,6 +236,7 @@ pub fn bench(
                 renderer.render(ctx, &scene, &base_camera, &counting)
             })?;
             rays.push(counted.ray_counts);
+            load.take();
             for w in 0..warm[k] {
                 let i = (w + warmup).saturating_sub(warm[k]);
                 bench_frame(

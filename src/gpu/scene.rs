@@ -94,6 +94,7 @@ pub struct GpuScene {
 impl GpuScene {
     pub fn upload(ctx: &Context, scene: &Scene) -> Result<GpuScene> {
         let t0 = std::time::Instant::now();
+        crate::progress::stage("uploading the scene");
         // Everything created lands in `gs` at once, so a failure half-way destroys what exists: no leak.
         let gs = built(ctx, GpuScene::empty(), |gs| gs.fill(ctx, scene))?;
         log::info!(

@@ -156,12 +156,14 @@ impl FramePasses {
             "frame: compiling the shaders of {n} passes: a software device compiles each pipeline on first use \
              (seconds each the first time; Mesa's disk cache keeps them for later runs)"
         );
+        crate::progress::stage(format!("compiling the shaders of {n} passes"));
         let started = std::time::Instant::now();
         let (mut k, mut last) = (0, started);
         self.record_each(rec, cx, state, |rec, name| {
             ctx.submit_spare(rec.cmd)?;
             rec.cmd = ctx.begin_spare(COMPILING)?;
             k += 1;
+            crate::progress::percent(k, n);
             let now = std::time::Instant::now();
             let (pass_s, all_s) = ((now - last).as_secs_f64(), (now - started).as_secs_f64());
             log::info!("frame: [{k}/{n}] {name} compiled and ran in {pass_s:.1} s ({all_s:.1} s in all)");

@@ -204,6 +204,7 @@ pub fn peak_rss() -> u64 {
 /// unmeasured) with `job`'s settings and size on `job.settings.backend`; prints the row.
 pub fn measure_point(gpu: &GpuOptions, point: Point, job: &RenderJob, frames: usize) -> Result<()> {
     let row = with_context(gpu, |ctx| {
+        let load = crate::progress::begin();
         let t = std::time::Instant::now();
         let scene = point.scene()?;
         let generate_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -216,6 +217,7 @@ pub fn measure_point(gpu: &GpuOptions, point: Point, job: &RenderJob, frames: us
             let t = std::time::Instant::now();
             renderer.render(ctx, &scene, &camera, &job.settings)?;
             let first_ms = t.elapsed().as_secs_f64() * 1e3;
+            drop(load);
             let stats = renderer.accel_stats().unwrap_or_default();
             let mut totals = Vec::new();
             let mut passes: Vec<(String, Vec<f64>)> = Vec::new();

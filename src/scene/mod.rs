@@ -446,6 +446,7 @@ impl Scene {
     /// Loads a glTF/GLB, an OBJ or a TOML scene file, chosen by extension.
     /// Fills in a default light and camera when the content has none.
     pub fn load(path: &Path) -> Result<Scene> {
+        crate::progress::stage(format!("reading {}", path.display()));
         let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
         let mut scene = match ext.as_str() {
             "gltf" | "glb" => gltf_import::load(path)?,

@@ -76,6 +76,7 @@ impl Viewer {
     pub(super) fn new(el: &ActiveEventLoop, opts: &ViewerOptions) -> Result<Viewer> {
         let job = &opts.job;
         let requested = validate_extent(job)?;
+        let _load = crate::progress::begin();
         let mut scene = crate::app::load_scene(job)?;
         let animation = match &job.animation {
             Some(a) => {

@@ -16,6 +16,9 @@ pub struct Buffer {
     pub address: vk::DeviceAddress,
 }
 
+/// The most host memory a buffer upload stages at once (textures batch the same way).
+pub const STAGING_BYTES: usize = 64 << 20;
+
 /// Device memory from the allocator, or the failure a test injected (`Context::alloc_fault`).
 fn allocate(ctx: &Context, desc: &AllocationCreateDesc) -> Result<Allocation> {
     if ctx.alloc_fault.hit() {
@@ -75,7 +78,10 @@ impl Buffer {
     }
 
     /// Copies `data` into a device-local buffer (made by `with_data`) at
-    /// `offset` through a staging buffer, waiting for the copy.
+    /// `offset` through a staging buffer of at most [`STAGING_BYTES`],
+    /// one copy per chunk, waiting for each: a 200 MB vertex buffer does not
+    /// hold a second 200 MB of host memory while it uploads (on a software
+    /// device the "device" copy is host memory too).
     pub fn upload(&self, ctx: &Context, offset: u64, data: &[u8]) -> Result<()> {
         if data.is_empty() {
             return Ok(());
@@ -84,17 +90,24 @@ impl Buffer {
         let mut staging = Buffer::new(
             ctx,
             "upload (staging)",
-            data.len() as u64,
+            data.len().min(STAGING_BYTES) as u64,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        let r = staging.write(0, data).and_then(|_| {
-            ctx.one_shot("upload", |cmd| {
-                let region = [vk::BufferCopy::default().dst_offset(offset).size(data.len() as u64)];
-                unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, self.raw, &region) };
-                Ok(())
-            })
-        });
+        let mut r = Ok(());
+        for (k, chunk) in data.chunks(STAGING_BYTES).enumerate() {
+            let at = offset + (k * STAGING_BYTES) as u64;
+            r = staging.write(0, chunk).and_then(|_| {
+                ctx.one_shot("upload", |cmd| {
+                    let region = [vk::BufferCopy::default().dst_offset(at).size(chunk.len() as u64)];
+                    unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, self.raw, &region) };
+                    Ok(())
+                })
+            });
+            if r.is_err() {
+                break;
+            }
+        }
         staging.destroy(ctx);
         r
     }
@@ -361,7 +374,7 @@ impl Image {
     /// Several textures (as [`Image::texture`]) uploaded through shared staging buffers: one submission per
     /// ~64 MiB of texels rather than one per texture.
     pub fn textures(ctx: &Context, descs: &[TextureDesc]) -> Result<Vec<Image>> {
-        const BATCH_BYTES: usize = 64 << 20;
+        const BATCH_BYTES: usize = STAGING_BYTES;
         built(ctx, Vec::with_capacity(descs.len()), |images| {
             let mut start = 0;
             while start < descs.len() {

@@ -28,7 +28,7 @@ pub use built::{built, Destroy};
 pub use device::{Capabilities, DeviceSelector, RtEnables};
 pub use features::FeaturePath;
 pub use instance::{Instance, InstanceOptions, ValidationCounters};
-pub use memory::{Buffer, Image};
+pub use memory::{Buffer, Image, STAGING_BYTES};
 pub use renderdoc::RenderDoc;
 
 /// How to create the Vulkan context.

@@ -678,3 +678,32 @@ fn first_frame_reports_compile_progress() {
         passes.iter().enumerate().map(|(i, p)| (format!("{}/{n}", i + 1), p.to_string())).collect();
     assert_eq!(progress, expected, "{stderr}");
 }
+
+/// A long load shows its stages (here every load: the threshold set to 0 ms through the environment),
+/// as plain log lines when stderr is not a terminal, and ends with the total.
+#[test]
+fn a_load_shows_its_stages() {
+    let dir = tmp("progress");
+    let out = bin()
+        .env("HYBRID_RT_PROGRESS_AFTER_MS", "0")
+        .args(["render", "--width", "64", "--height", "36", "--backend", "compute", "--out"])
+        .arg(dir.join("p.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| l.contains("load")).collect();
+    let at = |needle: &str| {
+        lines.iter().position(|l| l.contains(needle)).unwrap_or_else(|| panic!("no '{needle}' in {lines:#?}"))
+    };
+    // In load order, no terminal control characters.
+    let stages = [
+        at("): reading "),
+        at("): uploading the scene"),
+        at("): building the compute BVH"),
+        at("): compiling the shaders of"),
+        at("load: done in"),
+    ];
+    assert!(stages.windows(2).all(|w| w[0] < w[1]), "{lines:#?}");
+    assert!(!stderr.contains('\r') && !stderr.contains('\x1b'), "terminal codes in a log");
+}

@@ -46,3 +46,44 @@ fn scene_memory_breakdown_matches_what_was_uploaded() {
     gpu.destroy(&ctx);
     common::assert_validation_clean(&ctx);
 }
+
+/// A buffer larger than the upload's staging bound arrives whole: every chunk at its offset (an upload
+/// into the middle of a buffer included), nothing left of a chunk boundary.
+#[test]
+fn uploads_larger_than_the_staging_bound_arrive_whole() {
+    use ash::vk;
+    use gpu_allocator::MemoryLocation;
+    use hybrid_rt::vk::{Buffer, STAGING_BYTES};
+    let ctx = common::validated_context();
+    let n = 2 * STAGING_BYTES + 12_345;
+    let data: Vec<u8> = (0..n as u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 24) as u8).collect();
+    let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+    let mut device = Buffer::with_data(&ctx, "big upload", &data, usage).unwrap();
+    // Again at an offset: the last chunk straddles the first upload's chunk boundaries.
+    let at = STAGING_BYTES as u64 - 7;
+    let tail = &data[..STAGING_BYTES + 100];
+    device.upload(&ctx, at, tail).unwrap();
+    let mut host = Buffer::new(
+        &ctx,
+        "big readback",
+        n as u64,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+    )
+    .unwrap();
+    ctx.one_shot("read back", |cmd| {
+        let region = [vk::BufferCopy::default().size(n as u64)];
+        unsafe { ctx.device.cmd_copy_buffer(cmd, device.raw, host.raw, &region) };
+        Ok(())
+    })
+    .unwrap();
+    let got = host.read().unwrap();
+    let mut want = data.clone();
+    want[at as usize..at as usize + tail.len()].copy_from_slice(tail);
+    let first_bad = got.iter().zip(&want).position(|(a, b)| a != b);
+    assert_eq!(first_bad, None, "byte {first_bad:?} differs");
+    assert_eq!(got.len(), n);
+    host.destroy(&ctx);
+    device.destroy(&ctx);
+    drop(ctx);
+}

@@ -403,7 +403,9 @@ fn grow_parallel(nodes: &mut Vec<BvhNode>, refs: &mut [Ref], root: Task) {
     let mut size_order: Vec<usize> = (0..frontier.len()).collect();
     size_order.sort_by_key(|&k| std::cmp::Reverse(frontier[k].count));
     let top = &nodes[..];
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let subtrees = crate::par::map(frontier.len(), &size_order, |k| {
+        crate::progress::percent(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed), frontier.len());
         let t = &frontier[k];
         let slice =
             slices[k].lock().map(|mut s| s.take()).ok().flatten().expect("each subtree is built once");

@@ -141,9 +141,13 @@ impl ImageSource {
 /// Decodes `sources` on up to all available cores; the first failure (in
 /// source order) is returned.
 fn decode_parallel(sources: &[ImageSource], buffers: &[Vec<u8>]) -> Result<Vec<DecodedImage>> {
+    crate::progress::stage(format!("decoding {} textures", sources.len()));
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let results = crate::par::map(sources.len(), &[], |i| {
         let src = &sources[i];
-        src.decode(buffers).with_context(|| format!("image '{}'", src.name))
+        let r = src.decode(buffers).with_context(|| format!("image '{}'", src.name));
+        crate::progress::percent(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, sources.len());
+        r
     })
     .context("decoding images")?;
     results.into_iter().collect()
