@@ -423,6 +423,10 @@ mod tests {
         let flat = FlatStatic::build(&s, RenderOrigin::default(), None).unwrap();
         assert_eq!(flat.flattened, f);
         assert_eq!(flat.source_triangles, 80);
+        // The total line counts triangles: 32,768 quads are exactly 65,536, one more is past it.
+        let n = FLAT_ALWAYS_TRIANGLES / 2;
+        assert!(flatten_choice(&build(0, n)).iter().all(|f| *f));
+        assert!(flatten_choice(&build(0, n + 1)).iter().all(|f| !*f));
     }
 
     /// The disk cache: a second build of the same geometry reads the first one's tree; a damaged or
