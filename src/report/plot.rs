@@ -291,17 +291,27 @@ fn draw_curves(
         .x_label_formatter(&|v| significant(*v, 3))
         .y_label_formatter(&|v| format!("{v:.4}"))
         .draw()?;
-    for (k, s) in series.iter().enumerate() {
-        let mut pts: Vec<(f64, f64, &str)> = s
-            .points
-            .iter()
-            .filter(|p| p.0.is_finite() && p.1.is_finite())
-            .map(|p| (p.0, p.1, p.2.as_str()))
-            .collect();
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        draw_series(&mut chart, k, &s.label, &pts)?;
-    }
+    draw_lines(&mut chart, series, |x, y| x.is_finite() && y.is_finite())?;
     finish(&root, &mut chart)
+}
+
+/// Each series' points that `keep` accepts, in x order, as [`draw_series`] line `k`.
+fn draw_lines<X, Y>(
+    chart: &mut ChartContext<'_, BitMapBackend<'_>, Cartesian2d<X, Y>>,
+    series: &[Series],
+    keep: impl Fn(f64, f64) -> bool,
+) -> DrawResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    for (k, s) in series.iter().enumerate() {
+        let mut pts: Vec<(f64, f64, &str)> =
+            s.points.iter().filter(|p| keep(p.0, p.1)).map(|p| (p.0, p.1, p.2.as_str())).collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        draw_series(chart, k, &s.label, &pts)?;
+    }
+    Ok(())
 }
 
 /// [`curves`] on log-log axes (positive points only, each axis spanning them with a margin), for cost
@@ -352,16 +362,7 @@ fn draw_log_curves(
         .x_label_formatter(&|v| significant(*v, 2))
         .y_label_formatter(&|v| significant(*v, 2))
         .draw()?;
-    for (k, s) in series.iter().enumerate() {
-        let mut pts: Vec<(f64, f64, &str)> = s
-            .points
-            .iter()
-            .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite())
-            .map(|p| (p.0, p.1, p.2.as_str()))
-            .collect();
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        draw_series(&mut chart, k, &s.label, &pts)?;
-    }
+    draw_lines(&mut chart, series, |x, y| x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite())?;
     finish(&root, &mut chart)
 }
 
