@@ -124,7 +124,7 @@ fn update(f: impl FnOnce(&mut State)) {
     }
 }
 
-/// Whether a load is under way (for tests).
+/// Whether a load is under way (the ticker's loop condition; tests).
 pub fn active() -> bool {
     STATE.lock().map(|s| s.is_some()).unwrap_or(false)
 }

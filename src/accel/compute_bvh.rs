@@ -494,18 +494,20 @@ impl ComputeBvh {
     /// Bytes of the tracer's buffers: nodes, triangle order, flat triangles and members, top level and
     /// instance records.
     pub fn bytes(&self) -> u64 {
+        self.trace_buffers().iter().map(|b| b.size).sum()
+    }
+
+    /// The trace set's buffers, in binding order (BVH_BLAS_NODES .. BVH_FLAT_MEMBERS).
+    fn trace_buffers(&self) -> [&Buffer; 7] {
         [
             &self.blas_nodes,
             &self.blas_prims,
-            &self.flat_tris,
-            &self.flat_members,
             &self.tlas_nodes,
             &self.tlas_prims,
             &self.instances,
+            &self.flat_tris,
+            &self.flat_members,
         ]
-        .iter()
-        .map(|b| b.size)
-        .sum()
     }
 
     pub fn mean_sah_cost(&self) -> f32 {
@@ -555,18 +557,7 @@ impl ComputeBvh {
         }
         let sb = Binding::one(vk::DescriptorType::STORAGE_BUFFER);
         self.set = DescriptorSet::new(ctx, "trace set (compute BVH)", &[sb; 7])?;
-        for (i, b) in [
-            &self.blas_nodes,
-            &self.blas_prims,
-            &self.tlas_nodes,
-            &self.tlas_prims,
-            &self.instances,
-            &self.flat_tris,
-            &self.flat_members,
-        ]
-        .iter()
-        .enumerate()
-        {
+        for (i, b) in self.trace_buffers().iter().enumerate() {
             self.set.write_buffer(ctx, i as u32, b.raw);
         }
         Ok(())

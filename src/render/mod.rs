@@ -66,6 +66,8 @@ pub struct Renderer {
     frame: FramePasses,
     /// This frame's decisions: budget, shadow maps, draws, ambient, reference.
     pub choices: FrameChoices,
+    /// The triangles of every draw, fixed at upload (the visibility model's load, read each frame).
+    drawn_triangles: u64,
 }
 
 impl Renderer {
@@ -74,7 +76,9 @@ impl Renderer {
         let gpu = GpuScene::upload(ctx, scene)?;
         // Everything after the upload is created into a renderer that owns it
         // from the start, so a failure part-way destroys what exists.
+        let drawn_triangles = gpu.draws.iter().map(|d| d.range.index_count as u64 / 3).sum();
         let empty = Renderer {
+            drawn_triangles,
             gpu,
             tracer: None,
             update: SceneUpdate::empty(),
@@ -251,7 +255,7 @@ impl Renderer {
         let backend = ShadingConfig::resolve(ctx, self.frame.needs, &raster).ok().and_then(|c| c.backend);
         let e = self.frame.extent;
         let load = visibility::RasterLoad {
-            triangles: self.gpu.draws.iter().map(|d| d.range.index_count as u64 / 3).sum(),
+            triangles: self.drawn_triangles,
             draws: self.gpu.draws.len() as u64,
             pixels: e.width as u64 * e.height as u64,
         };

@@ -156,10 +156,11 @@ textures_bytes,other_bytes,accel_bytes,targets_bytes,gpu_bytes,bytes_per_triangl
     /// The child's line back into a row (the fields `csv` wrote; derived ones are recomputed).
     pub fn parse(line: &str) -> Result<ScaleRow> {
         let f: Vec<&str> = line.split(',').collect();
-        anyhow::ensure!(f.len() == 22, "{} fields, expected 22: {line}", f.len());
+        let want = Self::CSV_HEADER.split(',').count();
+        anyhow::ensure!(f.len() == want, "{} fields, expected {want}: {line}", f.len());
         let n = |i: usize| f[i].parse::<u64>().with_context(|| format!("field {i} of {line}"));
         let x = |i: usize| f[i].parse::<f64>().with_context(|| format!("field {i} of {line}"));
-        let passes = f[21]
+        let passes = f[want - 1]
             .split(';')
             .filter(|p| !p.is_empty())
             .map(|p| {

@@ -1,19 +1,6 @@
 //! `bench --scale` end to end: one process per size and backend, validation on in each (the
 //! environment carries over), rows that add up, curves that grow with size, plots that decode.
-use std::path::PathBuf;
-use std::process::Command;
-
-fn bin() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_hybrid-rt"));
-    c.env("HYBRID_RT_VALIDATION", "1");
-    c
-}
-
-fn out_dir(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use crate::cli::{bin, tmp as out_dir};
 
 #[test]
 fn bench_scale_measures_every_size_and_backend_and_writes_csv_and_plots() {
