@@ -61,6 +61,58 @@ pub fn fill<T: Send>(out: &mut [T], chunk: usize, f: impl Fn(usize, &mut [T]) + 
     Ok(())
 }
 
+/// `out[j] = f(j)` for every `j`: on every core, `chunk` items at a time, when `out` holds at least two
+/// chunks; else on this thread (starting threads would cost more than the work). A panic in `f` is an
+/// error.
+pub fn fill_each<T: Send>(out: &mut [T], chunk: usize, f: impl Fn(usize) -> T + Sync) -> Result<()> {
+    let serial =
+        |first: usize, part: &mut [T]| part.iter_mut().enumerate().for_each(|(j, o)| *o = f(first + j));
+    if out.len() < 2 * chunk.max(1) {
+        serial(0, out);
+        Ok(())
+    } else {
+        fill(out, chunk, serial)
+    }
+}
+
+/// `(0..n).map(f).collect()`, on every core in chunks of `chunk` when `n` is at least two chunks. The
+/// vector is written once (no initialising pass before the parallel one). A panic in `f` is an error.
+pub fn collect_each<T: Send>(n: usize, chunk: usize, f: impl Fn(usize) -> T + Sync) -> Result<Vec<T>> {
+    let mut out: Vec<T> = Vec::with_capacity(n);
+    fill_each(&mut out.spare_capacity_mut()[..n], chunk, |i| std::mem::MaybeUninit::new(f(i)))?;
+    // SAFETY: `fill_each` returned Ok, so every one of the first n slots was written.
+    unsafe { out.set_len(n) };
+    Ok(out)
+}
+
+/// Appends `parts` to `out`, each item mapped by `f(part index, item)`, the parts copied on every core
+/// (a large tree's subtrees linked in after its top). A panic in `f` is an error; `out` is then unchanged.
+pub fn extend_parts<T: Sync, U: Send>(
+    out: &mut Vec<U>,
+    parts: &[&[T]],
+    f: impl Fn(usize, &T) -> U + Sync,
+) -> Result<()> {
+    let total: usize = parts.iter().map(|p| p.len()).sum();
+    out.reserve(total);
+    let mut rest = &mut out.spare_capacity_mut()[..total];
+    let mut slots = Vec::with_capacity(parts.len());
+    for p in parts {
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(p.len());
+        slots.push(std::sync::Mutex::new(Some(mine)));
+        rest = tail;
+    }
+    map(parts.len(), &[], |k| {
+        if let Some(dst) = slots[k].lock().map(|mut s| s.take()).ok().flatten() {
+            for (d, item) in dst.iter_mut().zip(parts[k]) {
+                d.write(f(k, item));
+            }
+        }
+    })?;
+    // SAFETY: `map` returned Ok, so every part's slots (the first `total` spare ones) were written.
+    unsafe { out.set_len(out.len() + total) };
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -69,6 +121,49 @@ mod tests {
         let out = super::map(100, &order, |i| i * i).unwrap();
         assert_eq!(out, (0..100).map(|i| i * i).collect::<Vec<_>>());
         assert_eq!(super::map(0, &[], |i| i).unwrap(), Vec::<usize>::new());
+    }
+
+    #[test]
+    fn fill_each_writes_each_item_from_its_index_serial_or_not() {
+        for (n, chunk) in [(0, 4), (7, 4), (8, 4), (1000, 64), (5, 0)] {
+            let mut out = vec![usize::MAX; n];
+            super::fill_each(&mut out, chunk, |j| j * 7 + 1).unwrap();
+            assert_eq!(out, (0..n).map(|j| j * 7 + 1).collect::<Vec<_>>(), "{n} items, chunks of {chunk}");
+        }
+        let mut out = vec![0u8; 100];
+        assert!(super::fill_each(&mut out, 10, |j| if j == 57 { panic!("item 57") } else { 1 }).is_err());
+    }
+
+    #[test]
+    fn collect_each_is_the_serial_collect() {
+        for (n, chunk) in [(0, 4), (7, 4), (8, 4), (1000, 64)] {
+            let v = super::collect_each(n, chunk, |i| vec![i; i % 3]).unwrap();
+            assert_eq!(v, (0..n).map(|i| vec![i; i % 3]).collect::<Vec<_>>(), "{n} items, chunks of {chunk}");
+        }
+        assert!(super::collect_each(100, 10, |i| if i == 57 { panic!("item 57") } else { i }).is_err());
+    }
+
+    #[test]
+    fn extend_parts_appends_each_part_in_order() {
+        let parts: Vec<Vec<u32>> = (0..40).map(|k| (0..k * 3).collect()).collect();
+        let refs: Vec<&[u32]> = parts.iter().map(|p| &p[..]).collect();
+        let mut out = vec![7u64, 8];
+        super::extend_parts(&mut out, &refs, |k, &x| (k as u64) << 32 | x as u64).unwrap();
+        let want: Vec<u64> = [7, 8]
+            .into_iter()
+            .chain(
+                parts
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(k, p)| p.iter().map(move |&x| (k as u64) << 32 | x as u64)),
+            )
+            .collect();
+        assert_eq!(out, want);
+        let mut out = vec![1u8];
+        assert!(
+            super::extend_parts(&mut out, &refs, |k, _| if k == 5 { panic!("part 5") } else { 0 }).is_err()
+        );
+        assert_eq!(out, vec![1], "unchanged after a panic");
     }
 
     #[test]

@@ -84,6 +84,21 @@ pub struct FlatStatic {
     pub flattened: Vec<bool>,
     /// Whether the tree was read from the disk cache (`flat_cache`) instead of built.
     pub cached: bool,
+    /// Host ms of the build's stages: world-space transform, binary build, 4-wide collapse, gather of
+    /// the triangles in leaf order (zeros when read from the cache).
+    pub stages_ms: [f64; 4],
+}
+
+/// Milliseconds since the last lap.
+struct StageClock(std::time::Instant);
+
+impl StageClock {
+    fn lap(&mut self) -> f64 {
+        let now = std::time::Instant::now();
+        let ms = (now - self.0).as_secs_f64() * 1e3;
+        self.0 = now;
+        ms
+    }
 }
 
 /// Per node: whether an animation channel moves it or one of its ancestors.
@@ -142,6 +157,50 @@ pub fn flatten_choice(scene: &Scene) -> Vec<bool> {
     scene.instances.iter().zip(statics).map(|(inst, s)| s && flatten(inst)).collect()
 }
 
+/// Large meshes are transformed and gathered on every core, in chunks of this many items.
+const PAR_CHUNK: usize = 1 << 15;
+
+/// `(0..n).map(f).collect()`, on every core when `n` is large.
+fn collect<T: Send>(n: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    crate::par::collect_each(n, PAR_CHUNK, f).unwrap_or_else(|e| panic!("flat tree: {e}"))
+}
+
+/// The members' triangles in world space relative to `origin`, numbered as `table` says, and their
+/// ids (number | member flags).
+fn world_triangles(
+    scene: &Scene,
+    origin: RenderOrigin,
+    members: &[usize],
+    table: &[[u32; 2]],
+    flags: &[u32],
+    count: usize,
+) -> (Vec<[Vec3; 3]>, Vec<u32>) {
+    let primitive = |i: usize| {
+        let inst = &scene.instances[i];
+        &scene.meshes[inst.mesh].primitives[inst.primitive]
+    };
+    // Each vertex once (an indexed mesh shares each by about six triangles); f64 until the end: one
+    // rounding per coordinate.
+    let world: Vec<Vec<Vec3>> = members
+        .iter()
+        .map(|&i| {
+            let (m, p) = (origin.relative(&scene.instances[i].world), primitive(i));
+            collect(p.vertices.len(), |v| {
+                m.transform_point3(DVec3::from(Vec3::from(p.vertices[v].position))).as_vec3()
+            })
+        })
+        .collect();
+    let member = |t: usize| table.partition_point(|m| m[0] as usize <= t) - 1;
+    let tris = collect(count, |t| {
+        let k = member(t);
+        let local = t - table[k][0] as usize;
+        let (w, idx) = (&world[k], &primitive(members[k]).indices[3 * local..3 * local + 3]);
+        [w[idx[0] as usize], w[idx[1] as usize], w[idx[2] as usize]]
+    });
+    let ids = collect(count, |t| t as u32 | flags[members[member(t)]]);
+    (tris, ids)
+}
+
 impl FlatStatic {
     /// In world space relative to `origin`; instances no ray can hit (mask 0) contribute no triangles.
     /// With a `cache` directory, a tree of at least [`CACHE_MIN_TRIANGLES`] is read from there when an
@@ -189,37 +248,22 @@ impl FlatStatic {
                 }
             }
         }
-        let mut tris: Vec<[Vec3; 3]> = Vec::with_capacity(count);
-        let mut ids: Vec<u32> = Vec::with_capacity(count);
-        for &i in &members {
-            let inst = &scene.instances[i];
-            // f64 until the end: one rounding per coordinate.
-            let m = origin.relative(&inst.world);
-            let p = &scene.meshes[inst.mesh].primitives[inst.primitive];
-            // Each vertex once (an indexed mesh shares each by about six triangles).
-            let world: Vec<Vec3> = p
-                .vertices
-                .iter()
-                .map(|v| m.transform_point3(DVec3::from(Vec3::from(v.position))).as_vec3())
-                .collect();
-            for t in p.indices.chunks_exact(3) {
-                tris.push([world[t[0] as usize], world[t[1] as usize], world[t[2] as usize]]);
-                ids.push(ids.len() as u32 | flags[i]);
-            }
-        }
+        let mut clock = StageClock(std::time::Instant::now());
+        let (tris, ids) = world_triangles(scene, origin, &members, &table, &flags, count);
+        let transform_ms = clock.lap();
         crate::progress::stage(format!("building the compute BVH over {count} triangles"));
         let (bvh, builder) = Bvh::build_static(&tris);
+        let build_ms = clock.lap();
         crate::progress::stage("collapsing the compute BVH 4-wide");
         let wide = WideBvh::from_binary(&bvh);
+        let collapse_ms = clock.lap();
         // In leaf order, on every core (a random-access gather: 0.1 s of the 4 M terrain's load).
-        let mut triangles = vec![FlatTriangle::default(); wide.prim_indices.len()];
-        crate::par::fill(&mut triangles, 1 << 15, |first, part| {
-            for (t, &k) in part.iter_mut().zip(&wide.prim_indices[first..]) {
-                let [p0, p1, p2] = tris[k as usize];
-                *t = FlatTriangle { p0: p0.into(), p1: p1.into(), p2: p2.into(), id: ids[k as usize] };
-            }
-        })
-        .unwrap_or_else(|e| panic!("flat tree: {e}"));
+        let triangles = collect(wide.prim_indices.len(), |j| {
+            let k = wide.prim_indices[j] as usize;
+            let [p0, p1, p2] = tris[k];
+            FlatTriangle { p0: p0.into(), p1: p1.into(), p2: p2.into(), id: ids[k] }
+        });
+        let stages_ms = [transform_ms, build_ms, collapse_ms, clock.lap()];
         let flat = FlatStatic {
             root: bvh.nodes.first().copied(),
             sah: bvh.sah_cost(),
@@ -230,6 +274,7 @@ impl FlatStatic {
             source_triangles: tris.len(),
             flattened,
             cached: false,
+            stages_ms,
         };
         if let Some((path, key)) = &file {
             // A cache that cannot be written costs a rebuild next time, not this run.

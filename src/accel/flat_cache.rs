@@ -122,5 +122,6 @@ pub fn load(path: &Path, key: u64, flattened: Vec<bool>, members: Vec<[u32; 2]>)
         source_triangles: word(2) as usize,
         flattened,
         cached: true,
+        stages_ms: [0.0; 4],
     })
 }

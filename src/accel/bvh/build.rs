@@ -88,15 +88,11 @@ impl Box4 {
         self.hi = self.hi.max(p);
     }
 
-    /// Surface area; 0 for empty (inverted) boxes.
+    /// Half the surface area of a box known not to be empty (an empty one gives inf or NaN).
     #[inline(always)]
-    fn area(&self) -> f32 {
+    fn half_area_unchecked(&self) -> f32 {
         let d = self.hi - self.lo;
-        if d.x >= 0.0 && d.y >= 0.0 && d.z >= 0.0 {
-            2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
-        } else {
-            0.0
-        }
+        d.x * d.y + d.y * d.z + d.z * d.x
     }
 
     fn bounds(&self) -> Bounds {
@@ -144,13 +140,13 @@ const EMPTY_BIN: Bin = Bin { bounds: Box4::EMPTY, count: 0 };
 /// was a fifth of the build).
 struct Scratch {
     bins: [[Bin; BINS]; 3],
-    right: [Box4; BINS],
-    right_count: [usize; BINS],
+    /// Per plane: half the area of the boxes right of it times their count.
+    right_cost: [f32; BINS],
 }
 
 impl Scratch {
     fn new() -> Box<Scratch> {
-        Box::new(Scratch { bins: [[EMPTY_BIN; BINS]; 3], right: [Box4::EMPTY; BINS], right_count: [0; BINS] })
+        Box::new(Scratch { bins: [[EMPTY_BIN; BINS]; 3], right_cost: [0.0; BINS] })
     }
 }
 
@@ -170,6 +166,40 @@ impl Binning {
     fn new(cb: &Box4, nbins: usize) -> Binning {
         let scale = Vec4::splat(nbins as f32) / (cb.hi - cb.lo);
         Binning { origin: cb.lo, scale, last: Vec4::splat((nbins - 1) as f32) }
+    }
+
+    /// Partitions `refs` into those whose centroid's bin on axis `A` is at most `bin` (< the last)
+    /// and the rest; returns the left count and both sides' centroid bounds. The test is `bins`' float
+    /// operations on one lane, compared instead of converted: trunc(clamp(t, 0, last)) <= bin is
+    /// !(t >= bin + 1), NaN going left in both. The axis is a constant so the lane is not a jump.
+    fn partition<const A: usize>(&self, refs: &mut [Ref], bin: usize) -> (usize, Box4, Box4) {
+        let (origin, scale, limit) = (self.origin[A], self.scale[A], (bin + 1) as f32);
+        // Negated on purpose: NaN must go left, as its bin (0) does.
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        let left = |c: Vec4| !((c[A] - origin) * scale >= limit);
+        let (mut lcb, mut rcb) = (Box4::EMPTY, Box4::EMPTY);
+        // Hoare's scheme: each reference classified once, only misplaced pairs swapped.
+        let (mut i, mut j) = (0, refs.len());
+        loop {
+            while i < j && left(refs[i].centroid2()) {
+                lcb.grow_point(refs[i].centroid2());
+                i += 1;
+            }
+            while i < j && !left(refs[j - 1].centroid2()) {
+                rcb.grow_point(refs[j - 1].centroid2());
+                j -= 1;
+            }
+            if i == j {
+                break;
+            }
+            // refs[i] goes right, refs[j - 1] left.
+            rcb.grow_point(refs[i].centroid2());
+            lcb.grow_point(refs[j - 1].centroid2());
+            refs.swap(i, j - 1);
+            i += 1;
+            j -= 1;
+        }
+        (i, lcb, rcb)
     }
 
     /// The bins of centroid `c` on x, y and z. Clamped in float, then converted in one SIMD
@@ -250,9 +280,11 @@ impl Bvh {
 
     /// [`Bvh::build`] over the triangles' boxes, without a list of them.
     pub fn build_triangles(tris: &[[Vec3; 3]]) -> Bvh {
-        let boxes =
-            tris.iter().map(|t| Aabb { min: t[0].min(t[1]).min(t[2]), max: t[0].max(t[1]).max(t[2]) });
-        Self::build_refs(boxes.enumerate().map(|(i, b)| Ref::new(&b, i as u32)).collect(), PAR_MIN_PRIMS)
+        let refs = collect_refs(tris.len(), PAR_MIN_PRIMS, |i| {
+            let t = &tris[i];
+            Ref::new(&Aabb { min: t[0].min(t[1]).min(t[2]), max: t[0].max(t[1]).max(t[2]) }, i as u32)
+        });
+        Self::build_refs(refs, PAR_MIN_PRIMS)
     }
 
     /// The build, on every core for inputs of at least `par_min` primitives. The tree is the same
@@ -283,8 +315,14 @@ impl Bvh {
             grow_parallel(&mut nodes, &mut refs, root);
         }
         nodes.shrink_to_fit();
-        Bvh { nodes, prim_indices: refs.iter().map(Ref::prim).collect() }
+        Bvh { nodes, prim_indices: collect_refs(n, par_min, |i| refs[i].prim()) }
     }
+}
+
+/// `(0..n).map(f).collect()`, on every core for at least `par_min` items.
+fn collect_refs<T: Send>(n: usize, par_min: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    let chunk = if n < par_min { n } else { PAR_BIN_CHUNK };
+    crate::par::collect_each(n, chunk, f).unwrap_or_else(|e| panic!("BVH build: {e}"))
 }
 
 /// Splits `task` (its references are `refs[task.first - base ..]`) or makes it a leaf (None).
@@ -307,20 +345,11 @@ fn step(
         }
         Decision::Sah { axis, bin, left, right } => {
             let binning = Binning::new(&task.cb, bin_count(task.count));
-            // Two-pointer partition by bin; gathers child centroid bounds.
-            let (mut lcb, mut rcb) = (Box4::EMPTY, Box4::EMPTY);
-            let (mut i, mut j) = (0, slice.len());
-            while i < j {
-                let c = slice[i].centroid2();
-                if binning.bins(c)[axis] <= bin {
-                    lcb.grow_point(c);
-                    i += 1;
-                } else {
-                    rcb.grow_point(c);
-                    j -= 1;
-                    slice.swap(i, j);
-                }
-            }
+            let (i, lcb, rcb) = match axis {
+                0 => binning.partition::<0>(slice, bin),
+                1 => binning.partition::<1>(slice, bin),
+                _ => binning.partition::<2>(slice, bin),
+            };
             (i, left, right, lcb, rcb)
         }
         Decision::Median => {
@@ -416,18 +445,25 @@ fn grow_parallel(nodes: &mut Vec<BvhNode>, refs: &mut [Ref], root: Task) {
         sub
     })
     .unwrap_or_else(|e| panic!("BVH build: {e}"));
-    for (t, sub) in frontier.iter().zip(subtrees) {
-        // Subtree node i > 0 lands at base + i - 1; leaves already index the whole build's references.
-        let base = nodes.len() as u32;
-        let link = |mut n: BvhNode| {
-            if n.count == 0 {
-                n.left_or_first = base + n.left_or_first - 1;
-            }
-            n
-        };
-        nodes[t.node] = link(sub[0]);
-        nodes.extend(sub[1..].iter().map(|&n| link(n)));
+    // Subtree node i > 0 lands at base + i - 1; leaves already index the whole build's references.
+    let mut bases = Vec::with_capacity(subtrees.len());
+    let mut at = nodes.len() as u32;
+    for sub in &subtrees {
+        bases.push(at);
+        at += sub.len() as u32 - 1;
     }
+    let link = |k: usize, &n: &BvhNode| {
+        let mut n = n;
+        if n.count == 0 {
+            n.left_or_first = bases[k] + n.left_or_first - 1;
+        }
+        n
+    };
+    for (k, (t, sub)) in frontier.iter().zip(&subtrees).enumerate() {
+        nodes[t.node] = link(k, &sub[0]);
+    }
+    let parts: Vec<&[BvhNode]> = subtrees.iter().map(|s| &s[1..]).collect();
+    crate::par::extend_parts(nodes, &parts, link).unwrap_or_else(|e| panic!("BVH build: {e}"));
 }
 
 /// Leaf, SAH split or median split for the node of `task` over `refs`; `par`: bin on every core.
@@ -436,12 +472,12 @@ fn decide(refs: &[Ref], bounds: &Bounds, task: &Task, par: bool, scratch: &mut S
     if count <= 1 {
         return Decision::Leaf;
     }
-    // (cost, axis, bin, left, right, left count)
-    let mut best: Option<(f32, usize, usize, Box4, Box4, usize)> = None;
+    // (half cost, axis, bin, left count)
+    let mut best: Option<(f32, usize, usize, usize)> = None;
     let ext = (task.cb.hi - task.cb.lo).to_array();
     let nbins = bin_count(count);
     let binning = Binning::new(&task.cb, nbins);
-    let Scratch { bins, right, right_count } = scratch;
+    let Scratch { bins, right_cost } = scratch;
     if par && count >= 2 * PAR_BIN_CHUNK {
         let chunks: Vec<&[Ref]> = refs.chunks(PAR_BIN_CHUNK).collect();
         let parts = crate::par::map(chunks.len(), &[], |k| {
@@ -460,36 +496,38 @@ fn decide(refs: &[Ref], bounds: &Bounds, task: &Task, par: bool, scratch: &mut S
     } else {
         bin_refs(refs, &binning, bins);
     }
+    // The sweeps are most of a small node's cost: half areas, no emptiness tests (a plane is only
+    // costed with references on both sides), and only costs kept; the chosen plane's boxes are
+    // gathered once afterwards. Halving is exact, so the choices are those of full areas.
     for (axis, bins) in bins.iter().enumerate() {
         // Axes without centroid extent are ignored; also skips NaN and infinite extents.
         if !(ext[axis] > 0.0 && ext[axis].is_finite()) {
             continue;
         }
-        // Suffix sweep: bounds/count right of each plane, then prefix sweep.
-        let (mut acc, mut n) = (Box4::EMPTY, 0);
+        let (mut acc, mut n) = (Box4::EMPTY, 0u32);
         for i in (1..nbins).rev() {
             acc.grow(&bins[i].bounds);
-            n += bins[i].count as usize;
-            right[i] = acc;
-            right_count[i] = n;
+            n += bins[i].count;
+            right_cost[i] = acc.half_area_unchecked() * n as f32;
         }
-        let (mut acc, mut n) = (Box4::EMPTY, 0);
+        let (mut acc, mut n) = (Box4::EMPTY, 0usize);
         for i in 0..nbins - 1 {
             acc.grow(&bins[i].bounds);
             n += bins[i].count as usize;
             if n == 0 || n == count {
                 continue;
             }
-            let cost = acc.area() * n as f32 + right[i + 1].area() * right_count[i + 1] as f32;
+            let cost = acc.half_area_unchecked() * n as f32 + right_cost[i + 1];
             if best.as_ref().is_none_or(|b| cost < b.0) {
-                best = Some((cost, axis, i, acc, right[i + 1], n));
+                best = Some((cost, axis, i, n));
             }
         }
     }
-    let Some((cost, axis, bin, left, right, left_count)) = best else {
+    let Some((half_cost, axis, bin, left_count)) = best else {
         // All centroids coincide: no plane separates them.
         return if count <= MAX_LEAF { Decision::Leaf } else { Decision::Median };
     };
+    let cost = 2.0 * half_cost;
     if count <= MAX_LEAF {
         let parent_area = bounds.area();
         let split_cost = if parent_area > 0.0 {
@@ -506,6 +544,10 @@ fn decide(refs: &[Ref], bounds: &Bounds, task: &Task, par: bool, scratch: &mut S
     if child_depth + levels_needed(left_count.max(count - left_count)) > MAX_DEPTH {
         return if count <= MAX_LEAF { Decision::Leaf } else { Decision::Median };
     }
+    let (mut left, mut right) = (Box4::EMPTY, Box4::EMPTY);
+    for (i, b) in scratch.bins[axis][..nbins].iter().enumerate() {
+        if i <= bin { &mut left } else { &mut right }.grow(&b.bounds);
+    }
     Decision::Sah { axis, bin, left, right }
 }
 
@@ -515,11 +557,16 @@ fn bin_refs(refs: &[Ref], binning: &Binning, bins: &mut [[Bin; BINS]; 3]) {
     let nbins = binning.last.x as usize + 1;
     bins.iter_mut().for_each(|b| b[..nbins].fill(EMPTY_BIN));
     let [xs, ys, zs] = bins;
+    // Unrolled by hand, counts without overflow checks (below 2^30 references): at the crate's
+    // opt-level the loop over three bins kept them on the stack and was a third of the binning.
     for r in refs {
         let [x, y, z] = binning.bins(r.centroid2());
-        for bin in [&mut xs[x], &mut ys[y], &mut zs[z]] {
-            bin.count += 1;
-            bin.bounds.grow(&r.0);
-        }
+        let (bx, by, bz) = (&mut xs[x], &mut ys[y], &mut zs[z]);
+        bx.count = bx.count.wrapping_add(1);
+        bx.bounds.grow(&r.0);
+        by.count = by.count.wrapping_add(1);
+        by.bounds.grow(&r.0);
+        bz.count = bz.count.wrapping_add(1);
+        bz.bounds.grow(&r.0);
     }
 }

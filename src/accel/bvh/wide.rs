@@ -94,8 +94,21 @@ impl WideNode {
 }
 
 /// 2^e for e in -126..=127 (normal floats), built from the bits.
-fn exp2i(e: i32) -> f32 {
+pub(super) fn exp2i(e: i32) -> f32 {
     f32::from_bits(((e.clamp(-126, 127) + 127) as u32) << 23)
+}
+
+/// ceil(log2(x)) for a positive finite x (from its bits; subnormals count as 2^-126).
+pub(super) fn ceil_log2(x: f32) -> i32 {
+    let bits = x.to_bits();
+    let exp = (bits >> 23) as i32 - 127;
+    if exp < -126 {
+        -126
+    } else if bits & 0x7F_FFFF != 0 {
+        exp + 1
+    } else {
+        exp
+    }
 }
 
 fn node_bounds(b: &Bvh, i: usize) -> Aabb {
@@ -114,18 +127,23 @@ fn quantize(boxes: &[Aabb]) -> WideNode {
     let mut n = WideNode { origin: lo.to_array(), meta: (boxes.len() as u32) << 24, ..Default::default() };
     for k in 0..3 {
         let ext = hi[k] - lo[k];
-        // Smallest power of two with 255 * 2^e >= ext, then up while
-        // float rounding of the decode would cut into a box.
-        let mut e = if ext > 0.0 { (ext / 255.0).log2().ceil() as i32 } else { -126 };
+        // Smallest power of two with 255 * 2^e >= ext (from the bits of ext / 255, which the check
+        // below corrects if its rounding was short), then up while float rounding of the decode would
+        // cut into a box. Floor and ceil by conversion: the values are >= 0, and at the crate's
+        // opt-level the library calls were a third of the collapse.
+        let mut e = if ext > 0.0 { ceil_log2(ext / 255.0) } else { -126 };
         'grow: loop {
-            let s = exp2i(e);
+            // 1 / s is exact (a power of two), so multiplying is dividing, without the divide.
+            let (s, inv) = (exp2i(e), 1.0 / exp2i(e));
             let (mut qlo, mut qhi) = (0u32, 0u32);
             for (i, b) in boxes.iter().enumerate() {
-                let mut a = ((b.min[k] - lo[k]) / s).floor().clamp(0.0, 255.0) as u32;
+                let mut a = (((b.min[k] - lo[k]) * inv) as u32).min(255);
                 while a > 0 && lo[k] + a as f32 * s > b.min[k] {
                     a -= 1;
                 }
-                let mut z = ((b.max[k] - lo[k]) / s).ceil().clamp(0.0, 255.0) as u32;
+                let x = (b.max[k] - lo[k]) * inv;
+                let mut z = x as u32;
+                z = if (z as f32) < x { z + 1 } else { z }.min(255);
                 while z < 255 && lo[k] + (z as f32) * s < b.max[k] {
                     z += 1;
                 }
@@ -189,23 +207,32 @@ impl WideBvh {
             sub
         })
         .unwrap_or_else(|e| panic!("wide BVH: {e}"));
-        for (&(at, _), sub) in pending.iter().zip(subtrees) {
-            // Subtree node j > 0 lands at base + j - 1; its root fills the slot the top reserved.
-            let base = w.nodes.len() as u32;
-            let link = |mut n: WideNode| {
-                let children = n.children();
-                for c in &mut n.child[..children] {
-                    if *c & LEAF_BIT == 0 {
-                        *c = base + *c - 1;
-                    }
-                }
-                n
-            };
-            w.nodes[at] = link(sub.nodes[0]);
-            w.source[at] = sub.source[0];
-            w.nodes.extend(sub.nodes[1..].iter().map(|&n| link(n)));
-            w.source.extend_from_slice(&sub.source[1..]);
+        // Subtree node j > 0 lands at base + j - 1; its root fills the slot the top reserved.
+        let mut bases = Vec::with_capacity(subtrees.len());
+        let mut next = w.nodes.len() as u32;
+        for sub in &subtrees {
+            bases.push(next);
+            next += sub.nodes.len() as u32 - 1;
         }
+        let link = |k: usize, &n: &WideNode| {
+            let mut n = n;
+            let children = n.children();
+            for c in &mut n.child[..children] {
+                if *c & LEAF_BIT == 0 {
+                    *c = bases[k] + *c - 1;
+                }
+            }
+            n
+        };
+        for (k, (&(at, _), sub)) in pending.iter().zip(&subtrees).enumerate() {
+            w.nodes[at] = link(k, &sub.nodes[0]);
+            w.source[at] = sub.source[0];
+        }
+        let parts: Vec<&[WideNode]> = subtrees.iter().map(|s| &s.nodes[1..]).collect();
+        crate::par::extend_parts(&mut w.nodes, &parts, link).unwrap_or_else(|e| panic!("wide BVH: {e}"));
+        let parts: Vec<&[[u32; WIDTH]]> = subtrees.iter().map(|s| &s.source[1..]).collect();
+        crate::par::extend_parts(&mut w.source, &parts, |_, &s| s)
+            .unwrap_or_else(|e| panic!("wide BVH: {e}"));
         w
     }
 

@@ -195,3 +195,38 @@ fn parallel_collapse_makes_the_serial_tree() {
         canonical(&WideBvh::from_binary_in(&small, usize::MAX))
     );
 }
+
+/// The exponent from the bits is ceil(log2 x) (in f64: f32's log2 rounds 2^e * (1 + ulp) down to e),
+/// powers of two and subnormals included.
+#[test]
+fn ceil_log2_from_bits_matches_libm() {
+    let mut r = Rng(77);
+    let mut xs: Vec<f32> =
+        (-126..=127).map(super::wide::exp2i).flat_map(|p| [p, p * 1.0000001, p * 0.99999994]).collect();
+    xs.extend((0..10_000).map(|_| r.v().x * 10f32.powi((r.v().y * 60.0) as i32 - 30)).filter(|x| *x > 0.0));
+    for x in xs.into_iter().filter(|x| x.is_normal()) {
+        assert_eq!(super::wide::ceil_log2(x), ((x as f64).log2().ceil() as i32).max(-126), "x = {x:e}");
+    }
+    assert_eq!(super::wide::ceil_log2(f32::from_bits(1)), -126, "subnormal");
+}
+
+/// Quantization is tight: a node's exponent is the smallest that holds its children, so on nearly
+/// every axis with extent the largest child bound uses more than half of the 8-bit range (one
+/// exponent too many would put every one at or below 128).
+#[test]
+fn quantization_uses_the_smallest_exponent() {
+    let tris = soup(20_000, 43, Vec3::new(3e3, -70.0, 0.5));
+    let w = WideBvh::from_binary(&Bvh::build(&aabbs(&tris)));
+    let (mut axes, mut tight) = (0, 0);
+    for n in &w.nodes {
+        for k in 0..3 {
+            let top = (0..n.children()).map(|i| (n.qmax[k] >> (8 * i)) & 0xFF).max().unwrap_or(0);
+            let bottom = (0..n.children()).map(|i| (n.qmin[k] >> (8 * i)) & 0xFF).min().unwrap_or(0);
+            if top > bottom {
+                axes += 1;
+                tight += (top > 128) as usize;
+            }
+        }
+    }
+    assert!(tight * 100 >= axes * 95, "{tight} of {axes} node axes use more than half the range");
+}
