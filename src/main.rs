@@ -116,6 +116,11 @@ enum Command {
         /// With --scale: the folder for scale.csv and the plots.
         #[arg(long, default_value = "out/scale", requires = "scale")]
         scale_out: PathBuf,
+        /// The BVH builders side by side on generated scenes (comma-separated unique:N or
+        /// instanced:N): host binned SAH, host split BVH (up to its size limit), host LBVH and
+        /// the device LBVH (GPU ms per step); build ms, Mtri/s and SAH cost of each tree.
+        #[arg(long, value_delimiter = ',', value_name = "SCENES", conflicts_with_all = ["rays", "compare_modes", "compare_backends", "compare_accel_updates", "csv", "capture_frame", "scene", "scale"])]
+        builders: Vec<report::scale::Point>,
         /// One size of --scale, measured in this process (what --scale runs per size).
         #[arg(long, hide = true, conflicts_with = "scale")]
         scale_point: Option<report::scale::Point>,
@@ -248,8 +253,12 @@ fn run(cli: Cli) -> Result<()> {
             scale_frames,
             scale_out,
             scale_point,
+            builders,
             capture_frame,
         }) => {
+            if !builders.is_empty() {
+                return report::builders::builders_command(&gpu, &builders);
+            }
             if let Some(point) = scale_point {
                 let job = RenderJob {
                     settings: view.job()?.settings,

@@ -201,6 +201,31 @@ fn world_triangles(
     (tris, ids)
 }
 
+/// The triangles the flat tree would hold (its members', in world space relative to `origin`), for
+/// builders measured against its own (`bench --builders`).
+pub fn static_triangles(scene: &Scene, origin: RenderOrigin) -> Vec<[Vec3; 3]> {
+    let flattened = flatten_choice(scene);
+    let flags: Vec<u32> = (0..scene.instances.len()).map(|i| member_flags(scene, i)).collect();
+    let (members, table, count) = member_table(scene, &flattened, &flags);
+    world_triangles(scene, origin, &members, &table, &flags, count).0
+}
+
+/// The members (flattened instances a ray can hit, with triangles), the member table ([first number,
+/// instance] each) and the triangle count.
+fn member_table(scene: &Scene, flattened: &[bool], flags: &[u32]) -> (Vec<usize>, Vec<[u32; 2]>, usize) {
+    let (mut members, mut table, mut count) = (Vec::new(), Vec::new(), 0usize);
+    for i in (0..scene.instances.len()).filter(|&i| flattened[i] && flags[i] >> FLAT_ID_MASK_SHIFT != 0) {
+        let inst = &scene.instances[i];
+        let n = scene.meshes[inst.mesh].primitives[inst.primitive].indices.len() / 3;
+        if n > 0 {
+            members.push(i);
+            table.push([count as u32, i as u32]);
+            count += n;
+        }
+    }
+    (members, table, count)
+}
+
 impl FlatStatic {
     /// In world space relative to `origin`; instances no ray can hit (mask 0) contribute no triangles.
     /// With a `cache` directory, a tree of at least [`CACHE_MIN_TRIANGLES`] is read from there when an
@@ -208,19 +233,7 @@ impl FlatStatic {
     pub fn build(scene: &Scene, origin: RenderOrigin, cache: Option<&Path>) -> anyhow::Result<FlatStatic> {
         let flattened = flatten_choice(scene);
         let flags: Vec<u32> = (0..scene.instances.len()).map(|i| member_flags(scene, i)).collect();
-        let triangles_of = |i: usize| {
-            let inst = &scene.instances[i];
-            scene.meshes[inst.mesh].primitives[inst.primitive].indices.len() / 3
-        };
-        let members: Vec<usize> = (0..scene.instances.len())
-            .filter(|&i| flattened[i] && flags[i] >> FLAT_ID_MASK_SHIFT != 0 && triangles_of(i) > 0)
-            .collect();
-        let mut table = Vec::with_capacity(members.len());
-        let mut count = 0usize;
-        for &i in &members {
-            table.push([count as u32, i as u32]);
-            count += triangles_of(i);
-        }
+        let (members, table, count) = member_table(scene, &flattened, &flags);
         anyhow::ensure!(
             count <= FLAT_ID_INDEX as usize + 1,
             "{count} static triangles: more than the {} the compute BVH's flat tree can number",

@@ -15,6 +15,7 @@ pub mod cpu_trace;
 pub mod dynamic;
 pub mod flat;
 pub mod flat_cache;
+pub mod lbvh;
 
 use dynamic::{DynamicBlases, Update};
 

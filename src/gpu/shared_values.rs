@@ -247,6 +247,25 @@ shared! {
     id TOP_FIT_BLAS_NODES = 3;
     id TOP_FIT_ORDER = 4;
 
+    // The device-side LBVH builder's single set (accel/lbvh.rs, glsl/lbvh/): triangles, Morton keys and
+    // triangle numbers (sorted in place through the _OUT pair: the two sets swap them), radix
+    // histogram, the hierarchy (children per internal node, parent per node), node boxes and the
+    // bottom-up visit counters. Radix sort by LBVH_RADIX_BITS per pass over blocks of
+    // LBVH_RADIX_BLOCK keys per invocation.
+    id LBVH_TRIANGLES = 0;
+    id LBVH_KEYS = 1;
+    id LBVH_VALUES = 2;
+    id LBVH_KEYS_OUT = 3;
+    id LBVH_VALUES_OUT = 4;
+    id LBVH_HISTOGRAM = 5;
+    id LBVH_CHILDREN = 6;
+    id LBVH_PARENTS = 7;
+    id LBVH_BOXES = 8;
+    id LBVH_FLAGS = 9;
+    uint LBVH_RADIX_BITS = 4;
+    uint LBVH_RADIX_BLOCK = 256;
+    uint LBVH_GROUP = 64;
+
     // Set 1 of the ray microbenchmark (glsl/rays.comp, render/rays/): the rays, what each hit, and
     // (stats variant) nodes visited and triangles tested per ray.
     id RAYS_IN = 0;

@@ -10,6 +10,7 @@
 pub mod args;
 pub mod attribution;
 pub mod budget_paths;
+pub mod builders;
 pub mod compare;
 pub mod knobs;
 pub mod measure;

@@ -89,3 +89,45 @@ fn bench_scale_with_no_size_left_fails_clearly() {
     assert!(!out.status.success());
     assert!(stderr.contains("leave no size to measure") && !stderr.contains("panicked"), "{stderr}");
 }
+
+/// `bench --builders`: every builder's row per scene (the split BVH only up to its size limit), build
+/// times and SAH costs that are numbers, the LBVH's host and device trees of equal cost (the same
+/// tree), the device's steps timed; validation on; a bad scene spec is a clear CLI error.
+#[test]
+fn bench_builders_puts_the_builders_side_by_side() {
+    let out = bin().args(["bench", "--builders", "unique:20000,instanced:50"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "bench --builders failed:\n{stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let rows: Vec<Vec<&str>> = stdout
+        .lines()
+        .filter(|l| l.starts_with("| unique") || l.starts_with("| instanced"))
+        .map(|l| l.split('|').map(str::trim).collect())
+        .collect();
+    // Per scene: binned, split (both small enough), host LBVH, device LBVH.
+    assert_eq!(rows.len(), 8, "{stdout}");
+    for scene in ["unique:20000", "instanced:50"] {
+        let mine: Vec<&Vec<&str>> = rows.iter().filter(|r| r[1] == scene).collect();
+        let builders: Vec<&str> = mine.iter().map(|r| r[3]).collect();
+        assert_eq!(
+            builders,
+            [
+                "binned SAH (host, every core)",
+                "split BVH (host, every core)",
+                "LBVH (host, one thread)",
+                "LBVH (device)"
+            ],
+            "{scene}"
+        );
+        let num = |r: &Vec<&str>, k: usize| r[k].parse::<f64>().unwrap_or_else(|_| panic!("{scene}: {r:?}"));
+        for r in &mine {
+            assert!(num(r, 4) > 0.0 && num(r, 5) > 0.0 && num(r, 6) > 0.0, "{scene}: {r:?}");
+        }
+        assert_eq!(mine[2][6], mine[3][6], "{scene}: host and device LBVH are one tree");
+        assert!(num(mine[0], 6) < num(mine[2], 6), "{scene}: the SAH build beats Morton order");
+        assert!(mine[3][7].contains("sort") && mine[3][7].contains("bounds"), "{scene}: {:?}", mine[3]);
+    }
+    let bad = bin().args(["bench", "--builders", "unique:0"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && stderr.contains("unique"), "{stderr}");
+}

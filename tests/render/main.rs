@@ -22,6 +22,7 @@ mod extreme_radiance;
 mod far_from_origin;
 mod frame;
 mod ibl;
+mod lbvh;
 mod memory;
 mod models;
 mod occlusion;
