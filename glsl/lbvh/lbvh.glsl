@@ -20,16 +20,16 @@ layout(push_constant, scalar) uniform Push {
     float pad2;
 } pc;
 
-layout(set = 0, binding = LBVH_TRIANGLES, scalar) readonly buffer Triangles { float tris[]; };
-layout(set = 0, binding = LBVH_KEYS, std430) buffer Keys { uint keys[]; };
-layout(set = 0, binding = LBVH_VALUES, std430) buffer Values { uint values[]; };
-layout(set = 0, binding = LBVH_KEYS_OUT, std430) buffer KeysOut { uint keys_out[]; };
-layout(set = 0, binding = LBVH_VALUES_OUT, std430) buffer ValuesOut { uint values_out[]; };
-layout(set = 0, binding = LBVH_HISTOGRAM, std430) buffer Histogram { uint hist[]; };
-layout(set = 0, binding = LBVH_CHILDREN, std430) buffer Children { uvec2 children[]; };
-layout(set = 0, binding = LBVH_PARENTS, std430) buffer Parents { uint parents[]; };
-layout(set = 0, binding = LBVH_BOXES, scalar) coherent buffer Boxes { float boxes[]; };
-layout(set = 0, binding = LBVH_FLAGS, std430) coherent buffer Flags { uint flags[]; };
+layout(set = SET_LBVH, binding = LBVH_TRIANGLES, scalar) readonly buffer Triangles { float tris[]; };
+layout(set = SET_LBVH, binding = LBVH_KEYS, std430) buffer Keys { uint keys[]; };
+layout(set = SET_LBVH, binding = LBVH_VALUES, std430) buffer Values { uint values[]; };
+layout(set = SET_LBVH, binding = LBVH_KEYS_OUT, std430) buffer KeysOut { uint keys_out[]; };
+layout(set = SET_LBVH, binding = LBVH_VALUES_OUT, std430) buffer ValuesOut { uint values_out[]; };
+layout(set = SET_LBVH, binding = LBVH_HISTOGRAM, std430) buffer Histogram { uint hist[]; };
+layout(set = SET_LBVH, binding = LBVH_CHILDREN, std430) buffer Children { uvec2 children[]; };
+layout(set = SET_LBVH, binding = LBVH_PARENTS, std430) buffer Parents { uint parents[]; };
+layout(set = SET_LBVH, binding = LBVH_BOXES, scalar) coherent buffer Boxes { float boxes[]; };
+layout(set = SET_LBVH, binding = LBVH_FLAGS, std430) coherent buffer Flags { uint flags[]; };
 
 const uint RADIX = 1u << LBVH_RADIX_BITS;
 const uint NO_PARENT = 0xFFFFFFFFu;

@@ -165,16 +165,19 @@ fn collect<T: Send>(n: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
     crate::par::collect_each(n, PAR_CHUNK, f).unwrap_or_else(|e| panic!("flat tree: {e}"))
 }
 
-/// The members' triangles in world space relative to `origin`, numbered as `table` says, and their
-/// ids (number | member flags).
+/// Which member holds tree triangle number `t`.
+fn member_of(table: &[[u32; 2]], t: usize) -> usize {
+    table.partition_point(|m| m[0] as usize <= t) - 1
+}
+
+/// The members' triangles in world space relative to `origin`, numbered as `table` says.
 fn world_triangles(
     scene: &Scene,
     origin: RenderOrigin,
     members: &[usize],
     table: &[[u32; 2]],
-    flags: &[u32],
     count: usize,
-) -> (Vec<[Vec3; 3]>, Vec<u32>) {
+) -> Vec<[Vec3; 3]> {
     let primitive = |i: usize| {
         let inst = &scene.instances[i];
         &scene.meshes[inst.mesh].primitives[inst.primitive]
@@ -190,15 +193,12 @@ fn world_triangles(
             })
         })
         .collect();
-    let member = |t: usize| table.partition_point(|m| m[0] as usize <= t) - 1;
-    let tris = collect(count, |t| {
-        let k = member(t);
+    collect(count, |t| {
+        let k = member_of(table, t);
         let local = t - table[k][0] as usize;
         let (w, idx) = (&world[k], &primitive(members[k]).indices[3 * local..3 * local + 3]);
         [w[idx[0] as usize], w[idx[1] as usize], w[idx[2] as usize]]
-    });
-    let ids = collect(count, |t| t as u32 | flags[members[member(t)]]);
-    (tris, ids)
+    })
 }
 
 /// The triangles the flat tree would hold (its members', in world space relative to `origin`), for
@@ -207,7 +207,7 @@ pub fn static_triangles(scene: &Scene, origin: RenderOrigin) -> Vec<[Vec3; 3]> {
     let flattened = flatten_choice(scene);
     let flags: Vec<u32> = (0..scene.instances.len()).map(|i| member_flags(scene, i)).collect();
     let (members, table, count) = member_table(scene, &flattened, &flags);
-    world_triangles(scene, origin, &members, &table, &flags, count).0
+    world_triangles(scene, origin, &members, &table, count)
 }
 
 /// The members (flattened instances a ray can hit, with triangles), the member table ([first number,
@@ -262,7 +262,7 @@ impl FlatStatic {
             }
         }
         let mut clock = StageClock(std::time::Instant::now());
-        let (tris, ids) = world_triangles(scene, origin, &members, &table, &flags, count);
+        let tris = world_triangles(scene, origin, &members, &table, count);
         let transform_ms = clock.lap();
         crate::progress::stage(format!("building the compute BVH over {count} triangles"));
         let (bvh, builder) = Bvh::build_static(&tris);
@@ -270,11 +270,12 @@ impl FlatStatic {
         crate::progress::stage("collapsing the compute BVH 4-wide");
         let wide = WideBvh::from_binary(&bvh);
         let collapse_ms = clock.lap();
-        // In leaf order, on every core (a random-access gather: 0.1 s of the 4 M terrain's load).
+        // In leaf order, on every core (a random-access gather); each id from the member table.
         let triangles = collect(wide.prim_indices.len(), |j| {
             let k = wide.prim_indices[j] as usize;
             let [p0, p1, p2] = tris[k];
-            FlatTriangle { p0: p0.into(), p1: p1.into(), p2: p2.into(), id: ids[k] }
+            let id = k as u32 | flags[members[member_of(&table, k)]];
+            FlatTriangle { p0: p0.into(), p1: p1.into(), p2: p2.into(), id }
         });
         let stages_ms = [transform_ms, build_ms, collapse_ms, clock.lap()];
         let flat = FlatStatic {

@@ -252,6 +252,7 @@ shared! {
     // histogram, the hierarchy (children per internal node, parent per node), node boxes and the
     // bottom-up visit counters. Radix sort by LBVH_RADIX_BITS per pass over blocks of
     // LBVH_RADIX_BLOCK keys per invocation.
+    id SET_LBVH = 0;
     id LBVH_TRIANGLES = 0;
     id LBVH_KEYS = 1;
     id LBVH_VALUES = 2;
