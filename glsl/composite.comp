@@ -1,8 +1,9 @@
 #version 460
 // Pass `composite`: emission + direct light (`direct`) + ambient + the traced specular chain (variant
 // HAS_SPECULAR; a budget's partial share filled in, common/budget_fill.glsl); the environment on a miss. Variant REFERENCE takes the ambient from `reference`'s
-// accumulation; TERMS adds `terms`' (the report's attribution); DEBUG_VIEWS shows a G-buffer view
-// and reads neither light pass.
+// accumulation; AO scales it by the traced visibility (`ao filter`); TERMS replaces the ambient terms
+// `terms` supplies (the report's attribution); DEBUG_VIEWS shows a G-buffer view and reads neither
+// light pass.
 #include "common/gbuffer_read.glsl"
 #include "common/integrator.glsl"
 #include "common/prt.glsl"
@@ -20,6 +21,9 @@ layout(set = SET_PASS, binding = TERMS_IN, rgba32f) uniform readonly image2D ter
 #endif
 #ifdef REFERENCE
 layout(set = SET_PASS, binding = REFERENCE_IN, rgba32f) uniform readonly image2D reference_in;
+#endif
+#ifdef AO
+layout(set = SET_PASS, binding = AO_VISIBILITY_IN, rgba32f) uniform readonly image2D ao_visibility;
 #endif
 layout(set = SET_PASS, binding = HDR_OUT, rgba32f) uniform writeonly image2D hdr_out;
 
@@ -83,17 +87,39 @@ void main() {
         g_effects |= missing;
     }
 #endif
+    bool mirror = is_mirror(s, 0u);
 #ifdef REFERENCE
     // The ray-traced reference replaces the ambient radiance.
     vec4 acc = imageLoad(reference_in, px);
-    vec3 ambient = ambient_light_from(s, v, is_mirror(s, 0u), acc.rgb / max(acc.a, 1.0));
+    vec3 radiance = acc.rgb / max(acc.a, 1.0);
 #else
     // Diffuse PRT on static geometry (FRAME_AMBIENT_PRT), else SH/constant.
     vec3 prt_e;
-    bool prt = prt_irradiance(p.instance, p.primitive, p.b, prt_e);
-    vec3 ambient = prt ? ambient_light_from(s, v, is_mirror(s, 0u), prt_e / PI) : ambient_light(s, v, is_mirror(s, 0u));
+    vec3 radiance = prt_irradiance(p.instance, p.primitive, p.b, prt_e) ? prt_e / PI : ambient_radiance(s.normal);
 #endif
-    color = primary_emissive(px, p.instance, p.primitive, p.b) + imageLoad(direct_in, px).rgb + ambient;
+    vec3 diffuse = ambient_diffuse(s, radiance);
+    vec3 glossy = ambient_specular(s, v, mirror);
+#ifdef AO
+    // The traced ambient (`ao filter`): its radiance, and its visible share as the specular occlusion of
+    // a lobe no glossy ray corrects (with the attribution terms the `glossy` pass does not run).
+    vec4 traced = imageLoad(ao_visibility, px);
+    diffuse = ambient_diffuse(s, traced.rgb);
+#ifdef TERMS
+    bool corrected = false;
+#else
+    bool corrected = is_glossy(s, 0u);
+#endif
+    if (!corrected) glossy *= specular_occlusion(vec3(traced.a), max(dot(s.normal, v), 1e-4), s.roughness);
+#endif
+#ifdef TERMS
+    // The path tracer's terms (`terms`) replace the ambient they cover (the traced ambient's parts:
+    // FRAME_AO_* flags, cleared by the host).
+#ifndef AO
+    if ((frame.accum_bounces & TERM_VISIBILITY) != 0u) diffuse = vec3(0.0);
+#endif
+    if ((frame.accum_bounces & TERM_ENV_SPECULAR) != 0u) glossy = vec3(0.0);
+#endif
+    color = primary_emissive(px, p.instance, p.primitive, p.b) + imageLoad(direct_in, px).rgb + diffuse + glossy;
 #ifdef HAS_SPECULAR
     color += specular;
 #endif

@@ -133,7 +133,8 @@ impl RenderJob {
             width,
             height,
             camera: CameraChoice::First,
-            settings: RenderSettings::default(),
+            // As the command line with no flags: the scene file's ambient applies.
+            settings: RenderSettings { ambient_from_scene: true, ..RenderSettings::default() },
             animation: None,
             time: 0.0,
             fps: 30.0,

@@ -200,11 +200,23 @@ bool spawns_branches(Surface s, uint depth) {
 // Diffuse: `radiance`, what a Lambertian surface of albedo 1 exits (E / pi: SH irradiance, or PRT or
 // the reference in composite). Specular: the split-sum environment (split_sum.glsl), except for a
 // mirror, whose reflection branch carries it. `v`: towards the viewer, n.v > 0 (face_viewer).
-vec3 ambient_light_from(Surface s, vec3 v, bool mirror, vec3 radiance) {
+vec3 ambient_diffuse(Surface s, vec3 radiance) {
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
-    vec3 c = radiance * diffuse * (1.0 - surface_f0(s));
-    if (!mirror) c += env_specular(s, v, max(dot(s.normal, v), 1e-4));
-    return c * s.occlusion;
+    return radiance * diffuse * (1.0 - surface_f0(s)) * s.occlusion;
+}
+
+vec3 ambient_specular(Surface s, vec3 v, bool mirror) {
+    return mirror ? vec3(0.0) : env_specular(s, v, max(dot(s.normal, v), 1e-4)) * s.occlusion;
+}
+
+vec3 ambient_light_from(Surface s, vec3 v, bool mirror, vec3 radiance) {
+    return ambient_diffuse(s, radiance) + ambient_specular(s, v, mirror);
+}
+
+// The share of a lobe's environment light left by a diffuse visibility `ao` at n.v for roughness r
+// (Lagarde & de Rousiers 2014): the lobe narrows with smoothness and grazing views keep more.
+vec3 specular_occlusion(vec3 ao, float nv, float roughness) {
+    return clamp(pow(vec3(nv) + ao, vec3(exp2(-16.0 * roughness - 1.0))) - 1.0 + ao, 0.0, 1.0);
 }
 
 vec3 ambient_light(Surface s, vec3 v, bool mirror) {

@@ -1,6 +1,7 @@
 // Pass `terms` (report/attribution.rs): for each term in Frame.accum_bounces (TERM_*), the path-traced
-// light it carries to the primary hit minus what the hybrid shades for it, so `composite` (variant
-// TERMS) shows the hybrid with those terms from the path tracer. Each sample takes one lobe of
+// light it carries to the primary hit (minus the hybrid's direct light through glass for the caustics);
+// `composite` (variant TERMS) leaves out its own ambient terms the selection covers and adds this, so
+// it shows the hybrid with those terms from the path tracer. Each sample takes one lobe of
 // path/bsdf.glsl, chosen by albedo (diffuse cosine, or GGX visible normals, Heitz 2018); the hit decides:
 // - miss: TERM_ENV_SPECULAR via the specular lobe of a non-mirror (replaces the split-sum environment),
 //   TERM_VISIBILITY via the diffuse lobe (replaces the diffuse SH/PRT ambient).
@@ -14,7 +15,6 @@
 // traversal (lavapipe took 12 minutes for a version with six).
 #include "../common/gbuffer_read.glsl"
 #include "../common/integrator.glsl"
-#include "../common/prt.glsl"
 #include "../path/bsdf.glsl"
 
 layout(set = SET_PASS, binding = TERMS_OUT, rgba32f) uniform image2D terms_accum;
@@ -103,21 +103,6 @@ vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out S
     return radiance;
 }
 
-// Composite's ambient (ambient_light_from), split by lobe; p.s faces the viewer.
-vec3 hybrid_ambient_share(PrimaryHit p, bool mirror) {
-    Surface s = p.s;
-    vec3 prt_e;
-    vec3 radiance = prt_irradiance(p.instance, p.primitive, p.b, prt_e) ? prt_e / PI : ambient_radiance(s.normal);
-    vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
-    vec3 share = vec3(0.0);
-    if (term_on(TERM_VISIBILITY)) share += radiance * s.occlusion * diffuse * (1.0 - surface_f0(s));
-    if (term_on(TERM_ENV_SPECULAR) && !mirror) {
-        vec3 v = -p.dir;
-        share += s.occlusion * env_specular(s, v, max(dot(s.normal, v), 1e-4));
-    }
-    return share;
-}
-
 void terms_pixel(ivec2 px) {
     PrimaryHit p;
     if (outside_frame(px) || !read_primary(px, p)) return;
@@ -129,7 +114,7 @@ void terms_pixel(ivec2 px) {
     vec3 v = bsdf_local(m, v_world);
     uint rng = pcg_hash(uint(px.x) + pcg_hash(uint(px.y) + pcg_hash(frame.accum_frame ^ 0x7f4a7c15u)));
     float n = float(TERMS_SAMPLES_PER_FRAME);
-    vec3 sum = -n * hybrid_ambient_share(p, mirror);
+    vec3 sum = vec3(0.0);
     // Iteration 0 shades direct light with glass opaque: minus `direct`'s (glass transmits), that is the
     // hybrid's light through glass, which the caustics replace.
     for (uint i = 0u; i <= TERMS_SAMPLES_PER_FRAME; ++i) {

@@ -28,13 +28,20 @@ pub struct EnvArgs {
     /// `intensity`.
     #[arg(long, value_name = "X", value_parser = parse_intensity, allow_hyphen_values = true)]
     pub env_intensity: Option<f32>,
-    /// Diffuse environment light: sh (the map's irradiance, per normal, from
-    /// its spherical-harmonic projection), constant (the map's mean
-    /// radiance for every normal), or precomputed radiance transfer on the
-    /// static geometry: prt-unshadowed, prt-shadowed, prt-interreflected
-    /// (cached on disk; animated and skinned objects get sh) [default: sh].
+    /// Diffuse environment light: traced (sh shadowed by ray-traced visibility
+    /// at the primary hit, denoised), sh (the map's irradiance, per normal,
+    /// from its spherical-harmonic projection, unshadowed), constant (the
+    /// map's mean radiance for every normal), or precomputed radiance
+    /// transfer on the static geometry: prt-unshadowed, prt-shadowed,
+    /// prt-interreflected (cached on disk; animated and skinned objects get
+    /// sh) [default: traced].
     #[arg(long, value_enum)]
     pub ambient: Option<AmbientMode>,
+    /// With --ambient traced: the ambient rays bring only the environment's
+    /// light, not the emission and direct light of the surfaces they hit
+    /// (the one indirect bounce).
+    #[arg(long)]
+    pub no_indirect: bool,
     /// PRT directions per vertex: N gives N×N stratified jittered samples
     /// over the sphere (1..=1024) [default: 16].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=crate::prt::MAX_SAMPLES as i64))]

@@ -264,6 +264,7 @@ impl ViewArgs {
                 budget: self.budget.settings(),
                 ambient: self.env.ambient.unwrap_or_default(),
                 ambient_from_scene: self.env.ambient.is_none(),
+                ambient_bounce: !self.env.no_indirect,
                 prt: self.env.prt_options(),
                 reference: self.env.reference(),
                 terms: 0,

@@ -109,6 +109,14 @@ shared! {
     // directional and spot lights read them; without it they stay unshadowed (the budget found the
     // maps too dear).
     uint FRAME_SHADOW_MAPS = 256;
+    // `--ambient traced` (passes/ao.glsl, ao_filter.comp): its rays that hit bring the hit's direct
+    // light, its emission and its environment light (the one indirect bounce; `--no-indirect` clears
+    // all three); the environment's light shades by the visible share. The report's attribution clears
+    // the parts its terms supply.
+    uint FRAME_AO_BOUNCE_LIGHTS = 512;
+    uint FRAME_AO_BOUNCE_EMISSION = 1024;
+    uint FRAME_AO_SKY = 2048;
+    uint FRAME_AO_BOUNCE_SKY = 4096;
     uint PRT_HEADER_WORDS = 4;
     uint PRT_NO_VERTEX = 2147483647;
 
@@ -154,6 +162,25 @@ shared! {
     float GLOSSY_FILTER_SCALE = 0.5;
     float GLOSSY_FILTER_MAX_PX = 16.0;
     id REFERENCE_IN = 8;
+    // Traced ambient (`--ambient traced`; render/passes/ao.rs, ao_filter.rs): `ao` writes per pixel the
+    // share of the environment's diffuse light its AO_SAMPLES cosine rays find unoccluded (rgb) with the
+    // camera distance (a; 0: no sample), and the irradiance their hits bounce (rgb); `ao filter`
+    // averages both over the (2 AO_FILTER_RADIUS_PX)² window, guided by the G-buffer, into the diffuse
+    // ambient radiance `composite` shades with (rgb) and the mean share (a, the specular occlusion).
+    id AO_OUT = 5;
+    id AO_IN = 5;
+    id AO_BOUNCE_OUT = 6;
+    id AO_BOUNCE_IN = 6;
+    id AO_VISIBILITY_OUT = 7;
+    id AO_VISIBILITY_IN = 10;
+    uint AO_SEED = 40503;
+    uint AO_SAMPLES = 4;
+    // The level of the prefiltered environment (ENV_SPECULAR_LEVELS) that weighs each ray.
+    uint AO_WEIGHT_LEVEL = 1;
+    // sqrt(16 AO_SAMPLES): the strata per axis of a 4x4 tile's rays (passes/ao.glsl).
+    uint AO_GRID = 8;
+    // A whole number of 4x4 tiles across: each tile's rays are one stratified set.
+    uint AO_FILTER_RADIUS_PX = 4;
     uint REFERENCE_SAMPLES_PER_FRAME = 4;
     // The path tracer (render/passes/path.rs, glsl/path/path.glsl): its
     // accumulation (rgb: radiance sum, a: samples), kept across frames, and
@@ -164,7 +191,7 @@ shared! {
     uint PATH_SAMPLES_PER_FRAME = 4;
     uint PATH_RR_START = 3;
     // The report's attribution (render/passes/terms.rs): per pixel the selected terms' path-traced
-    // estimate minus the hybrid's shading of them (rgb) and the sample count (a), added by `composite`;
+    // estimate (rgb) and the sample count (a), which `composite` adds in place of its own terms;
     // the terms (selected via Frame.accum_bounces); samples per pixel per frame; longest glass/mirror chain.
     id TERMS_OUT = 6;
     id TERMS_IN = 9;

@@ -95,7 +95,10 @@ impl FrameChoices {
         let sh = match (settings.ambient, &sh_radiance) {
             (AmbientMode::Constant, _) => None,
             // PRT shades static primary hits; the rest keep SH irradiance.
-            (_, Some(sh)) => Some(crate::gpu::env_sh::irradiance_uniform(sh, env)),
+            // The traced visibility's irradiance is the plain truncation: the accurate one (env_sh.rs).
+            (ambient, Some(sh)) => {
+                Some(crate::gpu::env_sh::irradiance_uniform(sh, env, ambient == AmbientMode::Traced))
+            }
             _ => None,
         };
         let budget_flags = match settings.budget.map(|b| b.fallback) {

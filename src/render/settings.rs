@@ -7,9 +7,14 @@ use crate::gpu::shared::REFERENCE_SAMPLES_PER_FRAME;
 /// How the ambient term lights surfaces from an environment map.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum AmbientMode {
-    /// The map's irradiance at the surface normal, from its 3-band SH
-    /// projection (gpu/env_sh.rs).
+    /// `Sh` shadowed per pixel by ray-traced visibility, plus one indirect bounce (render/passes/ao.rs):
+    /// the share of the environment's light that cosine rays from the primary hit find unoccluded and
+    /// the light their hits send back, denoised. The default: without visibility an interior is lit by
+    /// the sky seen through its walls. `Sh` with `--no-shadows` or `--budget` (AmbientMode::pick).
     #[default]
+    Traced,
+    /// The map's irradiance at the surface normal, from its 3-band SH
+    /// projection (gpu/env_sh.rs), unshadowed.
     Sh,
     /// The map's mean radiance for every normal (the behaviour before SH).
     Constant,
@@ -25,10 +30,26 @@ pub enum AmbientMode {
 impl AmbientMode {
     /// `settings.ambient`, or the scene file's where it applies.
     pub fn resolve(settings: &RenderSettings, env: &crate::scene::Environment) -> AmbientMode {
+        AmbientMode::pick(settings, AmbientMode::of_scene(env))
+    }
+
+    /// The scene file's `[environment] ambient`, if it names one.
+    pub fn of_scene(env: &crate::scene::Environment) -> Option<AmbientMode> {
         use clap::ValueEnum;
-        match (&env.ambient, settings.ambient_from_scene) {
-            (Some(name), true) => AmbientMode::from_str(name, false).unwrap_or(settings.ambient),
+        env.ambient.as_deref().and_then(|name| AmbientMode::from_str(name, false).ok())
+    }
+
+    /// `settings.ambient`, or `scene`'s (AmbientMode::of_scene) where the command line gave none. `Traced`
+    /// shadows the sky with rays, so it is `Sh` where shadows are off (a raster-only frame traces nothing)
+    /// and under a budget, whose cost model does not hold it yet.
+    pub fn pick(settings: &RenderSettings, scene: Option<AmbientMode>) -> AmbientMode {
+        let mode = match (scene, settings.ambient_from_scene) {
+            (Some(mode), true) => mode,
             _ => settings.ambient,
+        };
+        match mode {
+            AmbientMode::Traced if !settings.effects.shadows || settings.budget.is_some() => AmbientMode::Sh,
+            m => m,
         }
     }
 
@@ -36,7 +57,7 @@ impl AmbientMode {
     pub fn prt_mode(self) -> Option<crate::prt::PrtMode> {
         use crate::prt::PrtMode;
         match self {
-            AmbientMode::Sh | AmbientMode::Constant => None,
+            AmbientMode::Traced | AmbientMode::Sh | AmbientMode::Constant => None,
             AmbientMode::PrtUnshadowed => Some(PrtMode::Unshadowed),
             AmbientMode::PrtShadowed => Some(PrtMode::Shadowed),
             AmbientMode::PrtInterreflected => Some(PrtMode::Interreflected),
@@ -177,6 +198,9 @@ pub struct RenderSettings {
     /// `ambient` was not given on the command line: the scene file's
     /// `[environment] ambient` wins where it has one.
     pub ambient_from_scene: bool,
+    /// `Traced`'s rays bring the emission and direct light of what they hit (one indirect bounce;
+    /// `--no-indirect` turns it off). A frame flag: switching it compiles nothing.
+    pub ambient_bounce: bool,
     pub prt: PrtOptions,
     /// The ray-traced reference replaces the ambient radiance at primary
     /// hits (--reference-samples; render/reference.rs).
@@ -213,8 +237,9 @@ impl Default for RenderSettings {
             backend: Backend::Auto,
             aa: AaMode::Edge,
             budget: None,
-            ambient: AmbientMode::Sh,
+            ambient: AmbientMode::Traced,
             ambient_from_scene: false,
+            ambient_bounce: true,
             prt: PrtOptions::default(),
             reference: None,
             terms: 0,

@@ -12,7 +12,7 @@ use crate::scene::{LightKind, Scene};
 use crate::vk::limits::Limits;
 use crate::vk::{Context, RtEnables};
 
-pub use super::settings::{AaMode, Backend, Effects, Mode};
+pub use super::settings::{AaMode, AmbientMode, Backend, Effects, Mode};
 
 /// What the scene contains that each effect needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,6 +27,11 @@ pub struct SceneNeeds {
     pub refractions: bool,
     /// A directional or spot light casts shadows (the budget's raster fallback renders shadow maps for them).
     pub shadow_maps: bool,
+    /// Something lights the scene (the environment, a light, an emissive material) and something can
+    /// occlude or bounce it: `--ambient traced` has something to trace.
+    pub ambient_occluders: bool,
+    /// The scene file's `[environment] ambient`.
+    pub scene_ambient: Option<AmbientMode>,
     /// Triangles of the largest primitive (one BLAS each) and the instance
     /// count (TLAS entries), checked against the driver's limits.
     pub largest_primitive_triangles: u64,
@@ -43,8 +48,15 @@ impl SceneNeeds {
         let range = |m: &usize| scene.materials[*m].roughness_range();
         let mirrors = used.iter().any(|m| range(m).0 <= MIRROR_ROUGHNESS);
         let glossy = used.iter().any(|m| range(m).1 > MIRROR_ROUGHNESS && range(m).0 <= GLOSSY_ROUGHNESS);
+        let env = &scene.environment;
+        let env_lit = env.intensity > 0.0 && (env.map.is_some() || env.color.max_element() > 0.0);
         SceneNeeds {
             shadows: any_occluder && scene.lights.iter().any(|l| l.casts_shadows && light_is_on(l)),
+            ambient_occluders: any_occluder
+                && (env_lit
+                    || scene.lights.iter().any(light_is_on)
+                    || used.iter().any(|&m| scene.materials[m].emissive.iter().any(|c| *c > 0.0))),
+            scene_ambient: AmbientMode::of_scene(env),
             reflections: mirrors || glossy,
             mirrors,
             glossy,
@@ -174,6 +186,9 @@ pub struct ShadingConfig {
     /// RenderSettings::glossy_temporal: the `glossy temporal` pass and the history exist (the viewer);
     /// without it the filter reads the frame's sample itself.
     pub glossy_temporal: bool,
+    /// `--ambient traced` where the environment lights the scene and something occludes it (not in a
+    /// debug view, not beside the reference, which replaces the ambient): passes `ao` and `ao filter`.
+    pub ambient_visibility: bool,
 }
 
 impl ShadingConfig {
@@ -207,9 +222,14 @@ impl ShadingConfig {
             bail!("the attribution terms replace neither the ambient reference nor a debug view");
         }
         let terms = settings.terms != 0;
+        let ambient_visibility = AmbientMode::pick(settings, needs.scene_ambient) == AmbientMode::Traced
+            && needs.ambient_occluders
+            && !debug_view
+            && !reference;
         use crate::render::settings::PrimaryVisibility as Pv;
         let visibility = if mode == Mode::Hybrid { settings.primary_visibility } else { Pv::Raster };
         let traces = mode == Mode::Rt
+            || ambient_visibility
             || visibility != Pv::Raster
             || reference
             || terms
@@ -251,6 +271,7 @@ impl ShadingConfig {
                 && mode == Mode::Hybrid
                 && visibility != Pv::Traced,
             glossy_temporal: settings.glossy_temporal,
+            ambient_visibility,
         })
     }
 
@@ -282,6 +303,7 @@ impl ShadingConfig {
             visibility: crate::render::settings::PrimaryVisibility::Raster,
             occlusion: false,
             glossy_temporal: false,
+            ambient_visibility: false,
         })
     }
 
@@ -335,6 +357,7 @@ impl ShadingConfig {
             if on.is_empty() { "none".to_string() } else { on.join(", ") },
             if self.budget { " (per-object budget)" } else { "" }
         ) + if self.reference { ", ray-traced ambient reference" } else { "" }
+            + if self.ambient_visibility { ", traced ambient visibility" } else { "" }
             + if self.terms { ", path-traced attribution terms" } else { "" }
             + match (self.mode, self.visibility) {
                 (Mode::Rt | Mode::Path, _) => "",
@@ -359,6 +382,8 @@ mod tests {
             glossy: false,
             refractions: false,
             shadow_maps: false,
+            ambient_occluders: false,
+            scene_ambient: None,
             largest_primitive_triangles: triangles,
             instances,
         }

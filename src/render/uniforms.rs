@@ -9,8 +9,10 @@ use super::settings::RenderSettings;
 use super::shading::Mode;
 use super::tone::{ToneOperator, ToneSettings};
 use crate::gpu::shared::{
-    FRAME_AMBIENT_PRT, FRAME_AMBIENT_SH, FRAME_COUNT_RAYS, FRAME_GLOSSY_HISTORY, FRAME_GLOSSY_TEMPORAL,
-    FRAME_OPAQUE_OCCLUDERS, SH_IRRADIANCE_COEFFS, SH_PRT_MAX_COEFFS,
+    FRAME_AMBIENT_PRT, FRAME_AMBIENT_SH, FRAME_AO_BOUNCE_EMISSION, FRAME_AO_BOUNCE_LIGHTS,
+    FRAME_AO_BOUNCE_SKY, FRAME_AO_SKY, FRAME_COUNT_RAYS, FRAME_GLOSSY_HISTORY, FRAME_GLOSSY_TEMPORAL,
+    FRAME_OPAQUE_OCCLUDERS, SH_IRRADIANCE_COEFFS, SH_PRT_MAX_COEFFS, TERM_EMITTERS, TERM_INDIRECT,
+    TERM_VISIBILITY,
 };
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
@@ -54,6 +56,21 @@ pub fn frame(i: &Inputs, settings: &RenderSettings, accumulation: &mut Accumulat
     }
     if settings.effects.count_rays {
         flags |= FRAME_COUNT_RAYS;
+    }
+    // The attribution's terms (report/attribution.rs) stand in for the parts of the traced ambient they
+    // cover: the environment's light (visibility), the hits' direct light (indirect), their emission.
+    let supplied = |term: u32| settings.terms & term != 0;
+    if !supplied(TERM_VISIBILITY) {
+        flags |= FRAME_AO_SKY;
+    }
+    if settings.ambient_bounce && !supplied(TERM_INDIRECT) {
+        flags |= FRAME_AO_BOUNCE_LIGHTS;
+    }
+    if settings.ambient_bounce && !supplied(TERM_EMITTERS) {
+        flags |= FRAME_AO_BOUNCE_EMISSION;
+    }
+    if settings.ambient_bounce {
+        flags |= FRAME_AO_BOUNCE_SKY;
     }
     let (prev_view_proj, prev_camera_pos) = match i.prev_camera.filter(|_| settings.glossy_temporal) {
         Some((vp, pos)) => {

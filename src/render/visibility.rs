@@ -273,6 +273,8 @@ mod tests {
             glossy: false,
             refractions: false,
             shadow_maps: false,
+            ambient_occluders: false,
+            scene_ambient: None,
             largest_primitive_triangles: 1,
             instances: 1,
         };
@@ -293,6 +295,7 @@ mod tests {
             visibility: PrimaryVisibility::Auto,
             occlusion: false,
             glossy_temporal: false,
+            ambient_visibility: false,
         }
     }
 

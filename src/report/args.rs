@@ -76,7 +76,7 @@ impl Common {
 pub struct KnobArgs {
     /// Knobs to sweep, comma-separated, each optionally with its values
     /// after '=' separated by ':' (e.g. "max-depth=0:2:8,mode"); knobs:
-    /// max-depth, min-weight, effects, mode, backend, aa, accel-update
+    /// max-depth, min-weight, effects, ambient, mode, backend, aa, accel-update
     /// (animated scenes: with --animation, frames --fps apart), budget
     /// (share of the cost of tracing everything), resolution-scale.
     /// Default: all, with their full value lists.

@@ -27,11 +27,27 @@ pub const TERMS: [Term; 5] = [
     Term {
         bit: TERM_ENV_SPECULAR,
         name: "environment specular",
-        hybrid: "the split-sum prefiltered environment, unshadowed (mirrors: traced)",
+        hybrid:
+            "the split-sum prefiltered environment (--ambient traced: times the specular occlusion of its \
+                 visibility where no glossy ray corrects it; mirrors: traced)",
     },
-    Term { bit: TERM_VISIBILITY, name: "diffuse visibility", hybrid: "the unshadowed SH (or PRT) ambient" },
-    Term { bit: TERM_INDIRECT, name: "one indirect bounce", hybrid: "none" },
-    Term { bit: TERM_EMITTERS, name: "emissive surfaces", hybrid: "none (emission is only seen)" },
+    Term {
+        bit: TERM_VISIBILITY,
+        name: "diffuse visibility",
+        hybrid:
+            "--ambient traced: the SH ambient times the traced visible share; else the unshadowed SH (or \
+                 PRT) ambient",
+    },
+    Term {
+        bit: TERM_INDIRECT,
+        name: "one indirect bounce",
+        hybrid: "--ambient traced: its rays' hits lit by the punctual lights; else none",
+    },
+    Term {
+        bit: TERM_EMITTERS,
+        name: "emissive surfaces",
+        hybrid: "--ambient traced: its rays' hits' emission; else none (emission is only seen)",
+    },
     Term {
         bit: TERM_CAUSTICS,
         name: "caustics",

@@ -6,7 +6,7 @@ use anyhow::{bail, Context as _, Result};
 
 use crate::app::AccelUpdate;
 use crate::render::shading::{AaMode, Backend, Mode};
-use crate::render::RenderSettings;
+use crate::render::{AmbientMode, RenderSettings};
 
 /// What one measured setting renders: the frame settings and the
 /// resolution scale (the frame is rendered at the scaled size and
@@ -88,6 +88,25 @@ pub const KNOBS: &[Knob] = &[
                 "+refractions" => (true, true, true),
                 _ => bail!("effects '{s}': expected none, shadows, +reflections or +refractions"),
             };
+            Ok(())
+        },
+        skip_unavailable: false,
+    },
+    Knob {
+        name: "ambient",
+        about: "the diffuse ambient: traced (SH shadowed by traced visibility, plus the one indirect bounce), \
+                visibility (traced without the bounce: --no-indirect), sh (unshadowed) or constant (the \
+                map's mean); the --prt report sweeps the PRT transfers",
+        values: &["traced", "visibility", "sh", "constant"],
+        apply: |v, s| {
+            (v.settings.ambient, v.settings.ambient_bounce) = match s {
+                "traced" => (AmbientMode::Traced, true),
+                "visibility" => (AmbientMode::Traced, false),
+                "sh" => (AmbientMode::Sh, true),
+                "constant" => (AmbientMode::Constant, true),
+                _ => bail!("ambient '{s}': expected traced, visibility, sh or constant"),
+            };
+            v.settings.ambient_from_scene = false;
             Ok(())
         },
         skip_unavailable: false,

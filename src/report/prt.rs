@@ -88,8 +88,9 @@ fn parse_projection(s: &str) -> Result<EnvProjection> {
 
 /// A transfer name: the ambient mode and, for interreflected, its bounces.
 fn parse_transfer(s: &str) -> Result<(AmbientMode, Option<u32>)> {
-    let expected = "expected sh, prt-unshadowed, prt-shadowed or prt-interreflected-K (K = 1..=16)";
+    let expected = "expected traced, sh, prt-unshadowed, prt-shadowed or prt-interreflected-K (K = 1..=16)";
     Ok(match s {
+        "traced" => (AmbientMode::Traced, None),
         "sh" => (AmbientMode::Sh, None),
         "prt-unshadowed" => (AmbientMode::PrtUnshadowed, None),
         "prt-shadowed" => (AmbientMode::PrtShadowed, None),
@@ -270,6 +271,7 @@ fn plan(opts: &PrtReportOptions, base: &Variant) -> Result<Plan> {
 /// The transfer knob's name of the settings' ambient.
 fn transfer_name(s: &RenderSettings) -> String {
     match s.ambient {
+        AmbientMode::Traced => "traced".into(),
         AmbientMode::Sh => "sh".into(),
         AmbientMode::Constant => "constant".into(),
         AmbientMode::PrtUnshadowed => "prt-unshadowed".into(),
@@ -513,7 +515,7 @@ mod tests {
             ("sh-samples", "0", "sh-samples '0'"),
             ("sh-samples", "exactly", "expected exact or N"),
             ("transfer", "prt-interreflected-0", "transfer 'prt-interreflected-0'"),
-            ("transfer", "shadowed", "expected sh, prt-unshadowed"),
+            ("transfer", "shadowed", "expected traced, sh, prt-unshadowed"),
         ] {
             let e = format!("{:#}", applied(k, bad).unwrap_err());
             assert!(e.contains(says), "{k} {bad}: {e}");

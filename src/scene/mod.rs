@@ -20,8 +20,8 @@ pub mod tangents;
 
 /// The ambient modes' names (`--ambient`, the scene file's
 /// `[environment] ambient`; render::AmbientMode checks it has the same).
-pub const AMBIENT_NAMES: [&str; 5] =
-    ["sh", "constant", "prt-unshadowed", "prt-shadowed", "prt-interreflected"];
+pub const AMBIENT_NAMES: [&str; 6] =
+    ["traced", "sh", "constant", "prt-unshadowed", "prt-shadowed", "prt-interreflected"];
 
 use std::path::{Path, PathBuf};
 

@@ -18,7 +18,7 @@ use hybrid_rt::image_diff::diff_stats;
 use hybrid_rt::render::budget::effects::{selection_word, traced_fraction};
 use hybrid_rt::render::budget::{BudgetMode, BudgetSettings, Fallback};
 use hybrid_rt::render::shading::{AaMode, Effects};
-use hybrid_rt::render::{RenderSettings, Renderer};
+use hybrid_rt::render::{AmbientMode, RenderSettings, Renderer};
 use hybrid_rt::scene::{Camera, Scene};
 
 const W: u32 = 96;
@@ -36,7 +36,8 @@ fn default_scene() -> Scene {
 fn zero_budget_is_raster_only_and_unlimited_is_full_hybrid_on_every_backend() {
     let scene = default_scene();
     for backend in BACKENDS {
-        let full = RenderSettings { backend, ..Default::default() };
+        // Under a budget the ambient is SH (AmbientMode::pick): so are the frames it is compared with.
+        let full = RenderSettings { backend, ambient: AmbientMode::Sh, ..Default::default() };
         let none = Effects { shadows: false, reflections: false, refractions: false, ..full.effects };
         let raster = common::render_scene(&scene, W, H, &RenderSettings { effects: none, ..full });
         let hybrid = common::render_scene(&scene, W, H, &full);
@@ -81,7 +82,8 @@ fn each_effect_bit_gates_exactly_its_effect() {
     let b = BudgetSettings { fallback: Fallback::None, ..BudgetSettings::effects(f64::INFINITY) };
     let mut r = Renderer::new(&ctx, &scene, ash::vk::Extent2D { width: W, height: H }).unwrap();
     let none = Effects { shadows: false, reflections: false, refractions: false, ..Effects::default() };
-    let with = |effects: Effects| RenderSettings { effects, ..Default::default() };
+    // Under a budget the ambient is SH (AmbientMode::pick): so are the frames it is compared with.
+    let with = |effects: Effects| RenderSettings { effects, ambient: AmbientMode::Sh, ..Default::default() };
     let untraced = r.render(&ctx, &scene, &camera, &with(none)).unwrap();
     let cases = [
         (EFFECT_BIT_SHADOWS, "shadows", Effects { shadows: true, ..none }),

@@ -12,7 +12,7 @@ use common::toml::*;
 use hybrid_rt::image_diff::diff_stats;
 use hybrid_rt::render::budget::{BudgetSettings, Fallback};
 use hybrid_rt::render::shading::Effects;
-use hybrid_rt::render::{RenderSettings, Renderer};
+use hybrid_rt::render::{AmbientMode, RenderSettings, Renderer};
 
 const W: u32 = 96;
 const H: u32 = 54;
@@ -42,7 +42,7 @@ fn mirror_sphere_scene() -> String {
 fn a_mirror_left_out_reflects_the_sky_as_the_traced_one_does_on_every_backend() {
     let scene = common::scene_from_toml("fallback_mirror_sphere", &mirror_sphere_scene());
     for backend in common::BACKENDS {
-        let full = RenderSettings { backend, ..Default::default() };
+        let full = RenderSettings { backend, ambient: AmbientMode::Sh, ..Default::default() };
         let traced = common::render_scene(&scene, W, H, &full);
         let modes = [BudgetSettings::paper(0.0), BudgetSettings::effects(0.0)];
         for base in modes {
@@ -146,7 +146,7 @@ fn a_shadow_left_out_falls_back_to_a_shadow_map_matching_the_traced_one() {
     let cases =
         common::BACKENDS.map(|b| (b, &sun, "sun")).into_iter().chain([(common::BACKENDS[2], &spot, "spot")]);
     for (backend, scene, light) in cases {
-        let full = RenderSettings { backend, ..Default::default() };
+        let full = RenderSettings { backend, ambient: AmbientMode::Sh, ..Default::default() };
         let with =
             |fallback| RenderSettings { budget: zero_budget(BudgetSettings::paper(0.0), fallback), ..full };
         let flat = RenderSettings { effects: Effects { shadows: false, ..full.effects }, ..full };
@@ -179,7 +179,8 @@ fn a_shadow_left_out_falls_back_to_a_shadow_map_matching_the_traced_one() {
 fn point_lights_stay_unshadowed_in_the_fallback() {
     let lamp = point([0.5, 3.0, 0.5], 30.0);
     let scene = common::scene_from_toml("fallback_point_shadow", &sphere_over_ground(lamp));
-    let full = RenderSettings { backend: common::BACKENDS[2], ..Default::default() };
+    let full =
+        RenderSettings { backend: common::BACKENDS[2], ambient: AmbientMode::Sh, ..Default::default() };
     let with_raster =
         RenderSettings { budget: zero_budget(BudgetSettings::paper(0.0), Fallback::Raster), ..full };
     let flat = RenderSettings { effects: Effects { shadows: false, ..full.effects }, ..full };

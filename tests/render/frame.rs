@@ -6,7 +6,7 @@ use crate::common;
 
 use hybrid_rt::render::settings::PrimaryVisibility;
 use hybrid_rt::render::shading::{AaMode, Backend, Mode};
-use hybrid_rt::render::{DebugView, RenderSettings, Renderer};
+use hybrid_rt::render::{AmbientMode, DebugView, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
 
 use common::toml::*;
@@ -43,6 +43,8 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
                 "gbuffer",
                 "gbuffer resolve",
                 "direct",
+                "ao",
+                "ao filter",
                 "specular",
                 "glossy",
                 "glossy filter",
@@ -59,7 +61,18 @@ fn every_backend_and_mode_records_the_stages_clean_under_sync_validation() {
         let (p, targets) = frame_of(&ctx, &scene, &rt);
         assert_eq!(
             p,
-            ["primary", "direct", "specular", "glossy", "glossy filter", "composite", "tonemap", "edge aa"],
+            [
+                "primary",
+                "direct",
+                "ao",
+                "ao filter",
+                "specular",
+                "glossy",
+                "glossy filter",
+                "composite",
+                "tonemap",
+                "edge aa"
+            ],
             "{backend:?} rt"
         );
         // Pure RT differs only in how the primary hits are found (raster
@@ -102,9 +115,33 @@ fn passes_and_targets_a_scene_does_not_need_are_left_out() {
             plane("floor", 10.0).at([0.0, -1.0, 0.0]).material("clay"),
         ]),
     );
-    let (passes, targets) = frame_of(&ctx, &plain, &RenderSettings::default());
+    let sh = RenderSettings { ambient: AmbientMode::Sh, ..Default::default() };
+    let (passes, targets) = frame_of(&ctx, &plain, &sh);
     assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap", "edge aa"]);
     assert!(!targets.contains(&"specular chain") && !targets.contains(&"work list"), "{targets:?}");
+    // The ball hides part of the sky from the floor: the traced ambient (the default) has something to
+    // trace; under a black sky with no light to bounce it has not.
+    let (passes, targets) = frame_of(&ctx, &plain, &RenderSettings::default());
+    let traced =
+        ["gbuffer", "gbuffer resolve", "direct", "ao", "ao filter", "composite", "tonemap", "edge aa"];
+    assert_eq!(passes, traced);
+    assert!(
+        targets.contains(&"ambient visibility") && targets.contains(&"ambient bounce sample"),
+        "{targets:?}"
+    );
+    let dark = common::scene_from_toml(
+        "frame_dark",
+        &scene_toml([
+            black_sky(),
+            camera([0.0, 2.0, 5.0], [0.0; 3]),
+            no_light(),
+            clay().roughness(0.9),
+            primitive("ball", "sphere").material("clay"),
+            plane("floor", 10.0).at([0.0, -1.0, 0.0]).material("clay"),
+        ]),
+    );
+    let (passes, _) = frame_of(&ctx, &dark, &RenderSettings::default());
+    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap", "edge aa"]);
 
     // Glossy but nothing mirrors or transmits: glossy reflections without the specular chain (and the
     // filter reads no chain); a mirror alone: the chain without the glossy passes.
@@ -124,6 +161,8 @@ fn passes_and_targets_a_scene_does_not_need_are_left_out() {
         "gbuffer",
         "gbuffer resolve",
         "direct",
+        "ao",
+        "ao filter",
         "glossy",
         "glossy filter",
         "composite",
@@ -138,13 +177,23 @@ fn passes_and_targets_a_scene_does_not_need_are_left_out() {
     let temporal = RenderSettings { glossy_temporal: true, ..Default::default() };
     let (passes, targets) = frame_of(&ctx, &one("frame_glossy_temporal", 0.3), &temporal);
     let mut with_history = glossy.to_vec();
-    with_history.insert(4, "glossy temporal");
+    with_history.insert(6, "glossy temporal");
     assert_eq!(passes, with_history);
     assert!(targets.contains(&"glossy history") && targets.contains(&"glossy blend"), "{targets:?}");
     let (passes, targets) = frame_of(&ctx, &one("frame_mirror", 0.05), &RenderSettings::default());
     assert_eq!(
         passes,
-        ["gbuffer", "gbuffer resolve", "direct", "specular", "composite", "tonemap", "edge aa"]
+        [
+            "gbuffer",
+            "gbuffer resolve",
+            "direct",
+            "ao",
+            "ao filter",
+            "specular",
+            "composite",
+            "tonemap",
+            "edge aa"
+        ]
     );
     assert!(
         !["glossy sample", "glossy history", "glossy blend", "reflected radiance"]
@@ -159,17 +208,20 @@ fn passes_and_targets_a_scene_does_not_need_are_left_out() {
     s.effects.reflections = false;
     s.effects.refractions = false;
     let (passes, targets) = frame_of(&ctx, &scene, &s);
-    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap", "edge aa"]);
+    assert_eq!(passes, traced);
     assert!(!targets.contains(&"specular chain") && !targets.contains(&"work list"), "{targets:?}");
 
     // --aa none: tone mapping's image is the result, no AA target; fxaa
     // instead of the edge filter.
     let none = RenderSettings { aa: AaMode::None, ..s };
     let (passes, targets) = frame_of(&ctx, &scene, &none);
-    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap"]);
+    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "ao", "ao filter", "composite", "tonemap"]);
     assert!(!targets.contains(&"anti-aliased output"), "{targets:?}");
     let (passes, _) = frame_of(&ctx, &scene, &RenderSettings { aa: AaMode::Fxaa, ..s });
-    assert_eq!(passes, ["gbuffer", "gbuffer resolve", "direct", "composite", "tonemap", "fxaa"]);
+    assert_eq!(
+        passes,
+        ["gbuffer", "gbuffer resolve", "direct", "ao", "ao filter", "composite", "tonemap", "fxaa"]
+    );
 
     // A debug view shows the G-buffer: no light pass at all, and unfiltered.
     let debug = RenderSettings { debug_view: DebugView::Normal, ..Default::default() };

@@ -8,6 +8,7 @@
 mod common;
 
 mod alpha_lod;
+mod ambient_visibility;
 mod analytic_lighting;
 mod animation;
 mod antialias;

@@ -16,7 +16,7 @@ use common::toml::*;
 use common::BACKENDS;
 use hybrid_rt::render::settings::PrimaryVisibility;
 use hybrid_rt::render::shading::{AaMode, Backend};
-use hybrid_rt::render::{FrameOutput, RenderSettings, Renderer};
+use hybrid_rt::render::{AmbientMode, FrameOutput, RenderSettings, Renderer};
 use hybrid_rt::scene::Scene;
 
 const W: u32 = 160;
@@ -31,8 +31,14 @@ fn same(a: f32, b: f32) -> bool {
 
 /// Renders `scene` hybrid with `visibility`; checks which visibility pass ran.
 fn render(scene: &Scene, backend: Backend, visibility: PrimaryVisibility) -> FrameOutput {
-    let settings =
-        RenderSettings { backend, aa: AaMode::None, primary_visibility: visibility, ..Default::default() };
+    // The SH ambient: the traced one's filter spreads a pixel that hit another triangle over its window.
+    let settings = RenderSettings {
+        backend,
+        aa: AaMode::None,
+        primary_visibility: visibility,
+        ambient: AmbientMode::Sh,
+        ..Default::default()
+    };
     let out = common::render_scene(scene, W, H, &settings);
     let ran = |p: &str| out.timings.iter().any(|(n, _)| *n == p);
     let (raster, traced) = (ran("gbuffer"), ran("visibility trace"));

@@ -32,9 +32,15 @@ use glam::Vec3;
 use hybrid_rt::app::EnvOverrides;
 use hybrid_rt::gpu::shared::{TERMS_SAMPLES_PER_FRAME, TERM_CAUSTICS, TERM_ENV_SPECULAR, TERM_VISIBILITY};
 use hybrid_rt::render::shading::Backend;
-use hybrid_rt::render::{DebugView, FrameOutput, RenderSettings};
+use hybrid_rt::render::{AmbientMode, DebugView, FrameOutput, RenderSettings};
 use hybrid_rt::report::attribution::all_terms;
 use hybrid_rt::scene::{Camera, EnvLayout, Scene};
+
+/// The hybrid frame these closed forms are about: the unshadowed SH ambient (the traced one's own checks
+/// are tests/render/ambient_visibility.rs).
+fn sh() -> RenderSettings {
+    RenderSettings { ambient: AmbientMode::Sh, ..Default::default() }
+}
 
 const L: f32 = 0.5;
 
@@ -65,7 +71,7 @@ fn with_terms(
     samples: u32,
     backend: Backend,
 ) -> FrameOutput {
-    let settings = RenderSettings { terms, backend, ..Default::default() };
+    let settings = RenderSettings { terms, backend, ..sh() };
     b.renderer.reset_reference();
     let frames = samples.div_ceil(TERMS_SAMPLES_PER_FRAME);
     let mut out = None;
@@ -88,7 +94,7 @@ fn visibility_term_matches_the_analytic_occlusion() {
     let scene = scene("attribution_visibility", "black", 0.0, L);
     let cam = scene.cameras[0].clone();
     let mut b = Bench::new(&scene, w, h);
-    let hybrid = b.frame(&scene, &cam, &RenderSettings::default());
+    let hybrid = b.frame(&scene, &cam, &sh());
     // Leave-out: without terms no pass and no accumulation target.
     assert!(!b.renderer.pass_names().contains(&"terms"), "{:?}", b.renderer.pass_names());
     assert!(b.renderer.targets().describe().iter().all(|(n, _)| !n.contains("terms")));
@@ -147,7 +153,7 @@ fn caustics_term_removes_sunlight_straight_through_glass_on_every_backend() {
     assert!(pixels.len() >= 10, "only {} floor pixels under the sphere", pixels.len());
     let mut means = Vec::new();
     for backend in common::BACKENDS {
-        let hybrid = b.frame(&scene, &cam, &RenderSettings { backend, ..Default::default() });
+        let hybrid = b.frame(&scene, &cam, &RenderSettings { backend, ..sh() });
         let lit: f64 =
             pixels.iter().map(|(i, _)| hybrid.hdr[i * 4] as f64).sum::<f64>() / pixels.len() as f64;
         // The sun at 3 on a 0.8 Lambert floor, straight through the glass.
@@ -210,7 +216,7 @@ fn env_specular_matches_the_path_traced_lobe_on_rough_metals() {
         let mut b = Bench::new(&scene, w, h);
         // The split sum alone: the glossy pass (gold is in its range) corrects it where the lobe meets
         // geometry, and the attribution measures the frame without that correction.
-        let mut split_sum = RenderSettings::default();
+        let mut split_sum = sh();
         split_sum.effects.reflections = false;
         let hybrid = b.frame(&scene, &cam, &split_sum);
         let truth = with_terms(&mut b, &scene, &cam, TERM_ENV_SPECULAR, 256, Backend::Auto);

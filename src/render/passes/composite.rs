@@ -1,12 +1,14 @@
-//! Pass `composite`: emission + direct light + ambient environment light +
-//! the specular chain at the primary hit, the environment where the camera
+//! Pass `composite`: emission + direct light + ambient environment light (scaled by the traced
+//! visibility where `ao filter` runs) + the specular chain at the primary hit, the environment where the camera
 //! ray missed (glsl/composite.comp); or, in a debug view, the G-buffer view.
 
 use ash::vk;
 
 use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
-use super::{direct, gbuffer, glossy_filter, reference, specular, terms, Creation, PassDesc, Upstream};
-use crate::gpu::shared::{DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN, TERMS_IN};
+use super::{
+    ao_filter, direct, gbuffer, glossy_filter, reference, specular, terms, Creation, PassDesc, Upstream,
+};
+use crate::gpu::shared::{AO_VISIBILITY_IN, DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN, TERMS_IN};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
 use crate::render::targets::TargetDesc;
@@ -21,6 +23,7 @@ struct Inputs {
     specular: Option<&'static TargetDesc>,
     reference: Option<&'static TargetDesc>,
     terms: Option<&'static TargetDesc>,
+    visibility: Option<&'static TargetDesc>,
 }
 
 impl Inputs {
@@ -30,6 +33,7 @@ impl Inputs {
             specular: up.get(&glossy_filter::REFLECTED).or(up.get(&specular::SPECULAR)),
             reference: up.get(&reference::ACCUMULATION),
             terms: up.get(&terms::ACCUMULATION),
+            visibility: up.get(&ao_filter::VISIBILITY),
         }
     }
 }
@@ -39,9 +43,12 @@ fn io(c: &ShadingConfig, inputs: &Inputs) -> Vec<TargetBinding> {
     if !c.debug_view {
         io.push(TargetBinding::new(DIRECT_IN, &direct::DIRECT, Access::StorageRead));
     }
-    for (binding, input) in
-        [(SPECULAR_IN, inputs.specular), (REFERENCE_IN, inputs.reference), (TERMS_IN, inputs.terms)]
-    {
+    for (binding, input) in [
+        (SPECULAR_IN, inputs.specular),
+        (REFERENCE_IN, inputs.reference),
+        (TERMS_IN, inputs.terms),
+        (AO_VISIBILITY_IN, inputs.visibility),
+    ] {
         if let Some(t) = input {
             io.push(TargetBinding::new(binding, t, Access::StorageRead));
         }
@@ -53,17 +60,25 @@ fn io(c: &ShadingConfig, inputs: &Inputs) -> Vec<TargetBinding> {
 /// The shader variant that reads exactly the inputs there are.
 fn shader(c: &ShadingConfig, inputs: &Inputs) -> &'static str {
     // (ShadingConfig::resolve allows terms neither beside the reference
-    // nor in a debug view.)
-    let (specular, reference, terms) =
-        (inputs.specular.is_some(), inputs.reference.is_some(), inputs.terms.is_some());
-    match (c.debug_view, specular, reference, terms) {
+    // nor in a debug view, and the visibility not beside the reference.)
+    let (specular, reference, terms, ao) = (
+        inputs.specular.is_some(),
+        inputs.reference.is_some(),
+        inputs.terms.is_some(),
+        inputs.visibility.is_some(),
+    );
+    match (c.debug_view, specular, reference, terms, ao) {
         (true, ..) => "composite_debug",
-        (false, true, true, _) => "composite_specular_reference",
-        (false, true, false, true) => "composite_specular_terms",
-        (false, true, false, false) => "composite_specular",
-        (false, false, true, _) => "composite_reference",
-        (false, false, false, true) => "composite_terms",
-        (false, false, false, false) => "composite.comp",
+        (false, true, true, ..) => "composite_specular_reference",
+        (false, true, false, true, true) => "composite_specular_terms_ao",
+        (false, true, false, true, false) => "composite_specular_terms",
+        (false, true, false, false, true) => "composite_specular_ao",
+        (false, true, false, false, false) => "composite_specular",
+        (false, false, true, ..) => "composite_reference",
+        (false, false, false, true, true) => "composite_terms_ao",
+        (false, false, false, true, false) => "composite_terms",
+        (false, false, false, false, true) => "composite_ao",
+        (false, false, false, false, false) => "composite.comp",
     }
 }
 

@@ -3,6 +3,8 @@
 //! line in `FRAME`.
 
 pub mod antialias;
+pub mod ao;
+pub mod ao_filter;
 pub mod compacted;
 pub mod composite;
 pub mod direct;
@@ -40,7 +42,8 @@ use crate::vk::Context;
 use inject::Injected;
 
 /// The frame (DESIGN.md's data flow): primary hits (raster or traced visibility + resolve, or camera
-/// rays) -> budget statistics -> fallback shadow maps -> direct -> ambient reference -> attribution
+/// rays) -> budget statistics -> fallback shadow maps -> direct -> ambient visibility and its filter ->
+/// ambient reference -> attribution
 /// terms -> specular chain -> glossy reflections, their history and filter -> composite -> luminance -> tone map -> anti-aliasing (at most one). The
 /// scene update (skinning, refit, top level) is recorded before it by `Renderer` and the tracer.
 pub const FRAME: &[PassDesc] = &[
@@ -51,6 +54,8 @@ pub const FRAME: &[PassDesc] = &[
     heuristic::PASS,
     shadow_map::PASS,
     direct::PASS,
+    ao::PASS,
+    ao_filter::PASS,
     reference::PASS,
     terms::PASS,
     specular::PASS,

@@ -1,6 +1,6 @@
 //! Pass `terms` (report/attribution.rs): per pixel, the path-traced estimate of the selected terms the
-//! hybrid approximates or leaves out (`TERM_*`) minus what the hybrid shades for them, accumulated into
-//! a target `composite` adds (glsl/passes/terms.glsl). Only with `RenderSettings::terms`; never in a
+//! hybrid approximates or leaves out (`TERM_*`), accumulated into a target `composite` adds in place of
+//! its own shading of those terms (glsl/passes/terms.glsl). Only with `RenderSettings::terms`; never in a
 //! debug view or beside the ambient reference.
 
 use ash::vk;
@@ -13,7 +13,7 @@ use crate::render::shading::ShadingConfig;
 use crate::render::targets::TargetDesc;
 use crate::vk::pipeline::Specialization;
 
-/// Per pixel the sum of the samples' differences (rgb) and their count
+/// Per pixel the sum of the samples (rgb) and their count
 /// (a), kept from frame to frame.
 pub static ACCUMULATION: TargetDesc = TargetDesc::kept("terms accumulation", vk::Format::R32G32B32A32_SFLOAT);
 

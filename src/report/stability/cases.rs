@@ -190,8 +190,11 @@ fn glass(ior: f32) -> Material {
 
 /// Materials that can be glossy (render/shading.rs) made rough past GLOSSY_ROUGHNESS, their roughness
 /// textures dropped: the image then has no glossy lobe a glass sphere could hide.
+/// Also the unshadowed SH ambient (unless the command line names one): the traced ambient, like the
+/// glossy lobes, is traced at primary hits only, so a surface seen through glass keeps the SH ambient.
 fn rough_glossy(s: &mut Scene) {
     use crate::render::shading::{GLOSSY_ROUGHNESS, MIRROR_ROUGHNESS};
+    s.environment.ambient = Some("sh".into());
     for m in &mut s.materials {
         let (low, high) = m.roughness_range();
         if high > MIRROR_ROUGHNESS && low <= GLOSSY_ROUGHNESS {
@@ -332,9 +335,9 @@ fn make(name: &'static str, base: &Scene, cam: &Camera, dir: &Path) -> Result<Ca
         }
         "origin-rough" => {
             rough_glossy(&mut s);
-            let about = "the scene with its glossy materials made rough (canonical of the glass spheres: glossy \
-                         lobes are traced from primary hits only, so a glossy surface seen through glass keeps \
-                         the split sum)";
+            let about = "the scene with its glossy materials made rough and the SH ambient (canonical of the \
+                         glass spheres: glossy lobes and the traced ambient are traced from primary hits only, \
+                         so a surface seen through glass keeps the split sum and the SH ambient)";
             psnr(case(name, about.into(), s, cam.clone(), Against::Rt), MODE_PSNR)
         }
         n if n.starts_with("ior-") => {

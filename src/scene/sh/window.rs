@@ -64,6 +64,17 @@ impl ShCoeffs {
         }
         out
     }
+
+    /// Undoes `windowed(w)`: bands the window zeroed stay zero.
+    pub fn unwindowed(&self, w: Window) -> ShCoeffs {
+        let mut out = self.clone();
+        for (i, c) in out.rgb.iter_mut().enumerate() {
+            let f = w.factor(band_of(i), self.bands);
+            let inv = if f > 0.0 { 1.0 / f } else { 0.0 };
+            c.iter_mut().for_each(|v| *v *= inv);
+        }
+        out
+    }
 }
 
 #[cfg(test)]
