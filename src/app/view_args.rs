@@ -40,9 +40,11 @@ pub struct ViewArgs {
     #[arg(long, value_parser = parse_fov, allow_hyphen_values = true)]
     pub fov: Option<f32>,
     /// Exposure multiplier before tone mapping (finite, > 0); with
-    /// --auto-exposure, a compensation on the measured exposure.
-    #[arg(long, default_value_t = 1.0, value_parser = parse_exposure, allow_hyphen_values = true)]
-    pub exposure: f32,
+    /// --auto-exposure, a compensation on the measured exposure. With
+    /// neither, the scene file's `[environment] exposure` applies, and a
+    /// scene without one is auto-exposed (histogram) [default: 1].
+    #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true)]
+    pub exposure: Option<f32>,
     #[command(flatten)]
     pub tone: ToneArgs,
     /// Show a G-buffer target instead of the lit image.
@@ -116,9 +118,10 @@ pub struct ToneArgs {
     /// Exposure from the frame's luminance: off (fixed --exposure),
     /// log-average (Reinhard's key / log-average), histogram (percentile-clipped
     /// log-luminance histogram). Still frames converge at once; bench and
-    /// view adapt over time.
-    #[arg(long, value_enum, default_value_t = AutoExposure::Off)]
-    pub auto_exposure: AutoExposure,
+    /// view adapt over time [default: off with --exposure; else the scene
+    /// file's `exposure`, histogram where it has none].
+    #[arg(long, value_enum)]
+    pub auto_exposure: Option<AutoExposure>,
     /// Key: the exposed luminance the frame's average maps to (finite, > 0),
     /// with --auto-exposure [default: 0.18].
     #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true)]
@@ -145,7 +148,7 @@ impl ToneArgs {
         let (speed_brighten, speed_darken) = self.adapt_speed.unwrap_or((d.speed_brighten, d.speed_darken));
         ToneSettings {
             operator: self.tonemap,
-            auto_exposure: self.auto_exposure,
+            auto_exposure: self.auto_exposure.unwrap_or(AutoExposure::Off),
             key: self.key.unwrap_or(d.key),
             white: self.white_point,
             histogram_low,
@@ -157,14 +160,17 @@ impl ToneArgs {
 
     /// A tone option the chosen operator or exposure mode does not read.
     pub fn without_effect(&self) -> Option<&'static str> {
-        let histogram = self.auto_exposure == AutoExposure::Histogram;
-        if self.key.is_some() && self.auto_exposure == AutoExposure::Off {
+        let histogram = self.auto_exposure == Some(AutoExposure::Histogram);
+        if self.key.is_some() && self.auto_exposure == Some(AutoExposure::Off) {
             return Some("--key has no effect without --auto-exposure (the fixed --exposure applies)");
         }
         if self.white_point.is_some() && self.tonemap != ToneOperator::ReinhardWhite {
             return Some("--white-point has no effect without --tonemap reinhard-white");
         }
-        if (self.histogram_clip.is_some() || self.adapt_speed.is_some()) && !histogram {
+        if (self.histogram_clip.is_some() || self.adapt_speed.is_some())
+            && self.auto_exposure.is_some()
+            && !histogram
+        {
             return Some(
                 "--histogram-clip and --adapt-speed have no effect without --auto-exposure histogram",
             );
@@ -247,8 +253,9 @@ impl ViewArgs {
             height: self.height,
             camera,
             settings: RenderSettings {
-                exposure: self.exposure,
+                exposure: self.exposure.unwrap_or(1.0),
                 tone: self.tone.settings(),
+                exposure_from_scene: self.exposure.is_none() && self.tone.auto_exposure.is_none(),
                 debug_view: self.debug_view,
                 mode: self.mode,
                 backend: self.backend,

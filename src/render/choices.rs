@@ -86,7 +86,8 @@ impl FrameChoices {
         } else {
             AmbientMode::resolve(settings, &scene.environment)
         };
-        let settings = &RenderSettings { ambient, ..*settings };
+        let (exposure, tone) = super::tone::pick(settings, scene.environment.exposure);
+        let settings = &RenderSettings { ambient, exposure, tone, ..*settings };
         self.prt.ensure(ctx, gpu, scene, settings)?;
         let env = &scene.environment;
         // No map: no SH (the constant colour's irradiance is pi L, exactly

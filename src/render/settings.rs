@@ -185,6 +185,9 @@ pub struct RenderSettings {
     /// The exposure with auto exposure off; with it on, a compensation factor on the measured one.
     pub exposure: f32,
     pub tone: ToneSettings,
+    /// Neither `--exposure` nor `--auto-exposure` was given: the scene file's `exposure` applies, and
+    /// without one histogram auto exposure (render/tone.rs `pick`).
+    pub exposure_from_scene: bool,
     pub debug_view: DebugView,
     pub mode: Mode,
     pub effects: Effects,
@@ -231,6 +234,7 @@ impl Default for RenderSettings {
         Self {
             exposure: 1.0,
             tone: ToneSettings::default(),
+            exposure_from_scene: false,
             debug_view: DebugView::None,
             mode: Mode::Hybrid,
             effects: Effects::default(),

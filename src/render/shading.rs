@@ -32,6 +32,8 @@ pub struct SceneNeeds {
     pub ambient_occluders: bool,
     /// The scene file's `[environment] ambient`.
     pub scene_ambient: Option<AmbientMode>,
+    /// The scene file's `[environment] exposure`.
+    pub scene_exposure: Option<crate::scene::SceneExposure>,
     /// Triangles of the largest primitive (one BLAS each) and the instance
     /// count (TLAS entries), checked against the driver's limits.
     pub largest_primitive_triangles: u64,
@@ -57,6 +59,7 @@ impl SceneNeeds {
                     || scene.lights.iter().any(light_is_on)
                     || used.iter().any(|&m| scene.materials[m].emissive.iter().any(|c| *c > 0.0))),
             scene_ambient: AmbientMode::of_scene(env),
+            scene_exposure: env.exposure,
             reflections: mirrors || glossy,
             mirrors,
             glossy,
@@ -241,7 +244,8 @@ impl ShadingConfig {
         } else {
             Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs, software(ctx))?)
         };
-        let luminance = settings.tone.measures_luminance() && !debug_view;
+        let luminance =
+            super::tone::pick(settings, needs.scene_exposure).1.measures_luminance() && !debug_view;
         let secondary = backend.is_some() && (effects.shadows || effects.reflections || effects.refractions);
         let budget = settings.budget.is_some()
             && (secondary || settings.debug_view == crate::render::settings::DebugView::Selection);
@@ -293,7 +297,7 @@ impl ShadingConfig {
             backend: Some(backend),
             debug_view: false,
             needs,
-            luminance: settings.tone.measures_luminance(),
+            luminance: super::tone::pick(settings, needs.scene_exposure).1.measures_luminance(),
             budget: false,
             shadow_fallback: false,
             aa: AaMode::None,
@@ -384,6 +388,7 @@ mod tests {
             shadow_maps: false,
             ambient_occluders: false,
             scene_ambient: None,
+            scene_exposure: None,
             largest_primitive_triangles: triangles,
             instances,
         }

@@ -275,6 +275,7 @@ mod tests {
             shadow_maps: false,
             ambient_occluders: false,
             scene_ambient: None,
+            scene_exposure: None,
             largest_primitive_triangles: 1,
             instances: 1,
         };

@@ -97,7 +97,12 @@ pub fn instanced(count: u64) -> anyhow::Result<Scene> {
 fn base_scene(eye: Vec3, target: Vec3, materials: Vec<Material>) -> Scene {
     Scene {
         materials,
-        environment: Environment { color: Vec3::new(0.45, 0.55, 0.75), ..Default::default() },
+        // A fixed exposure, like the shipped scenes: the scale benches time the same passes at every size.
+        environment: Environment {
+            color: Vec3::new(0.45, 0.55, 0.75),
+            exposure: Some(super::SceneExposure::Fixed(1.0)),
+            ..Default::default()
+        },
         lights: vec![Light {
             name: "sun".into(),
             kind: LightKind::Directional,

@@ -332,7 +332,22 @@ pub struct Environment {
     /// The scene file's `ambient` (one of [`AMBIENT_NAMES`]), used
     /// when the command line gives no `--ambient`.
     pub ambient: Option<String>,
+    /// The scene file's `exposure`, used when the command line gives neither `--exposure` nor
+    /// `--auto-exposure` (render/tone.rs `pick`; without one the frame is auto-exposed).
+    pub exposure: Option<SceneExposure>,
 }
+
+/// How a scene file asks its frames to be exposed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SceneExposure {
+    /// A fixed multiplier (finite, > 0).
+    Fixed(f32),
+    /// Measured from each frame (histogram auto exposure).
+    Auto,
+}
+
+/// Only finite values are built, so equality is reflexive.
+impl Eq for SceneExposure {}
 
 impl Default for Environment {
     fn default() -> Self {
@@ -343,6 +358,7 @@ impl Default for Environment {
             intensity: 1.0,
             rotation: 0.0,
             ambient: None,
+            exposure: None,
         }
     }
 }

@@ -87,6 +87,8 @@ impl Viewer {
             None => None,
         };
         let camera = job.camera.resolve(&scene)?;
+        // The scene's exposure resolved once: the exposure and tone keys start from what is shown.
+        let (exposure, tone) = crate::render::tone::pick(&job.settings, scene.environment.exposure);
         let start_index = match job.camera {
             CameraChoice::First => Some(0),
             CameraChoice::Index(i) => Some(i),
@@ -139,7 +141,13 @@ impl Viewer {
             scene_dirty: false,
             controller,
             // A frame sequence: glossy reflections converge over frames.
-            settings: RenderSettings { glossy_temporal: true, ..job.settings },
+            settings: RenderSettings {
+                glossy_temporal: true,
+                exposure,
+                tone,
+                exposure_from_scene: false,
+                ..job.settings
+            },
             budget_keys: job.settings.budget.unwrap_or(BudgetSettings::effects(f64::INFINITY)),
             stats: FrameStats::new(now),
             needs_recreate: true,

@@ -19,9 +19,10 @@ pub(crate) fn tmp(name: &str) -> PathBuf {
     d
 }
 
+/// At a fixed exposure: the glTF files here author none, which would auto-expose them.
 fn render_scene(scene: &Path, out_dir: &Path) -> Output {
     bin()
-        .args(["render", "--width", "64", "--height", "36", "--scene"])
+        .args(["render", "--width", "64", "--height", "36", "--exposure", "1", "--scene"])
         .arg(scene)
         .arg("--out")
         .arg(out_dir.join("x.png"))
@@ -564,6 +565,47 @@ fn ldr_environment_map_is_warned_about() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && !stderr.contains("not HDR"), "{stderr}");
+}
+
+/// A scene that authors no exposure (a glTF file) is auto-exposed: the frame measures its luminance;
+/// `--exposure` (or a scene file's `[environment] exposure`) fixes it.
+#[test]
+fn a_scene_without_an_exposure_is_auto_exposed() {
+    let d = tmp("auto-exposure");
+    let scene = write_triangle_gltf(&d, |_, _| {});
+    let passes = |extra: &[&str]| {
+        let out = bin()
+            .args(["render", "--width", "32", "--height", "18", "--log", "info", "--scene"])
+            .arg(&scene)
+            .args(extra)
+            .arg("--out")
+            .arg(d.join("x.png"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{stderr}");
+        let line = stderr.lines().find(|l| l.contains("frame: passes")).map(str::to_string);
+        line.unwrap_or_else(|| panic!("no pass list in: {stderr}"))
+    };
+    assert!(passes(&[]).contains("luminance"), "{}", passes(&[]));
+    assert!(!passes(&["--exposure", "1"]).contains("luminance"), "{}", passes(&["--exposure", "1"]));
+    let toml = d.join("fixed.toml");
+    std::fs::write(
+        &toml,
+        format!("[environment]\nexposure = 2.0\n\n[[object]]\nname = \"t\"\ngltf = {:?}\n", scene),
+    )
+    .unwrap();
+    let out = bin()
+        .args(["render", "--width", "32", "--height", "18", "--log", "info", "--scene"])
+        .arg(&toml)
+        .arg("--out")
+        .arg(d.join("y.png"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let line = stderr.lines().find(|l| l.contains("frame: passes")).unwrap_or_default();
+    assert!(!line.contains("luminance"), "{line}");
 }
 
 /// `view --help` lists the viewer's keys.

@@ -99,6 +99,19 @@ impl Builder<'_> {
             }
             out.ambient = Some(a.into_inner());
         }
+        if let Some(e) = env.exposure {
+            use super::schema::ExposureDef;
+            out.exposure = Some(match e.get_ref() {
+                ExposureDef::Fixed(x) if x.is_finite() && *x > 0.0 => crate::scene::SceneExposure::Fixed(*x),
+                ExposureDef::Named(n) if n == "auto" => crate::scene::SceneExposure::Auto,
+                ExposureDef::Fixed(x) => {
+                    bail!("{}: exposure {x}: expected a finite number > 0", self.at(e.span().start))
+                }
+                ExposureDef::Named(n) => {
+                    bail!("{}: exposure '{n}': expected a number > 0 or \"auto\"", self.at(e.span().start))
+                }
+            });
+        }
         out.intensity = non_negative(env.intensity.unwrap_or(1.0), "intensity").with_context(context)?;
         out.rotation =
             finite(env.rotation_deg.unwrap_or(0.0), "rotation_deg").with_context(context)?.to_radians();

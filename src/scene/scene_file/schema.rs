@@ -32,6 +32,15 @@ pub(super) struct EnvironmentDef {
     /// The diffuse ambient mode (`--ambient`'s names), unless the command
     /// line sets one.
     pub(super) ambient: Option<Spanned<String>>,
+    /// A fixed exposure (a number) or "auto", unless the command line sets one.
+    pub(super) exposure: Option<Spanned<ExposureDef>>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(super) enum ExposureDef {
+    Fixed(f32),
+    Named(String),
 }
 
 #[derive(Deserialize)]

@@ -439,6 +439,22 @@ fn unknown_material_is_named() {
     );
 }
 
+/// `[environment] exposure`: a number is a fixed exposure, "auto" auto exposure, none leaves it to
+/// render/tone.rs `pick` (auto).
+#[test]
+fn exposure_is_a_number_or_auto() {
+    use crate::scene::SceneExposure;
+    for (text, want) in [
+        ("exposure = 0.25\n", Some(SceneExposure::Fixed(0.25))),
+        ("exposure = 2\n", Some(SceneExposure::Fixed(2.0))),
+        ("exposure = \"auto\"\n", Some(SceneExposure::Auto)),
+        ("intensity = 1\n", None),
+    ] {
+        let path = write("exposure", "scene.toml", &format!("[environment]\n{text}"));
+        assert_eq!(Scene::load(&path).unwrap().environment.exposure, want, "{text}");
+    }
+}
+
 #[test]
 fn semantic_errors_are_reported() {
     let cases = [
@@ -462,6 +478,9 @@ fn semantic_errors_are_reported() {
         ("[environment]\nhdr = \"sky.hdr\"\n", "sky.hdr"),
         ("[environment]\nlayout = \"angular\"\n", "[environment]: `layout` needs an `hdr` map"),
         ("[environment]\nhdr = \"sky.hdr\"\nlayout = \"cube\"\n", "unknown variant `cube`"),
+        ("[environment]\nexposure = 0\n", "scene.toml:2: exposure 0: expected a finite number > 0"),
+        ("[environment]\nexposure = -2.5\n", "exposure -2.5: expected a finite number > 0"),
+        ("[environment]\nexposure = \"bright\"\n", "exposure 'bright': expected a number > 0 or \"auto\""),
         ("[[object]]\nname = \"x\"\nprimitive = \"cube\"\nscale = 0\n", "scale must be finite and non-zero"),
         (
             "[[object]]\nname = \"s\"\nprimitive = \"sphere\"\ncells = 4\n",
