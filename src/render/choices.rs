@@ -86,7 +86,7 @@ impl FrameChoices {
         } else {
             AmbientMode::resolve(settings, &scene.environment)
         };
-        let (exposure, tone) = super::tone::pick(settings, scene.environment.exposure);
+        let (exposure, tone) = settings.exposure_for(scene.environment.exposure);
         let settings = &RenderSettings { ambient, exposure, tone, ..*settings };
         self.prt.ensure(ctx, gpu, scene, settings)?;
         let env = &scene.environment;

@@ -3,6 +3,7 @@
 use super::budget;
 use super::tone::ToneSettings;
 use crate::gpu::shared::REFERENCE_SAMPLES_PER_FRAME;
+use crate::scene::SceneExposure;
 
 /// How the ambient term lights surfaces from an environment map.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -186,7 +187,7 @@ pub struct RenderSettings {
     pub exposure: f32,
     pub tone: ToneSettings,
     /// Neither `--exposure` nor `--auto-exposure` was given: the scene file's `exposure` applies, and
-    /// without one histogram auto exposure (render/tone.rs `pick`).
+    /// without one histogram auto exposure (`RenderSettings::exposure_for`).
     pub exposure_from_scene: bool,
     pub debug_view: DebugView,
     pub mode: Mode,
@@ -227,6 +228,27 @@ pub struct RenderSettings {
     /// (render/passes/glossy_temporal.rs): on for frame sequences (the viewer). Off, each frame is the
     /// same one-sample frame whatever came before (`render`, `bench`, `report`, tests). No flag.
     pub glossy_temporal: bool,
+}
+
+impl RenderSettings {
+    /// The exposure and tone settings a frame uses: these settings' own, or where the command line named
+    /// neither `--exposure` nor `--auto-exposure`, the scene file's `exposure` (`scene`), and without one
+    /// histogram auto exposure: a scene that authors no exposure (a glTF file, say) is neither black nor
+    /// blown out at whatever its light units are.
+    pub fn exposure_for(&self, scene: Option<SceneExposure>) -> (f32, ToneSettings) {
+        use super::tone::AutoExposure;
+        if !self.exposure_from_scene {
+            return (self.exposure, self.tone);
+        }
+        match scene {
+            Some(SceneExposure::Fixed(e)) => {
+                (e, ToneSettings { auto_exposure: AutoExposure::Off, ..self.tone })
+            }
+            Some(SceneExposure::Auto) | None => {
+                (1.0, ToneSettings { auto_exposure: AutoExposure::Histogram, ..self.tone })
+            }
+        }
+    }
 }
 
 impl Default for RenderSettings {
@@ -380,6 +402,24 @@ mod tests {
     use clap::ValueEnum;
 
     use super::*;
+
+    /// The command line's exposure wins; else the scene's; else histogram auto exposure.
+    #[test]
+    fn exposure_comes_from_the_command_line_then_the_scene_then_auto() {
+        use crate::render::tone::AutoExposure;
+        let log = ToneSettings { auto_exposure: AutoExposure::LogAverage, key: 0.3, ..Default::default() };
+        let cli = RenderSettings { exposure: 2.0, tone: log, ..Default::default() };
+        for scene in [None, Some(SceneExposure::Fixed(0.5)), Some(SceneExposure::Auto)] {
+            assert_eq!(cli.exposure_for(scene), (2.0, log), "{scene:?}");
+        }
+        let unset = RenderSettings { exposure_from_scene: true, ..cli };
+        let (e, t) = unset.exposure_for(Some(SceneExposure::Fixed(0.5)));
+        assert_eq!((e, t.auto_exposure, t.key), (0.5, AutoExposure::Off, 0.3));
+        for scene in [None, Some(SceneExposure::Auto)] {
+            let (e, t) = unset.exposure_for(scene);
+            assert_eq!((e, t.auto_exposure, t.key), (1.0, AutoExposure::Histogram, 0.3), "{scene:?}");
+        }
+    }
 
     /// The scene file accepts exactly the command line's names.
     #[test]

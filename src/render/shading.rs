@@ -244,8 +244,7 @@ impl ShadingConfig {
         } else {
             Some(pick_backend(backend, &ctx.rt, &ctx.caps.limits, &needs, software(ctx))?)
         };
-        let luminance =
-            super::tone::pick(settings, needs.scene_exposure).1.measures_luminance() && !debug_view;
+        let luminance = settings.exposure_for(needs.scene_exposure).1.measures_luminance() && !debug_view;
         let secondary = backend.is_some() && (effects.shadows || effects.reflections || effects.refractions);
         let budget = settings.budget.is_some()
             && (secondary || settings.debug_view == crate::render::settings::DebugView::Selection);
@@ -297,7 +296,7 @@ impl ShadingConfig {
             backend: Some(backend),
             debug_view: false,
             needs,
-            luminance: super::tone::pick(settings, needs.scene_exposure).1.measures_luminance(),
+            luminance: settings.exposure_for(needs.scene_exposure).1.measures_luminance(),
             budget: false,
             shadow_fallback: false,
             aa: AaMode::None,

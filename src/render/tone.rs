@@ -6,8 +6,6 @@ use crate::gpu::shared::{
     AUTO_EXPOSURE_HISTOGRAM, AUTO_EXPOSURE_LOG_AVERAGE, AUTO_EXPOSURE_OFF, TONEMAP_ACES, TONEMAP_NONE,
     TONEMAP_REINHARD, TONEMAP_REINHARD_WHITE,
 };
-use crate::render::RenderSettings;
-use crate::scene::SceneExposure;
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum ToneOperator {
@@ -106,24 +104,6 @@ impl Default for ToneSettings {
     }
 }
 
-/// The exposure and tone settings a frame uses: `settings`' own, or where the command line named
-/// neither `--exposure` nor `--auto-exposure`, the scene file's `exposure` (`scene`), and without one
-/// histogram auto exposure: a scene that authors no exposure (a glTF file, say) is neither black nor
-/// blown out at whatever its light units are.
-pub fn pick(settings: &RenderSettings, scene: Option<SceneExposure>) -> (f32, ToneSettings) {
-    if !settings.exposure_from_scene {
-        return (settings.exposure, settings.tone);
-    }
-    match scene {
-        Some(SceneExposure::Fixed(e)) => {
-            (e, ToneSettings { auto_exposure: AutoExposure::Off, ..settings.tone })
-        }
-        Some(SceneExposure::Auto) | None => {
-            (1.0, ToneSettings { auto_exposure: AutoExposure::Histogram, ..settings.tone })
-        }
-    }
-}
-
 impl ToneSettings {
     /// Whether the frame's luminance must be measured (the `luminance` pass runs).
     pub fn measures_luminance(&self) -> bool {
@@ -160,22 +140,5 @@ mod tests {
         assert!(!t.measures_luminance());
         t.auto_exposure = AutoExposure::Histogram;
         assert!(t.measures_luminance());
-    }
-
-    /// The command line's exposure wins; else the scene's; else histogram auto exposure.
-    #[test]
-    fn exposure_comes_from_the_command_line_then_the_scene_then_auto() {
-        let log = ToneSettings { auto_exposure: AutoExposure::LogAverage, key: 0.3, ..Default::default() };
-        let cli = RenderSettings { exposure: 2.0, tone: log, ..Default::default() };
-        for scene in [None, Some(SceneExposure::Fixed(0.5)), Some(SceneExposure::Auto)] {
-            assert_eq!(pick(&cli, scene), (2.0, log), "{scene:?}");
-        }
-        let unset = RenderSettings { exposure_from_scene: true, ..cli };
-        let (e, t) = pick(&unset, Some(SceneExposure::Fixed(0.5)));
-        assert_eq!((e, t.auto_exposure, t.key), (0.5, AutoExposure::Off, 0.3));
-        for scene in [None, Some(SceneExposure::Auto)] {
-            let (e, t) = pick(&unset, scene);
-            assert_eq!((e, t.auto_exposure, t.key), (1.0, AutoExposure::Histogram, 0.3), "{scene:?}");
-        }
     }
 }

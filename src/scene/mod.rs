@@ -333,7 +333,7 @@ pub struct Environment {
     /// when the command line gives no `--ambient`.
     pub ambient: Option<String>,
     /// The scene file's `exposure`, used when the command line gives neither `--exposure` nor
-    /// `--auto-exposure` (render/tone.rs `pick`; without one the frame is auto-exposed).
+    /// `--auto-exposure` (`RenderSettings::exposure_for`; without one the frame is auto-exposed).
     pub exposure: Option<SceneExposure>,
 }
 

@@ -88,7 +88,7 @@ impl Viewer {
         };
         let camera = job.camera.resolve(&scene)?;
         // The scene's exposure resolved once: the exposure and tone keys start from what is shown.
-        let (exposure, tone) = crate::render::tone::pick(&job.settings, scene.environment.exposure);
+        let (exposure, tone) = job.settings.exposure_for(scene.environment.exposure);
         let start_index = match job.camera {
             CameraChoice::First => Some(0),
             CameraChoice::Index(i) => Some(i),

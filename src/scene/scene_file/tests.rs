@@ -440,7 +440,7 @@ fn unknown_material_is_named() {
 }
 
 /// `[environment] exposure`: a number is a fixed exposure, "auto" auto exposure, none leaves it to
-/// render/tone.rs `pick` (auto).
+/// `RenderSettings::exposure_for` (auto).
 #[test]
 fn exposure_is_a_number_or_auto() {
     use crate::scene::SceneExposure;
