@@ -12,6 +12,8 @@ mod checks;
 mod elements;
 mod merge;
 mod orbit;
+#[cfg(test)]
+mod orbit_tests;
 mod schema;
 #[cfg(test)]
 mod terrain_tests;
