@@ -5,14 +5,18 @@
 // centre's hit agree (against the pixel's footprint), so the share does not bleed across creases and
 // silhouettes. Visible share and bounce are filtered apart and combined at the centre: the diffuse
 // ambient radiance `composite` reads (rgb: what a white Lambertian surface exits, the SH irradiance
-// times the share plus the bounce, over pi; a: the mean share, for the specular occlusion).
+// times the share plus the bounce, over pi; a: the mean share, for the specular occlusion). The
+// emitters' light on untraced specular lobes (demodulated by their albedo) is averaged with the same
+// weights.
 #include "common/gbuffer_read.glsl"
 #include "common/env.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = SET_PASS, binding = AO_IN, rgba32f) uniform readonly image2D ao_in;
 layout(set = SET_PASS, binding = AO_BOUNCE_IN, rgba32f) uniform readonly image2D ao_bounce_in;
+layout(set = SET_PASS, binding = AO_SPECULAR_IN, rgba32f) uniform readonly image2D ao_specular_in;
 layout(set = SET_PASS, binding = AO_VISIBILITY_OUT, rgba32f) uniform writeonly image2D ao_visibility;
+layout(set = SET_PASS, binding = AO_EMITTER_SPECULAR_OUT, rgba32f) uniform writeonly image2D emitter_specular;
 
 vec3 ao_point(ivec2 px, float camera_distance) {
     return frame.camera_pos + camera_ray_dir(vec2(px) + 0.5) * camera_distance;
@@ -26,11 +30,12 @@ void main() {
     if (centre.a <= 0.0) {
         vec3 sky = (frame.flags & FRAME_AO_SKY) != 0u ? ambient_radiance(n) : vec3(0.0);
         imageStore(ao_visibility, px, vec4(sky, 1.0));
+        imageStore(emitter_specular, px, vec4(0.0));
         return;
     }
     vec3 x = ao_point(px, centre.a);
     float footprint = pixel_spread_angle() * centre.a;
-    vec3 sum = vec3(0.0), bounce = vec3(0.0);
+    vec3 sum = vec3(0.0), bounce = vec3(0.0), specular = vec3(0.0);
     float weights = 0.0;
     // A window of whole 4x4 tiles: each tile holds one stratified set of directions (passes/ao.glsl).
     const int r0 = int(AO_FILTER_RADIUS_PX);
@@ -47,6 +52,7 @@ void main() {
             float w = wn * wp;
             sum += w * tap.rgb;
             bounce += w * imageLoad(ao_bounce_in, q).rgb;
+            specular += w * imageLoad(ao_specular_in, q).rgb;
             weights += w;
         }
     }
@@ -54,4 +60,5 @@ void main() {
     vec3 sky = (frame.flags & FRAME_AO_SKY) != 0u ? ambient_radiance(n) * share : vec3(0.0);
     vec3 radiance = sky + bounce / (weights * PI);
     imageStore(ao_visibility, px, vec4(radiance, (share.r + share.g + share.b) / 3.0));
+    imageStore(emitter_specular, px, vec4(specular / weights, 0.0));
 }

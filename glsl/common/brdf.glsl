@@ -46,13 +46,14 @@ vec3 surface_f0(Surface s) {
     return mix(vec3(f * f), s.base_color, s.metallic);
 }
 
-// Outgoing radiance towards v for light arriving from l with irradiance
-// `e` measured perpendicular to l (so the cosine is applied here); `ms` scales the specular lobe
-// (split_sum.glsl's multiple-scattering compensation; 1: single scattering).
-vec3 brdf_eval_ms(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
+// The BRDF's diffuse and specular lobes towards v for light from l; returns n.l (0: below the surface,
+// both lobes 0).
+float brdf_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 spec) {
     vec3 n = s.normal;
     float n_l = dot(n, l);
-    if (n_l <= 0.0) return vec3(0.0);
+    diffuse = vec3(0.0);
+    spec = vec3(0.0);
+    if (n_l <= 0.0) return 0.0;
     float n_v = max(dot(n, v), 1e-4);
     vec3 h = normalize(l + v);
     float n_h = max(dot(n, h), 0.0);
@@ -60,9 +61,25 @@ vec3 brdf_eval_ms(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
     float a = max(s.roughness * s.roughness, 1e-3);
     float a2 = a * a;
     vec3 f = f_schlick(surface_f0(s), v_h);
-    vec3 spec = ms * f * d_ggx(n_h, a2) * v_smith_ggx_correlated(n_v, n_l, a2);
-    vec3 diffuse = (1.0 - f) * (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color / PI;
+    spec = ms * f * d_ggx(n_h, a2) * v_smith_ggx_correlated(n_v, n_l, a2);
+    diffuse = (1.0 - f) * (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color / PI;
+    return n_l;
+}
+
+// Outgoing radiance towards v for light arriving from l with irradiance
+// `e` measured perpendicular to l (so the cosine is applied here); `ms` scales the specular lobe
+// (split_sum.glsl's multiple-scattering compensation; 1: single scattering).
+vec3 brdf_eval_ms(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
+    vec3 diffuse, spec;
+    float n_l = brdf_lobes(s, v, l, ms, diffuse, spec);
     return (diffuse + spec) * e * n_l;
+}
+
+// brdf_eval_ms's specular lobe alone.
+vec3 brdf_specular_ms(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
+    vec3 diffuse, spec;
+    float n_l = brdf_lobes(s, v, l, ms, diffuse, spec);
+    return spec * e * n_l;
 }
 
 vec3 brdf_eval(Surface s, vec3 v, vec3 l, vec3 e) {

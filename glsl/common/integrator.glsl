@@ -110,12 +110,42 @@ vec3 surface_ms(Surface s, vec3 v) {
     return ms_compensation(surface_f0(s), max(dot(s.normal, v), 1e-4), s.roughness);
 }
 
+#ifdef EMITTERS_GLSL
+// One light sample on the emissive triangles (path/emitters.glsl) as a light term at s, its shadow ray
+// stopping short of the emitter; contrib 0 where the sample cannot light s.
+LightTerm emitter_term(Surface s, vec3 v, vec3 gn, vec3 ms, inout uint rng) {
+    LightTerm t = LightTerm(vec3(0.0), false, vec3(0.0), vec3(0.0, 0.0, 1.0), 0.0);
+    EmitterSample es;
+    if (!sample_emitter_light(s.position, rng, es) || dot(es.d, gn) <= 0.0) return t;
+    t.contrib = brdf_eval_ms(s, v, es.d, es.le / es.pdf, ms);
+    // Traced whatever SHADOWS says: a scene lit only by emitters has no punctual shadows to compile.
+    t.ray = max3(t.contrib) > 0.0;
+    t.o = offset_ray(s.position, gn, s.extent);
+    t.d = es.d;
+    t.tmax = es.t * (1.0 - 1e-3);
+    return t;
+}
+
+// With g_direct_emitters, direct_light adds one such sample after the punctual lights (through the
+// same shadow ray call site), drawn from g_direct_rng.
+bool g_direct_emitters = false;
+uint g_direct_rng = 0u;
+#endif
+
 // Every light's term at s, shadow rays traced.
 vec3 direct_light(Surface s, vec3 v, vec3 gn) {
     vec3 c = vec3(0.0);
     vec3 ms = surface_ms(s, v);
-    for (uint i = 0u; i < frame.light_count; ++i) {
+    uint n = frame.light_count;
+#ifdef EMITTERS_GLSL
+    if (g_direct_emitters) n++;
+#endif
+    for (uint i = 0u; i < n; ++i) {
+#ifdef EMITTERS_GLSL
+        LightTerm t = i < frame.light_count ? light_term(s, v, gn, ms, i) : emitter_term(s, v, gn, ms, g_direct_rng);
+#else
         LightTerm t = light_term(s, v, gn, ms, i);
+#endif
         if (t.ray) {
             count_ray(RAY_KIND_SHADOW);
             t.contrib *= trace_shadow(t.o, t.d, t.tmax);

@@ -5,8 +5,9 @@
 // path/bsdf.glsl, chosen by albedo (diffuse cosine, or GGX visible normals, Heitz 2018); the hit decides:
 // - miss: TERM_ENV_SPECULAR via the specular lobe of a non-mirror (replaces the split-sum environment),
 //   TERM_VISIBILITY via the diffuse lobe (replaces the diffuse SH/PRT ambient).
-// - rough opaque surface: TERM_INDIRECT (one bounce, lit by punctual lights with glass opaque);
-//   its emission TERM_EMITTERS (the hybrid lights nothing with emissive surfaces).
+// - rough opaque surface: TERM_INDIRECT (one bounce, lit by punctual lights and a light sample on the
+//   emitters, glass opaque); its emission TERM_EMITTERS (replaces the hybrid's emitter light: its light
+//   samples and the traced ambient's rays that hit emitters).
 // - glass or a perfectly smooth surface: TERM_CAUSTICS, a chain of at most TERMS_CHAIN BSDF samples;
 //   replaces the hybrid's direct light through glass (its shadow rays pass transmissive occluders).
 // Each term is a set of the truth's own paths, so supplying one never adds light the truth lacks;
@@ -14,6 +15,7 @@
 // same rays. One trace and one shade call site each: a software device compiles every inlined
 // traversal (lavapipe took 12 minutes for a version with six).
 #include "../common/gbuffer_read.glsl"
+#include "../path/emitters.glsl"
 #include "../common/integrator.glsl"
 #include "../path/bsdf.glsl"
 
@@ -129,7 +131,12 @@ void terms_pixel(ivec2 px) {
         if (max3(end.weight) > 0.0) {
             g_opaque_occluders = end.opaque;
             face_viewer(end.s, end.v);
+            // A bounce's end is lit by the emitters too (as the hybrid's bounce is); the primary hit's
+            // own emitter light is the hybrid's (`ao`).
+            g_direct_emitters = i != 0u;
+            g_direct_rng = rng;
             c += end.weight * direct_light(end.s, end.v, end.gn);
+            rng = g_direct_rng;
             g_opaque_occluders = false;
         }
         if (any(isnan(c)) || any(isinf(c))) c = vec3(0.0);

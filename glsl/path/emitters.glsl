@@ -63,4 +63,46 @@ bool sample_emitter(inout uint rng, out RayHit h, out float choice) {
     return choice > 0.0;
 }
 
+// A light sample on the emissive triangles seen from p: direction d, distance t, the radiance le the
+// point sends towards p, and the solid-angle pdf. False where it cannot light p (a degenerate
+// triangle, a cut-out texel, no emission).
+struct EmitterSample {
+    vec3 d;
+    float t;
+    vec3 le;
+    float pdf;
+};
+
+bool sample_emitter_light(vec3 p, inout uint rng, out EmitterSample es) {
+    es = EmitterSample(vec3(0.0, 0.0, 1.0), 0.0, vec3(0.0), 0.0);
+    RayHit e;
+    float choice;
+    if (!sample_emitter(rng, e, choice)) return false;
+    TriangleWorld tw = triangle_world(e.instance, e.primitive);
+    vec3 en;
+    float area = triangle_area(tw, en);
+    vec3 b = bary3(e.bary);
+    vec3 to = tw.p0 * b.x + tw.p1 * b.y + tw.p2 * b.z - p;
+    e.t = length(to);
+    es.t = e.t;
+    es.d = to / max(e.t, 1e-30);
+    float cos_l = abs(dot(en, es.d));
+    if (!(e.t > 0.0 && cos_l > 0.0 && hit_alpha_passes(e.instance, e.primitive, e.bary, e.t))) return false;
+    es.pdf = emitter_pdf(choice, area, e.t, cos_l);
+    vec3 egn;
+    bool eback;
+    es.le = hit_surface(e, p, es.d, 0.0, egn, eback).emissive;
+    return es.pdf > 0.0 && any(greaterThan(es.le, vec3(0.0)));
+}
+
+// The solid-angle pdf with which a light sample would have chosen the direction `dir` of a ray that
+// hit `h` (0: no emitter the table holds).
+float emitter_hit_pdf(RayHit h, vec3 dir) {
+    float choice = emitter_choice(h.instance, h.primitive);
+    if (choice <= 0.0) return 0.0;
+    vec3 en;
+    float area = triangle_area(triangle_world(h.instance, h.primitive), en);
+    return emitter_pdf(choice, area, h.t, abs(dot(en, dir)));
+}
+
 #endif

@@ -39,30 +39,16 @@ bool nee_candidate(uint k, Surface s, vec3 gn, Bsdf m, vec3 v, inout uint rng, o
         shadowed = (light.flags & LIGHT_CASTS_SHADOWS) != 0u;
         if (light.type != LIGHT_DIRECTIONAL) tmax = ls.distance * (1.0 - 1e-4);
     } else if (k == frame.light_count) {
-        RayHit e;
-        float choice;
+        EmitterSample es;
         d = vec3(0.0, 0.0, 1.0);
-        if (!sample_emitter(rng, e, choice)) return false;
-        TriangleWorld tw = triangle_world(e.instance, e.primitive);
-        vec3 en;
-        float area = triangle_area(tw, en);
-        vec3 b = bary3(e.bary);
-        vec3 to = tw.p0 * b.x + tw.p1 * b.y + tw.p2 * b.z - s.position;
-        e.t = length(to);
-        d = to / max(e.t, 1e-30);
+        if (!sample_emitter_light(s.position, rng, es)) return false;
+        d = es.d;
         vec3 l = bsdf_local(m, d);
-        float cos_l = abs(dot(en, d));
-        if (!(e.t > 0.0 && cos_l > 0.0 && consistent_side(d, l.z, gn)
-              && hit_alpha_passes(e.instance, e.primitive, e.bary, e.t))) {
-            return false;
-        }
-        float pdf_light = emitter_pdf(choice, area, e.t, cos_l), pdf_bsdf;
-        vec3 egn;
-        bool eback;
-        vec3 le = hit_surface(e, s.position, d, 0.0, egn, eback).emissive;
-        c = bsdf_eval(m, v, l, pdf_bsdf) * le * (power_heuristic(pdf_light, pdf_bsdf) / pdf_light);
+        if (!consistent_side(d, l.z, gn)) return false;
+        float pdf_bsdf;
+        c = bsdf_eval(m, v, l, pdf_bsdf) * es.le * (power_heuristic(es.pdf, pdf_bsdf) / es.pdf);
         // Stops short of the emitter itself.
-        tmax = e.t * (1.0 - 1e-3);
+        tmax = es.t * (1.0 - 1e-3);
     } else {
         d = vec3(0.0, 0.0, 1.0);
         if (!env_emits()) return false;
@@ -162,13 +148,8 @@ vec3 path_radiance(ivec2 px, inout uint rng) {
         if (back_face) throughput *= volume_transmittance(h);
         if (max3(s.emissive) > 0.0) {
             // MIS only for emitters the light samples could have picked.
-            float choice = prev_delta ? 0.0 : emitter_choice(h.instance, h.primitive);
-            float w = 1.0;
-            if (choice > 0.0) {
-                vec3 en;
-                float area = triangle_area(triangle_world(h.instance, h.primitive), en);
-                w = power_heuristic(prev_pdf, emitter_pdf(choice, area, h.t, abs(dot(en, dir))));
-            }
+            float pdf_light = prev_delta ? 0.0 : emitter_hit_pdf(h, dir);
+            float w = pdf_light > 0.0 ? power_heuristic(prev_pdf, pdf_light) : 1.0;
             radiance += throughput * s.emissive * w;
         }
         if (bounce >= frame.accum_bounces) break;

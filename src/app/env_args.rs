@@ -38,8 +38,8 @@ pub struct EnvArgs {
     #[arg(long, value_enum)]
     pub ambient: Option<AmbientMode>,
     /// With --ambient traced: the ambient rays bring only the environment's
-    /// light, not the emission and direct light of the surfaces they hit
-    /// (the one indirect bounce).
+    /// light, not the direct and environment light of the surfaces they hit
+    /// (the one indirect bounce); emissive surfaces still light the scene.
     #[arg(long)]
     pub no_indirect: bool,
     /// PRT directions per vertex: N gives N×N stratified jittered samples

@@ -110,11 +110,12 @@ shared! {
     // maps too dear).
     uint FRAME_SHADOW_MAPS = 256;
     // `--ambient traced` (passes/ao.glsl, ao_filter.comp): its rays that hit bring the hit's direct
-    // light, its emission and its environment light (the one indirect bounce; `--no-indirect` clears
-    // all three); the environment's light shades by the visible share. The report's attribution clears
-    // the parts its terms supply.
+    // light and its environment light (the one indirect bounce; `--no-indirect` clears both); the
+    // environment's light shades by the visible share; emissive surfaces light the pixel directly
+    // (FRAME_AO_EMITTERS: light samples and the rays that hit them, MIS-weighted). The report's
+    // attribution clears the parts its terms supply.
     uint FRAME_AO_BOUNCE_LIGHTS = 512;
-    uint FRAME_AO_BOUNCE_EMISSION = 1024;
+    uint FRAME_AO_EMITTERS = 1024;
     uint FRAME_AO_SKY = 2048;
     uint FRAME_AO_BOUNCE_SKY = 4096;
     uint PRT_HEADER_WORDS = 4;
@@ -173,8 +174,19 @@ shared! {
     id AO_BOUNCE_IN = 6;
     id AO_VISIBILITY_OUT = 7;
     id AO_VISIBILITY_IN = 10;
+    // The emitters' light on a specular lobe no glossy ray samples (rougher than GLOSSY_ROUGHNESS): `ao`
+    // writes its light samples' radiance over the lobe's albedo (demodulated, so neighbours of another
+    // material average fairly), `ao filter` averages it with the share's weights, `composite` scales it
+    // by the pixel's own albedo.
+    id AO_SPECULAR_OUT = 7;
+    id AO_SPECULAR_IN = 8;
+    id AO_EMITTER_SPECULAR_OUT = 9;
+    id AO_EMITTER_SPECULAR_IN = 11;
     uint AO_SEED = 40503;
     uint AO_SAMPLES = 4;
+    // Light samples a pixel on the emissive triangles (gpu/emitters.rs), beside the AO_SAMPLES cosine
+    // rays (passes/ao.glsl); one more at each ray's hit for the bounce.
+    uint AO_EMITTER_SAMPLES = 1;
     // The level of the prefiltered environment (ENV_SPECULAR_LEVELS) that weighs each ray.
     uint AO_WEIGHT_LEVEL = 1;
     // sqrt(16 AO_SAMPLES): the strata per axis of a 4x4 tile's rays (passes/ao.glsl).

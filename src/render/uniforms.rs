@@ -9,10 +9,9 @@ use super::settings::RenderSettings;
 use super::shading::Mode;
 use super::tone::{ToneOperator, ToneSettings};
 use crate::gpu::shared::{
-    FRAME_AMBIENT_PRT, FRAME_AMBIENT_SH, FRAME_AO_BOUNCE_EMISSION, FRAME_AO_BOUNCE_LIGHTS,
-    FRAME_AO_BOUNCE_SKY, FRAME_AO_SKY, FRAME_COUNT_RAYS, FRAME_GLOSSY_HISTORY, FRAME_GLOSSY_TEMPORAL,
-    FRAME_OPAQUE_OCCLUDERS, SH_IRRADIANCE_COEFFS, SH_PRT_MAX_COEFFS, TERM_EMITTERS, TERM_INDIRECT,
-    TERM_VISIBILITY,
+    FRAME_AMBIENT_PRT, FRAME_AMBIENT_SH, FRAME_AO_BOUNCE_LIGHTS, FRAME_AO_BOUNCE_SKY, FRAME_AO_EMITTERS,
+    FRAME_AO_SKY, FRAME_COUNT_RAYS, FRAME_GLOSSY_HISTORY, FRAME_GLOSSY_TEMPORAL, FRAME_OPAQUE_OCCLUDERS,
+    SH_IRRADIANCE_COEFFS, SH_PRT_MAX_COEFFS, TERM_EMITTERS, TERM_INDIRECT, TERM_VISIBILITY,
 };
 use crate::gpu::types::GpuFrame;
 use crate::gpu::GpuScene;
@@ -66,8 +65,9 @@ pub fn frame(i: &Inputs, settings: &RenderSettings, accumulation: &mut Accumulat
     if settings.ambient_bounce && !supplied(TERM_INDIRECT) {
         flags |= FRAME_AO_BOUNCE_LIGHTS;
     }
-    if settings.ambient_bounce && !supplied(TERM_EMITTERS) {
-        flags |= FRAME_AO_BOUNCE_EMISSION;
+    // Emissive surfaces are direct light: `--no-indirect` keeps them.
+    if !supplied(TERM_EMITTERS) {
+        flags |= FRAME_AO_EMITTERS;
     }
     if settings.ambient_bounce {
         flags |= FRAME_AO_BOUNCE_SKY;

@@ -41,12 +41,14 @@ pub const TERMS: [Term; 5] = [
     Term {
         bit: TERM_INDIRECT,
         name: "one indirect bounce",
-        hybrid: "--ambient traced: its rays' hits lit by the punctual lights; else none",
+        hybrid: "--ambient traced: its rays' hits lit by the punctual lights and the emitters; else none",
     },
     Term {
         bit: TERM_EMITTERS,
         name: "emissive surfaces",
-        hybrid: "--ambient traced: its rays' hits' emission; else none (emission is only seen)",
+        hybrid:
+            "--ambient traced: light samples on the emissive triangles (diffuse and untraced rough \
+                 specular lobes) with its rays that hit them, MIS-weighted; else none (emission is only seen)",
     },
     Term {
         bit: TERM_CAUSTICS,

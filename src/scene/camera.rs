@@ -96,13 +96,19 @@ pub fn on_path(keys: &[CameraKey], t: f32, template: &Camera) -> Camera {
     )
 }
 
-/// A scene with no light gets a sun-like directional light; one with no
-/// camera gets a camera that frames its bounds.
+/// A scene with no light and nothing emissive gets a sun-like directional light (a room lit by its
+/// lamps stays lit by them alone); one with no camera gets a camera that frames its bounds.
 pub fn add_defaults(scene: &mut Scene) {
     let b = scene.bounds;
     let (center, radius) =
         if b.is_empty() { (Vec3::ZERO, 1.0) } else { (b.center(), (b.extent().length() * 0.5).max(1e-6)) };
-    if scene.lights.is_empty() {
+    let emits = scene.instances.iter().any(|i| {
+        let e = scene.materials[scene.instance_material(i)].emissive;
+        e.iter().any(|c| c.is_finite() && *c > 0.0)
+    });
+    if scene.lights.is_empty() && emits {
+        log::info!("scene has no punctual lights: lit by its emissive surfaces (no default sun)");
+    } else if scene.lights.is_empty() {
         log::info!("scene has no lights: adding a default directional light");
         scene.lights.push(Light {
             name: "default sun".into(),
@@ -146,5 +152,28 @@ mod tests {
         // +Y in view space goes to negative clip y (Vulkan's y points down).
         let up = p * Vec4::new(0.0, 1.0, -1.0, 1.0);
         assert!(up.y < 0.0);
+    }
+
+    /// The default sun lights a scene that has no other light; one whose surfaces emit keeps its own
+    /// light (an emissive material no object uses lights nothing).
+    #[test]
+    fn the_default_sun_only_where_nothing_emits() {
+        let dir = std::env::temp_dir().join("hybrid-rt-tests").join("default-sun");
+        std::fs::create_dir_all(&dir).unwrap();
+        let lamp = "[[material]]\nname = \"lamp\"\nemissive = [0.0, 0.5, 0.0]\n";
+        let grey = "[[material]]\nname = \"grey\"\n";
+        let floor =
+            |m: &str| format!("[[object]]\nname = \"floor\"\nprimitive = \"plane\"\nmaterial = \"{m}\"\n");
+        for (text, sun) in [
+            (format!("{grey}{floor}", floor = floor("grey")), true),
+            (format!("{lamp}{floor}", floor = floor("lamp")), false),
+            (format!("{lamp}{grey}{floor}", floor = floor("grey")), true),
+        ] {
+            let p = dir.join("scene.toml");
+            std::fs::write(&p, &text).unwrap();
+            let s = Scene::load(&p).unwrap();
+            let names: Vec<&str> = s.lights.iter().map(|l| l.name.as_str()).collect();
+            assert_eq!(names, if sun { vec!["default sun"] } else { vec![] }, "{text}");
+        }
     }
 }

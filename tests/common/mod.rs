@@ -226,6 +226,21 @@ pub fn render_scene(
     out
 }
 
+/// Form factor from a point to the rectangle [x1, x2] x [z1, z2] (offsets from the point) of a parallel
+/// plane at height h above it: the share of its cosine-weighted hemisphere the rectangle covers, by
+/// inclusion-exclusion over the corner rectangles (each the closed form of a rectangle with a corner
+/// above the point).
+pub fn rectangle_form_factor(h: f64, x1: f64, x2: f64, z1: f64, z2: f64) -> f64 {
+    let corner = |u: f64, v: f64| {
+        let (x, y) = ((u / h).abs(), (v / h).abs());
+        let f = (x / (1.0 + x * x).sqrt() * (y / (1.0 + x * x).sqrt()).atan()
+            + y / (1.0 + y * y).sqrt() * (x / (1.0 + y * y).sqrt()).atan())
+            / (2.0 * std::f64::consts::PI);
+        f * u.signum() * v.signum()
+    };
+    corner(x2, z2) - corner(x1, z2) - corner(x2, z1) + corner(x1, z1)
+}
+
 /// World-space direction of the camera ray through the centre of pixel
 /// (x, y), with the renderer's camera model.
 pub fn pixel_ray(cam: &hybrid_rt::scene::Camera, w: u32, h: u32, x: u32, y: u32) -> (glam::Vec3, glam::Vec3) {
@@ -235,6 +250,13 @@ pub fn pixel_ray(cam: &hybrid_rt::scene::Camera, w: u32, h: u32, x: u32, y: u32)
     let dv = glam::Vec3::new(ndc_x / proj.x_axis.x, ndc_y / proj.y_axis.y, -1.0);
     let rot = glam::Mat3::from_mat4(cam.view().as_mat4()).transpose();
     (cam.position(), (rot * dv).normalize())
+}
+
+/// The point of the floor (y = 0) that pixel (x, y) of a w x h frame sees, as (x, z).
+pub fn floor_point(cam: &hybrid_rt::scene::Camera, w: u32, h: u32, x: u32, y: u32) -> (f64, f64) {
+    let (o, d) = pixel_ray(cam, w, h, x, y);
+    let t = -o.y / d.y;
+    ((o.x + d.x * t) as f64, (o.z + d.z * t) as f64)
 }
 
 /// A context with validation and synchronization validation on; like

@@ -18,6 +18,7 @@ mod budget_fallback;
 mod compute_top_level;
 mod culling;
 mod device;
+mod emitters;
 mod error_paths;
 mod extreme_radiance;
 mod far_from_origin;

@@ -210,9 +210,11 @@ fn backdrop(ior: f32, extra: impl IntoIterator<Item = Block>) -> String {
         camera([0.0, 1.0, 5.0], [0.0, 1.0, 0.0]).yfov(50),
         no_light(),
         // Rough: glossy reflections are traced at primary hits only, so a glossy surface seen through
-        // the slab would lose its lobe's occlusion; this is about the slab.
-        emitter("red", [1.0, 0.1, 0.1]).roughness(1.0),
-        emitter("green", [0.1, 1.0, 0.2]).roughness(1.0),
+        // the slab would lose its lobe's occlusion; IOR 1 (no specular lobe): the emitters' light on
+        // each other is shaded at primary hits only, not at the hits seen through the slab. This is
+        // about the slab.
+        emitter("red", [1.0, 0.1, 0.1]).roughness(1.0).ior(1.0),
+        emitter("green", [0.1, 1.0, 0.2]).roughness(1.0).ior(1.0),
         glass("glass", ior),
         cube("a", 1.0).at([-1.0, 1.0, -2.0]).rot([20.0, 30.0, 0.0]).material("red"),
         sphere("b", 0.7).at([1.0, 1.3, -2.5]).material("green"),

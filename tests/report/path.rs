@@ -433,11 +433,7 @@ fn emissive_surfaces_are_sampled_as_lights() {
     ]);
     let scene = common::scene_from_toml("path_emissive_square", &toml);
     let frames = converged(&scene, W, H, &[path(16, Backend::Compute), path(256, Backend::Compute)]);
-    let (x, y) = (0.5f64, 0.5f64);
-    let f = ((x / (1.0 + x * x).sqrt()) * (y / (1.0 + x * x).sqrt()).atan()
-        + (y / (1.0 + y * y).sqrt()) * (x / (1.0 + y * y).sqrt()).atan())
-        / (2.0 * std::f64::consts::PI);
-    let expected = 0.5 * 4.0 * 2.0 * f;
+    let expected = 0.5 * 2.0 * common::rectangle_form_factor(1.0, -0.5, 0.5, -0.5, 0.5);
     let m = mean(&frames[1], 1, |_, _| true);
     let noisy = &frames[0];
     let m16 = mean(noisy, 1, |_, _| true);

@@ -8,7 +8,9 @@ use super::fullscreen::{self, FullScreen, Shader, TargetBinding};
 use super::{
     ao_filter, direct, gbuffer, glossy_filter, reference, specular, terms, Creation, PassDesc, Upstream,
 };
-use crate::gpu::shared::{AO_VISIBILITY_IN, DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN, TERMS_IN};
+use crate::gpu::shared::{
+    AO_EMITTER_SPECULAR_IN, AO_VISIBILITY_IN, DIRECT_IN, HDR_OUT, REFERENCE_IN, SPECULAR_IN, TERMS_IN,
+};
 use crate::render::frame::{Access, SharedBuffer, Use};
 use crate::render::shading::ShadingConfig;
 use crate::render::targets::TargetDesc;
@@ -24,6 +26,7 @@ struct Inputs {
     reference: Option<&'static TargetDesc>,
     terms: Option<&'static TargetDesc>,
     visibility: Option<&'static TargetDesc>,
+    emitter_specular: Option<&'static TargetDesc>,
 }
 
 impl Inputs {
@@ -34,6 +37,7 @@ impl Inputs {
             reference: up.get(&reference::ACCUMULATION),
             terms: up.get(&terms::ACCUMULATION),
             visibility: up.get(&ao_filter::VISIBILITY),
+            emitter_specular: up.get(&ao_filter::EMITTER_SPECULAR),
         }
     }
 }
@@ -48,6 +52,7 @@ fn io(c: &ShadingConfig, inputs: &Inputs) -> Vec<TargetBinding> {
         (REFERENCE_IN, inputs.reference),
         (TERMS_IN, inputs.terms),
         (AO_VISIBILITY_IN, inputs.visibility),
+        (AO_EMITTER_SPECULAR_IN, inputs.emitter_specular),
     ] {
         if let Some(t) = input {
             io.push(TargetBinding::new(binding, t, Access::StorageRead));
