@@ -5,7 +5,7 @@
 // geometry still interpolates uv for its alpha test.
 #include "common/scene.glsl"
 #ifdef GB_ALPHA_TEST
-#define MAT_SAMPLE(index, uv, fallback) sample_tex(index, uv, fallback)
+#define MAT_SAMPLE(index, xf, uv, fallback) sample_tex(index, xf, uv, fallback)
 #include "common/material.glsl"
 layout(location = 2) in vec2 v_uv;
 #endif

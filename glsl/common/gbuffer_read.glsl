@@ -34,7 +34,7 @@ vec3 primary_emissive(ivec2 px, uint instance, uint primitive, vec2 b) {
     vec2 uv = hit_uv(hit_vertices(instances[instance], primitive), b);
     vec2 dx, dy;
     camera_uv_gradients(instance, primitive, px, dx, dy);
-    return m.emissive * textureGrad(textures[nonuniformEXT(m.tex_emissive)], uv, dx, dy).rgb;
+    return m.emissive * sample_tex_grad(m.tex_emissive, m.uv_emissive, uv, dx, dy, vec4(1.0)).rgb;
 }
 
 // Material terms only, enough to decide which rays the hit spawns. False on a miss (hit id 0).

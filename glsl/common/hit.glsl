@@ -4,7 +4,7 @@
 #include "scene.glsl"
 #ifndef MAT_SAMPLE
 // Rays have no derivatives: the ray cone sets the level (scene.glsl).
-#define MAT_SAMPLE(index, uv, fallback) sample_tex_cone(index, uv, fallback)
+#define MAT_SAMPLE(index, xf, uv, fallback) sample_tex_cone(index, xf, uv, fallback)
 #endif
 #include "material.glsl"
 #include "offset.glsl"
@@ -81,7 +81,7 @@ float hit_alpha(uint instance, uint primitive, vec2 b, float t) {
     if (g_camera_ray) {
         vec2 dx, dy;
         camera_uv_gradients(instance, primitive, g_camera_pixel, dx, dy);
-        return m.base_color.a * textureGrad(textures[nonuniformEXT(m.tex_base_color)], uv, dx, dy).a;
+        return m.base_color.a * sample_tex_grad(m.tex_base_color, m.uv_base_color, uv, dx, dy, vec4(1.0)).a;
     }
     float lod = 0.0;
     if (g_alpha_cone != vec2(0.0)) {
@@ -90,11 +90,10 @@ float hit_alpha(uint instance, uint primitive, vec2 b, float t) {
         vec3 e2 = mat3(inst.world) * (hv.v2.position - hv.v0.position);
         vec3 gn = cross(e1, e2);
         gn = dot(gn, gn) > 0.0 ? normalize(gn) : vec3(0.0, 1.0, 0.0);
-        vec2 size = vec2(textureSize(textures[nonuniformEXT(m.tex_base_color)], 0));
         float width = g_alpha_cone.x + g_alpha_cone.y * t;
-        lod = max(cone_lod(hv, e1, e2, gn, g_alpha_dir, width) + 0.5 * log2(size.x * size.y), 0.0);
+        lod = max(texel_lod(m.tex_base_color, m.uv_base_color, cone_lod(hv, e1, e2, gn, g_alpha_dir, width)), 0.0);
     }
-    return m.base_color.a * sample_tex_lod(m.tex_base_color, uv, lod, vec4(1.0)).a;
+    return m.base_color.a * sample_tex_lod(m.tex_base_color, m.uv_base_color, uv, lod, vec4(1.0)).a;
 }
 
 bool hit_alpha_passes(uint instance, uint primitive, vec2 b, float t) {
@@ -113,11 +112,12 @@ vec3 occluder_transmittance(uint instance, uint primitive, vec2 b) {
     Instance inst = instances[instance];
     Material m = materials[inst.material];
     vec2 uv = hit_uv(hit_vertices(inst, primitive), b);
-    vec4 base = m.base_color * sample_tex_lod(m.tex_base_color, uv, 0.0, vec4(1.0));
+    vec4 base = m.base_color * sample_tex_lod(m.tex_base_color, m.uv_base_color, uv, 0.0, vec4(1.0));
     if (m.alpha_mode != ALPHA_OPAQUE && base.a < m.alpha_cutoff) return vec3(1.0);
     // Glass bends light, so a straight ray through it carries none (it arrives along refracted paths).
     if ((frame.flags & FRAME_OPAQUE_OCCLUDERS) != 0u || g_opaque_occluders) return vec3(0.0);
-    float tr = clamp(m.transmission * sample_tex_lod(m.tex_transmission, uv, 0.0, vec4(1.0)).r, 0.0, 1.0);
+    float tr = clamp(m.transmission * sample_tex_lod(m.tex_transmission, m.uv_transmission, uv, 0.0, vec4(1.0)).r,
+                     0.0, 1.0);
     return base.rgb * tr;
 }
 

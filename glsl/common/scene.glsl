@@ -51,8 +51,28 @@ uint budget_effects(uint instance, ivec2 px) {
     return (word & EFFECT_ALL) | budget_partial_here(word, px);
 }
 
-vec4 sample_tex(int index, vec2 uv, vec4 fallback) {
-    return index < 0 ? fallback : texture(textures[nonuniformEXT(index)], uv);
+// KHR_texture_transform: a reference's uv, and uv differences (gradients) under its linear part.
+vec2 uv_apply(UvTransform t, vec2 uv) {
+    return vec2(dot(t.row0, vec3(uv, 1.0)), dot(t.row1, vec3(uv, 1.0)));
+}
+
+vec2 uv_apply_linear(UvTransform t, vec2 d) {
+    return vec2(dot(t.row0.xy, d), dot(t.row1.xy, d));
+}
+
+// The mip shift of a footprint mapped through `t`: half the log2 of the area it scales by.
+float uv_lod_shift(UvTransform t) {
+    return 0.5 * log2(max(abs(t.row0.x * t.row1.y - t.row0.y * t.row1.x), 1e-30));
+}
+
+vec4 sample_tex(int index, UvTransform xf, vec2 uv, vec4 fallback) {
+    return index < 0 ? fallback : texture(textures[nonuniformEXT(index)], uv_apply(xf, uv));
+}
+
+vec4 sample_tex_grad(int index, UvTransform xf, vec2 uv, vec2 dx, vec2 dy, vec4 fallback) {
+    if (index < 0) return fallback;
+    return textureGrad(textures[nonuniformEXT(index)], uv_apply(xf, uv), uv_apply_linear(xf, dx),
+                       uv_apply_linear(xf, dy));
 }
 
 // Ray cones (Akenine-Möller et al., Ray Tracing Gems ch. 20): rays have no screen derivatives, so
@@ -64,15 +84,21 @@ bool g_hit_grad = false;
 vec2 g_uv_dx = vec2(0.0);
 vec2 g_uv_dy = vec2(0.0);
 
-vec4 sample_tex_cone(int index, vec2 uv, vec4 fallback) {
-    if (index < 0) return fallback;
-    if (g_hit_grad) return textureGrad(textures[nonuniformEXT(index)], uv, g_uv_dx, g_uv_dy);
+// The level a footprint of log2 uv-area `lod` (g_hit_lod's units) covers on texture `index` under `xf`.
+float texel_lod(int index, UvTransform xf, float lod) {
     vec2 size = vec2(textureSize(textures[nonuniformEXT(index)], 0));
-    return textureLod(textures[nonuniformEXT(index)], uv, g_hit_lod + 0.5 * log2(size.x * size.y));
+    return lod + uv_lod_shift(xf) + 0.5 * log2(size.x * size.y);
 }
 
-vec4 sample_tex_lod(int index, vec2 uv, float lod, vec4 fallback) {
-    return index < 0 ? fallback : textureLod(textures[nonuniformEXT(index)], uv, lod);
+vec4 sample_tex_cone(int index, UvTransform xf, vec2 uv, vec4 fallback) {
+    if (index < 0) return fallback;
+    if (g_hit_grad) return sample_tex_grad(index, xf, uv, g_uv_dx, g_uv_dy, fallback);
+    return textureLod(textures[nonuniformEXT(index)], uv_apply(xf, uv), texel_lod(index, xf, g_hit_lod));
+}
+
+// An explicit texel-space level (0: the finest).
+vec4 sample_tex_lod(int index, UvTransform xf, vec2 uv, float lod, vec4 fallback) {
+    return index < 0 ? fallback : textureLod(textures[nonuniformEXT(index)], uv_apply(xf, uv), lod);
 }
 
 #endif

@@ -14,6 +14,12 @@ struct Vertex {
     vec4 tangent;
 };
 
+// An affine map of texture coordinates: uv' = (dot(row0, (uv, 1)), dot(row1, (uv, 1))).
+struct UvTransform {
+    vec3 row0;
+    vec3 row1;
+};
+
 struct Material {
     vec4 base_color;
     vec3 emissive;
@@ -38,6 +44,13 @@ struct Material {
     uint pad0;
     uint pad1;
     uint pad2;
+    // KHR_texture_transform of each tex_* reference above, in their order.
+    UvTransform uv_base_color;
+    UvTransform uv_metallic_roughness;
+    UvTransform uv_normal;
+    UvTransform uv_occlusion;
+    UvTransform uv_emissive;
+    UvTransform uv_transmission;
 };
 
 struct Instance {

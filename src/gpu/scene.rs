@@ -21,7 +21,9 @@ use super::shared::{
 };
 use super::types::*;
 use crate::scene::tangents::bounds_of;
-use crate::scene::{Aabb, AlphaMode, Filter, Instance, LightKind, SamplerDesc, Scene, TextureRef, Wrap};
+use crate::scene::{
+    Aabb, AlphaMode, Filter, Instance, LightKind, SamplerDesc, Scene, TextureRef, UvTransform, Wrap,
+};
 use crate::vk::frame_ring::{upload_now, Uploads};
 use crate::vk::memory::TextureDesc;
 use crate::vk::pipeline::{Binding, DescriptorSet};
@@ -600,6 +602,15 @@ fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
         tex_transmission: tex_index(&m.transmission_texture),
         volume_sigma: m.volume_sigma(),
         pad: [0; 3],
+        uv_transforms: [
+            &m.base_color_texture,
+            &m.metallic_roughness_texture,
+            &m.normal_texture,
+            &m.occlusion_texture,
+            &m.emissive_texture,
+            &m.transmission_texture,
+        ]
+        .map(|t| t.map_or(UvTransform::IDENTITY, |t| t.transform).rows),
     }
 }
 

@@ -37,6 +37,9 @@ pub struct GpuMaterial {
     /// Material::volume_sigma.
     pub volume_sigma: [f32; 3],
     pub pad: [u32; 3],
+    /// Each texture reference's KHR_texture_transform (UvTransform::rows),
+    /// in the order of the tex_* indices above.
+    pub uv_transforms: [[[f32; 3]; 2]; 6],
 }
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == MATERIAL_STRIDE as usize);
 

@@ -72,11 +72,44 @@ pub enum AlphaMode {
     Blend,
 }
 
-/// Index into `Scene::textures` plus the UV set it reads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Index into `Scene::textures`, the UV set it reads and the transform
+/// applied to those UVs (KHR_texture_transform; per reference, as in glTF).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureRef {
     pub texture: usize,
     pub tex_coord: u32,
+    pub transform: UvTransform,
+}
+
+/// An affine map of texture coordinates, uv' = M (u, v, 1), held as M's two
+/// rows: KHR_texture_transform's translation x rotation x scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    pub rows: [[f32; 3]; 2],
+}
+
+impl UvTransform {
+    pub const IDENTITY: UvTransform = UvTransform { rows: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] };
+
+    /// glTF's order: scale first, then a counter-clockwise rotation of the
+    /// UVs by `rotation` radians (v points down the image), then the offset.
+    pub fn from_gltf(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> UvTransform {
+        let (s, c) = rotation.sin_cos();
+        UvTransform {
+            rows: [[c * scale[0], s * scale[1], offset[0]], [-s * scale[0], c * scale[1], offset[1]]],
+        }
+    }
+
+    pub fn apply(&self, uv: [f32; 2]) -> [f32; 2] {
+        let [a, b] = self.rows;
+        [a[0] * uv[0] + a[1] * uv[1] + a[2], b[0] * uv[0] + b[1] * uv[1] + b[2]]
+    }
+}
+
+impl Default for UvTransform {
+    fn default() -> Self {
+        Self::IDENTITY
+    }
 }
 
 /// glTF metallic-roughness material with the extensions the renderer reads.

@@ -153,10 +153,27 @@ pub fn masked_quad_gltf(
     uv_repeat: f32,
     texture: &image::RgbaImage,
 ) -> std::path::PathBuf {
+    let r = uv_repeat;
+    let material = r#"{"name": "stripes", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
+    "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 1.0}}"#;
+    quad_gltf(file, half, [[0.0, r], [r, r], [r, 0.0], [0.0, 0.0]], texture, material)
+}
+
+/// Writes a glTF file `file` (under the test tmpdir's `scenes/`) holding one
+/// quad of half-size `half` in the XY plane facing +Z, corners (-,-), (+,-),
+/// (+,+), (-,+) at `uvs`, with the material `material` (a glTF material
+/// object whose textures are index 0: `texture`, mipmapped, repeating).
+pub fn quad_gltf(
+    file: &str,
+    half: f32,
+    uvs: [[f32; 2]; 4],
+    texture: &image::RgbaImage,
+    material: &str,
+) -> std::path::PathBuf {
     let mut png = Vec::new();
     texture.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).unwrap();
     let mut bin: Vec<u8> = Vec::new();
-    let (s, r) = (half, uv_repeat);
+    let s = half;
     let mut put = |v: &[f32]| bin.extend(v.iter().flat_map(|x| x.to_le_bytes()));
     for p in [[-s, -s, 0.0], [s, -s, 0.0], [s, s, 0.0], [-s, s, 0.0]] {
         put(&p);
@@ -164,7 +181,7 @@ pub fn masked_quad_gltf(
     for _ in 0..4 {
         put(&[0.0, 0.0, 1.0]);
     }
-    for uv in [[0.0, r], [r, r], [r, 0.0], [0.0, 0.0]] {
+    for uv in uvs {
         put(&uv);
     }
     for i in [0u16, 1, 2, 0, 2, 3] {
@@ -173,11 +190,11 @@ pub fn masked_quad_gltf(
     let json = format!(
         r#"{{
   "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["KHR_texture_transform"],
   "scene": 0, "scenes": [{{"nodes": [0]}}],
-  "nodes": [{{"mesh": 0, "name": "fence"}}],
+  "nodes": [{{"mesh": 0, "name": "quad"}}],
   "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "indices": 3, "material": 0}}]}}],
-  "materials": [{{"name": "stripes", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": true,
-    "pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "metallicFactor": 0.0, "roughnessFactor": 1.0}}}}],
+  "materials": [{material}],
   "textures": [{{"source": 0, "sampler": 0}}],
   "samplers": [{{"wrapS": 10497, "wrapT": 10497, "minFilter": 9987, "magFilter": 9729}}],
   "images": [{{"uri": "data:image/png;base64,{png}"}}],

@@ -28,13 +28,15 @@ pub(super) fn check_glb_header(bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
-/// Extensions this importer reads; others (instancing, texture transforms,
-/// ...) are only used optionally by the file, so it loads without them.
+/// Extensions this importer reads; others (instancing, ...) are only used
+/// optionally by the file, so it loads without them.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_transmission",
+    "KHR_materials_volume",
+    "KHR_texture_transform",
 ];
 
 pub(super) fn warn_about_ignored_extensions(doc: &gltf::Document, path: &Path) {

@@ -7,7 +7,7 @@ use anyhow::{ensure, Context, Result};
 use gltf::texture::{MagFilter, MinFilter, WrappingMode};
 
 use super::buffers::read_uri;
-use crate::scene::{Filter, SamplerDesc, Texture, TextureRef, Wrap};
+use crate::scene::{Filter, SamplerDesc, Texture, TextureRef, UvTransform, Wrap};
 
 /// Assigns `Scene::textures` slots to (image, sampler, colour space)
 /// combinations while materials are converted; images are decoded later in
@@ -18,10 +18,13 @@ pub(super) struct TextureSlots {
 }
 
 impl TextureSlots {
+    /// `tex_coord` and `transform` as the reference gives them
+    /// (KHR_texture_transform's texCoord already applied).
     pub(super) fn slot(
         &mut self,
         texture: gltf::Texture,
         tex_coord: u32,
+        transform: UvTransform,
         srgb: bool,
         material: &str,
     ) -> TextureRef {
@@ -36,7 +39,7 @@ impl TextureSlots {
             self.keys.push(key);
             self.keys.len() - 1
         });
-        TextureRef { texture: index, tex_coord }
+        TextureRef { texture: index, tex_coord, transform }
     }
 
     /// Decodes every image used by a slot (each once, on all cores) and

@@ -1,28 +1,74 @@
-//! Materials: glTF metallic-roughness with the emissive strength, IOR and
-//! transmission extensions, their textures assigned to slots.
+//! Materials: glTF metallic-roughness with the emissive strength, IOR,
+//! transmission and volume extensions, their textures assigned to slots with
+//! each reference's KHR_texture_transform.
 
+use anyhow::{ensure, Context, Result};
 use glam::Vec3;
+use serde::Deserialize;
 
 use super::images::TextureSlots;
-use crate::scene::{AlphaMode, Material};
+use super::values::sane;
+use crate::scene::{AlphaMode, Material, TextureRef, UvTransform};
 
-pub(super) fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> Material {
+const TRANSFORM: &str = "KHR_texture_transform";
+
+pub(super) fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> Result<Material> {
     let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string);
     let pbr = m.pbr_metallic_roughness();
-    let mut slot = |info: Option<gltf::texture::Info>, srgb: bool| {
-        info.map(|i| slots.slot(i.texture(), i.tex_coord(), srgb, &name))
-    };
-    let base_color_texture = slot(pbr.base_color_texture(), true);
-    let metallic_roughness_texture = slot(pbr.metallic_roughness_texture(), false);
-    let emissive_texture = slot(m.emissive_texture(), true);
+    let mut slot =
+        |info: Option<gltf::texture::Info>, srgb: bool, what: &str| -> Result<Option<TextureRef>> {
+            let Some(i) = info else { return Ok(None) };
+            let t = i.texture_transform();
+            let transform = t.as_ref().map(|t| TransformExt {
+                offset: t.offset(),
+                rotation: t.rotation(),
+                scale: t.scale(),
+                tex_coord: t.tex_coord(),
+            });
+            let (tex_coord, transform) = uv_transform(transform, i.tex_coord(), what)?;
+            Ok(Some(slots.slot(i.texture(), tex_coord, transform, srgb, &name)))
+        };
+    let base_color_texture = slot(pbr.base_color_texture(), true, "baseColorTexture")?;
+    let metallic_roughness_texture =
+        slot(pbr.metallic_roughness_texture(), false, "metallicRoughnessTexture")?;
+    let emissive_texture = slot(m.emissive_texture(), true, "emissiveTexture")?;
     let transmission = m.transmission();
-    let transmission_texture = slot(transmission.as_ref().and_then(|t| t.transmission_texture()), false);
+    let transmission_texture =
+        slot(transmission.as_ref().and_then(|t| t.transmission_texture()), false, "transmissionTexture")?;
+    // The crate parses the extension on textureInfo only; normal and
+    // occlusion references carry it as raw JSON.
+    let mut raw_slot =
+        |texture: gltf::Texture, tex_coord: u32, ext: Option<&gltf::json::Value>, what: &str| {
+            let transform = match ext {
+                None => None,
+                Some(v) => {
+                    let t = gltf::json::extensions::texture::TextureTransform::deserialize(v)
+                        .with_context(|| format!("{what}: malformed {TRANSFORM}"))?;
+                    Some(TransformExt {
+                        offset: t.offset.0,
+                        rotation: t.rotation.0,
+                        scale: t.scale.0,
+                        tex_coord: t.tex_coord,
+                    })
+                }
+            };
+            let (tex_coord, transform) = uv_transform(transform, tex_coord, what)?;
+            anyhow::Ok(slots.slot(texture, tex_coord, transform, false, &name))
+        };
     let normal = m.normal_texture();
-    let normal_texture = normal.as_ref().map(|n| slots.slot(n.texture(), n.tex_coord(), false, &name));
+    let normal_texture = match &normal {
+        Some(n) => Some(raw_slot(n.texture(), n.tex_coord(), n.extension_value(TRANSFORM), "normalTexture")?),
+        None => None,
+    };
     let occlusion = m.occlusion_texture();
-    let occlusion_texture = occlusion.as_ref().map(|o| slots.slot(o.texture(), o.tex_coord(), false, &name));
+    let occlusion_texture = match &occlusion {
+        Some(o) => {
+            Some(raw_slot(o.texture(), o.tex_coord(), o.extension_value(TRANSFORM), "occlusionTexture")?)
+        }
+        None => None,
+    };
     let strength = m.emissive_strength().unwrap_or(1.0);
-    Material {
+    Ok(Material {
         base_color: pbr.base_color_factor(),
         base_color_texture,
         metallic: pbr.metallic_factor(),
@@ -49,5 +95,26 @@ pub(super) fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> 
         ior: m.ior().unwrap_or(1.5),
         casts_shadows: true,
         name,
-    }
+    })
+}
+
+/// KHR_texture_transform's numbers, from either form the crate gives them in.
+struct TransformExt {
+    offset: [f32; 2],
+    rotation: f32,
+    scale: [f32; 2],
+    tex_coord: Option<u32>,
+}
+
+/// A reference's (texCoord, transform): the extension's texCoord overrides
+/// the reference's; its numbers must be finite.
+fn uv_transform(ext: Option<TransformExt>, tex_coord: u32, what: &str) -> Result<(u32, UvTransform)> {
+    let Some(TransformExt { offset, rotation, scale, tex_coord: set }) = ext else {
+        return Ok((tex_coord, UvTransform::IDENTITY));
+    };
+    ensure!(
+        offset.iter().chain(&scale).chain([&rotation]).all(|&v| sane(v)),
+        "{what}: {TRANSFORM} offset {offset:?}, rotation {rotation}, scale {scale:?} must be finite"
+    );
+    Ok((set.unwrap_or(tex_coord), UvTransform::from_gltf(offset, rotation, scale)))
 }

@@ -56,7 +56,13 @@ fn import(path: &Path) -> Result<Scene> {
     let mut scene = Scene::default();
     let mut slots = TextureSlots::default();
     check_values(&doc)?;
-    scene.materials = doc.materials().map(|m| convert_material(&m, &mut slots)).collect();
+    scene.materials = doc
+        .materials()
+        .map(|m| {
+            convert_material(&m, &mut slots)
+                .with_context(|| format!("material {}{}", m.index().unwrap_or(0), quoted(m.name())))
+        })
+        .collect::<Result<_>>()?;
     let normal_mapped: Vec<bool> = scene.materials.iter().map(|m| m.normal_texture.is_some()).collect();
     // Primitives without a material use a default appended after the file's.
     let default_material = scene.materials.len();

@@ -8,7 +8,7 @@ use gltf::mesh::Mode;
 
 use super::geometry::triangle_list;
 use super::load;
-use crate::scene::{AlphaMode, Filter, LightKind, SamplerDesc, Scene, TextureRef, Vertex, Wrap};
+use crate::scene::{AlphaMode, Filter, LightKind, SamplerDesc, Scene, TextureRef, UvTransform, Vertex, Wrap};
 
 fn shared(relative: &str) -> PathBuf {
     let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/assets")).join(relative);
@@ -287,6 +287,62 @@ fn textures_are_deduplicated_per_image_sampler_and_colour_space() {
     // A normal-mapped material without TANGENT gets generated tangents.
     let p = &scene.meshes[0].primitives[0];
     assert!(p.vertices.iter().all(|v| v.tangent == [1.0, 0.0, 0.0, 1.0]), "{:?}", p.vertices);
+}
+
+/// KHR_texture_transform's example (the lower-left quadrant of the image,
+/// turned): the spec's matrix T * R * S applied to the quad's corners.
+#[test]
+fn texture_transform_follows_the_spec_example() {
+    let t = UvTransform::from_gltf([0.0, 1.0], std::f32::consts::FRAC_PI_2, [0.5, 0.5]);
+    let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]].map(|uv| t.apply(uv));
+    let want = [[0.0, 1.0], [0.0, 0.5], [0.5, 1.0], [0.5, 0.5]];
+    for (got, want) in corners.iter().zip(want) {
+        assert!((got[0] - want[0]).abs() < 1e-6 && (got[1] - want[1]).abs() < 1e-6, "{corners:?}");
+    }
+    assert_eq!(UvTransform::default().apply([0.25, 0.75]), [0.25, 0.75]);
+}
+
+/// Each texture reference keeps its own transform (textureInfo through the
+/// crate, normal and occlusion references from their raw JSON); texCoord in
+/// the extension overrides the reference's; a non-number is an error naming
+/// the material and the reference.
+#[test]
+fn texture_transforms_are_read_per_reference() {
+    let dir = temp_dir("texture-transform");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([255; 4])).save(dir.join("white.png")).unwrap();
+    let material = |normal_transform: &str| {
+        format!(
+            r#",
+  "extensionsUsed": ["KHR_texture_transform"],
+  "materials": [{{"name": "tiled",
+    "pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0,
+      "extensions": {{"KHR_texture_transform": {{"offset": [0.5, 0.25], "scale": [2, 3]}}}}}}}},
+    "normalTexture": {{"index": 0, "extensions": {{"KHR_texture_transform": {normal_transform}}}}},
+    "occlusionTexture": {{"index": 0, "texCoord": 1, "extensions": {{"KHR_texture_transform": {{"texCoord": 0}}}}}},
+    "emissiveTexture": {{"index": 0}}}}],
+  "textures": [{{"source": 0}}],
+  "images": [{{"uri": "white.png"}}]"#
+        )
+    };
+    let bin = triangle_bin(TRIANGLE, [0, 1, 2]);
+    let path =
+        write_triangle(&dir, &bin, &triangle_json("tri.bin", 3, true, &material(r#"{"rotation": 1.0}"#)));
+    let scene = load(&path).unwrap();
+    let m = &scene.materials[0];
+    let transform = |t: Option<TextureRef>| t.unwrap().transform;
+    assert_eq!(transform(m.base_color_texture), UvTransform::from_gltf([0.5, 0.25], 0.0, [2.0, 3.0]));
+    assert_eq!(transform(m.normal_texture), UvTransform::from_gltf([0.0; 2], 1.0, [1.0; 2]));
+    assert_eq!(transform(m.occlusion_texture), UvTransform::IDENTITY);
+    assert_eq!(m.occlusion_texture.unwrap().tex_coord, 0, "the extension's texCoord overrides");
+    assert_eq!(transform(m.emissive_texture), UvTransform::IDENTITY);
+
+    let bad = triangle_json("tri.bin", 3, true, &material(r#"{"rotation": "left"}"#));
+    let err = error_of(&write_triangle(&dir, &bin, &bad));
+    assert!(err.contains("material 0 'tiled'") && err.contains("normalTexture"), "{err}");
+    assert!(err.contains("KHR_texture_transform"), "{err}");
+    let huge = triangle_json("tri.bin", 3, true, &material(r#"{"scale": [1e38, 1]}"#));
+    let err = error_of(&write_triangle(&dir, &bin, &huge));
+    assert!(err.contains("normalTexture") && err.contains("must be finite"), "{err}");
 }
 
 #[test]
