@@ -15,6 +15,10 @@ struct Surface {
     vec3 emissive;
     float transmission;
     float ior;
+    // KHR_materials_specular: the dielectric reflection's weight and the colour its F0 (the IOR's)
+    // is multiplied by; 1 and white leave the IOR's reflection as it is.
+    float specular;
+    vec3 specular_color;
 };
 
 float d_ggx(float n_h, float a2) {
@@ -36,14 +40,39 @@ float schlick_f90(vec3 f0) {
     return clamp(dot(f0, vec3(50.0 / 3.0)), 0.0, 1.0);
 }
 
-vec3 f_schlick(vec3 f0, float v_h) {
+vec3 f_schlick(vec3 f0, float f90, float v_h) {
     float f = pow(clamp(1.0 - v_h, 0.0, 1.0), 5.0);
-    return f0 + (schlick_f90(f0) - f0) * f;
+    return f0 + (f90 - f0) * f;
+}
+
+vec3 f_schlick(vec3 f0, float v_h) {
+    return f_schlick(f0, schlick_f90(f0), v_h);
+}
+
+// The dielectric F0 before KHR_materials_specular's weight: the IOR's, tinted by its colour.
+vec3 dielectric_f0(Surface s) {
+    float f = (s.ior - 1.0) / (s.ior + 1.0);
+    return min(vec3(f * f) * s.specular_color, vec3(1.0));
 }
 
 vec3 surface_f0(Surface s) {
-    float f = (s.ior - 1.0) / (s.ior + 1.0);
-    return mix(vec3(f * f), s.base_color, s.metallic);
+    return mix(s.specular * dielectric_f0(s), s.base_color, s.metallic);
+}
+
+// The weight scales the dielectric's whole Fresnel curve, f90 included (KHR_materials_specular).
+float surface_f90(Surface s) {
+    return schlick_f90(mix(dielectric_f0(s), s.base_color, s.metallic)) * mix(s.specular, 1.0, s.metallic);
+}
+
+// The surface's Fresnel reflectance at v.h (or n.v).
+vec3 surface_fresnel(Surface s, float v_h) {
+    return f_schlick(surface_f0(s), surface_f90(s), v_h);
+}
+
+// Every Surface field KHR_materials_specular adds, at its "no extension" values.
+void no_specular_extension(inout Surface s) {
+    s.specular = 1.0;
+    s.specular_color = vec3(1.0);
 }
 
 // The BRDF's diffuse and specular lobes towards v for light from l; returns n.l (0: below the surface,
@@ -60,7 +89,7 @@ float brdf_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 
     float v_h = max(dot(v, h), 0.0);
     float a = max(s.roughness * s.roughness, 1e-3);
     float a2 = a * a;
-    vec3 f = f_schlick(surface_f0(s), v_h);
+    vec3 f = surface_fresnel(s, v_h);
     spec = ms * f * d_ggx(n_h, a2) * v_smith_ggx_correlated(n_v, n_l, a2);
     diffuse = (1.0 - f) * (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color / PI;
     return n_l;

@@ -37,6 +37,21 @@ vec3 primary_emissive(ivec2 px, uint instance, uint primitive, vec2 b) {
     return m.emissive * sample_tex_grad(m.tex_emissive, m.uv_emissive, uv, dx, dy, vec4(1.0)).rgb;
 }
 
+// KHR_materials_specular at the pixel's hit. The G-buffer does not store it: the factors come from
+// the material, and only materials with its textures sample them (filtered as the G-buffer pass would).
+void primary_specular(ivec2 px, uvec2 hit, Material m, inout Surface s) {
+    s.specular = m.specular;
+    s.specular_color = m.specular_color;
+    if (m.tex_specular < 0 && m.tex_specular_color < 0) return;
+    uint instance = hit.x - 1u;
+    vec2 b = plane_barycentrics(triangle_world(instance, hit.y), frame.camera_pos, camera_ray_dir(vec2(px) + 0.5));
+    vec2 uv = hit_uv(hit_vertices(instances[instance], hit.y), b);
+    vec2 dx, dy;
+    camera_uv_gradients(instance, hit.y, px, dx, dy);
+    s.specular = clamp(s.specular * sample_tex_grad(m.tex_specular, m.uv_specular, uv, dx, dy, vec4(1.0)).a, 0.0, 1.0);
+    s.specular_color *= sample_tex_grad(m.tex_specular_color, m.uv_specular_color, uv, dx, dy, vec4(1.0)).rgb;
+}
+
 // Material terms only, enough to decide which rays the hit spawns. False on a miss (hit id 0).
 bool read_primary_material(ivec2 px, out uvec2 hit, out Surface s) {
     hit = texelFetch(gb_hit, px, 0).xy;
@@ -48,7 +63,9 @@ bool read_primary_material(ivec2 px, out uvec2 hit, out Surface s) {
     s.metallic = mat.r;
     s.roughness = mat.g;
     s.transmission = mat.b;
-    s.ior = materials[instances[hit.x - 1u].material].ior;
+    Material m = materials[instances[hit.x - 1u].material];
+    s.ior = m.ior;
+    primary_specular(px, hit, m, s);
     // Only `composite` adds emission, so the tracing passes skip its texture lookup.
     s.emissive = vec3(0.0);
     return true;

@@ -263,7 +263,7 @@ void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w,
     vec3 f0 = surface_f0(s);
     float eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
     float fr = fresnel_dielectric(nv, eta);
-    vec3 kr = f_schlick(f0, nv);
+    vec3 kr = f_schlick(f0, surface_f90(s), nv);
     // A chain's rays count for the effect that started it at the primary hit (total internal
     // reflection there counts as refraction).
     bool root = depth == 0u;

@@ -19,6 +19,8 @@ void material_eval(Material m, vec2 uv, inout Surface s, out float alpha) {
     s.emissive = m.emissive * MAT_SAMPLE(m.tex_emissive, m.uv_emissive, uv, vec4(1.0)).rgb;
     s.transmission = clamp(m.transmission * MAT_SAMPLE(m.tex_transmission, m.uv_transmission, uv, vec4(1.0)).r, 0.0, 1.0);
     s.ior = m.ior;
+    s.specular = clamp(m.specular * MAT_SAMPLE(m.tex_specular, m.uv_specular, uv, vec4(1.0)).a, 0.0, 1.0);
+    s.specular_color = m.specular_color * MAT_SAMPLE(m.tex_specular_color, m.uv_specular_color, uv, vec4(1.0)).rgb;
 }
 
 // Perturbs the unit normal `n` by the material's normal map. Degenerate

@@ -39,7 +39,7 @@ vec3 env_specular_radiance(Surface s, vec3 v) {
 vec3 specular_albedo(Surface s, float nv) {
     vec3 f0 = surface_f0(s);
     vec2 ab = dfg_at(nv, s.roughness);
-    return (f0 * ab.x + schlick_f90(f0) * ab.y) * ms_from(f0, ab);
+    return (f0 * ab.x + surface_f90(s) * ab.y) * ms_from(f0, ab);
 }
 
 // The surface's GGX lobe lit by the unshadowed environment.

@@ -41,9 +41,11 @@ struct Material {
     // Beer-Lambert attenuation per world unit inside the closed mesh
     // (KHR_materials_volume; 0: clear).
     vec3 volume_sigma;
-    uint pad0;
-    uint pad1;
-    uint pad2;
+    // KHR_materials_specular: the dielectric reflection's weight (x texture A) and the F0 colour's
+    // texture (RGB; its factor is specular_color below).
+    float specular;
+    int tex_specular;
+    int tex_specular_color;
     // KHR_texture_transform of each tex_* reference above, in their order.
     UvTransform uv_base_color;
     UvTransform uv_metallic_roughness;
@@ -51,6 +53,11 @@ struct Material {
     UvTransform uv_occlusion;
     UvTransform uv_emissive;
     UvTransform uv_transmission;
+    UvTransform uv_specular;
+    UvTransform uv_specular_color;
+    // Multiplies the IOR's F0 (clamped to 1 after).
+    vec3 specular_color;
+    uint pad0;
 };
 
 struct Instance {

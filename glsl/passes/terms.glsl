@@ -54,10 +54,10 @@ vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out S
         float r = sqrt(u1), phi = 2.0 * PI * u2;
         l = vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u1, 0.0)));
         // Lambert weighted by 1 - F, as bsdf_eval: f cos / (cos / pi).
-        w = (1.0 - f_schlick(m.f0, max(dot(v, normalize(v + l)), 0.0))) * m.diffuse * ((pd + ps) / pd);
+        w = (1.0 - f_schlick(m.f0, m.f90, max(dot(v, normalize(v + l)), 0.0))) * m.diffuse * ((pd + ps) / pd);
     } else if (m.delta) {
         l = vec3(-v.x, -v.y, v.z);
-        w = m.spec_w * f_schlick(m.f0, max(v.z, 1e-4)) * ((pd + ps) / ps);
+        w = m.spec_w * f_schlick(m.f0, m.f90, max(v.z, 1e-4)) * ((pd + ps) / ps);
     } else {
         vec3 h = sample_vndf(v, m.alpha, u1, u2);
         l = reflect(-v, h);
@@ -65,7 +65,7 @@ vec3 terms_path(PrimaryHit p, Bsdf m, vec3 v, bool mirror, inout uint rng, out S
         float a2 = m.alpha * m.alpha, lv = ggx_lambda(max(v.z, 1e-4), a2);
         // f cos / pdf = F G2 / G1 (height-correlated Smith).
         float g = (1.0 + lv) / (1.0 + lv + ggx_lambda(l.z, a2));
-        w = m.spec_w * m.ms * f_schlick(m.f0, max(dot(v, h), 0.0)) * g * ((pd + ps) / ps);
+        w = m.spec_w * m.ms * f_schlick(m.f0, m.f90, max(dot(v, h), 0.0)) * g * ((pd + ps) / ps);
     }
     vec3 d = normalize(bsdf_world(m, l));
     if (dot(d, p.gn) <= 0.0) return vec3(0.0);  // below the geometry: occluded

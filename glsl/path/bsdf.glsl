@@ -17,6 +17,7 @@ const float DELTA_ALPHA = 1e-3;
 struct Bsdf {
     vec3 t, b, n;
     vec3 f0;         // Schlick reflectance of the opaque part (surface_f0)
+    float f90;       // and its grazing reflectance (surface_f90)
     vec3 ms;         // its lobe's multiple-scattering compensation (split_sum.glsl), as the raster's
     float alpha;     // GGX alpha (roughness^2, at least DELTA_ALPHA)
     bool delta;      // perfect specular lobes
@@ -43,6 +44,7 @@ Bsdf bsdf_at(Surface s, vec3 v, bool back_face) {
     m.delta = a < DELTA_ALPHA;
     m.alpha = max(a, DELTA_ALPHA);
     m.f0 = surface_f0(s);
+    m.f90 = surface_f90(s);
     m.ms = ms_compensation(m.f0, max(dot(m.n, v), 1e-4), s.roughness);
     m.tm = s.transmission * (1.0 - s.metallic);
     m.spec_w = 1.0 - m.tm;
@@ -50,7 +52,7 @@ Bsdf bsdf_at(Surface s, vec3 v, bool back_face) {
     m.eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
     m.tint = s.base_color;
     // In proportion to each lobe's albedo estimate at n.v.
-    vec3 fv = f_schlick(m.f0, max(dot(m.n, v), 1e-4));
+    vec3 fv = f_schlick(m.f0, m.f90, max(dot(m.n, v), 1e-4));
     float ws = m.spec_w * max3(fv), wd = max3(m.diffuse * (1.0 - fv)), wg = m.tm;
     float sum = ws + wd + wg;
     m.p_spec = sum > 0.0 ? ws / sum : 0.0;
@@ -98,7 +100,7 @@ vec3 bsdf_eval(Bsdf m, vec3 v, vec3 l, out float pdf) {
     if (l.z > 0.0) {
         vec3 h = normalize(v + l);
         float vh = max(dot(v, h), 0.0);
-        vec3 fs = f_schlick(m.f0, vh);
+        vec3 fs = f_schlick(m.f0, m.f90, vh);
         if (m.p_diff > 0.0) {
             f += (1.0 - fs) * m.diffuse * (l.z / PI);
             pdf += m.p_diff * l.z / PI;
@@ -146,7 +148,7 @@ bool bsdf_sample(Bsdf m, vec3 v, inout uint rng, out BsdfSample bs) {
     if (u < m.p_spec) {
         if (m.delta) {
             bs.l = vec3(-v.x, -v.y, v.z);
-            bs.weight = m.spec_w * f_schlick(m.f0, max(v.z, 1e-4)) / m.p_spec;
+            bs.weight = m.spec_w * f_schlick(m.f0, m.f90, max(v.z, 1e-4)) / m.p_spec;
             bs.delta = true;
             return true;
         }

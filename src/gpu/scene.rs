@@ -601,7 +601,9 @@ fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
         tex_emissive: tex_index(&m.emissive_texture),
         tex_transmission: tex_index(&m.transmission_texture),
         volume_sigma: m.volume_sigma(),
-        pad: [0; 3],
+        specular: m.specular,
+        tex_specular: tex_index(&m.specular_texture),
+        tex_specular_color: tex_index(&m.specular_color_texture),
         uv_transforms: [
             &m.base_color_texture,
             &m.metallic_roughness_texture,
@@ -609,8 +611,12 @@ fn gpu_material(m: &crate::scene::Material) -> GpuMaterial {
             &m.occlusion_texture,
             &m.emissive_texture,
             &m.transmission_texture,
+            &m.specular_texture,
+            &m.specular_color_texture,
         ]
         .map(|t| t.map_or(UvTransform::IDENTITY, |t| t.transform).rows),
+        specular_color: m.specular_color,
+        pad: 0,
     }
 }
 

@@ -36,10 +36,16 @@ pub struct GpuMaterial {
     pub tex_transmission: i32,
     /// Material::volume_sigma.
     pub volume_sigma: [f32; 3],
-    pub pad: [u32; 3],
+    /// KHR_materials_specular: Material::specular and its texture (A), the
+    /// F0 colour's texture (RGB); the colour factor is below.
+    pub specular: f32,
+    pub tex_specular: i32,
+    pub tex_specular_color: i32,
     /// Each texture reference's KHR_texture_transform (UvTransform::rows),
     /// in the order of the tex_* indices above.
-    pub uv_transforms: [[[f32; 3]; 2]; 6],
+    pub uv_transforms: [[[f32; 3]; 2]; 8],
+    pub specular_color: [f32; 3],
+    pub pad: u32,
 }
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == MATERIAL_STRIDE as usize);
 

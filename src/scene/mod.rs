@@ -137,6 +137,13 @@ pub struct Material {
     pub transmission_texture: Option<TextureRef>,
     /// KHR_materials_ior (glTF default 1.5).
     pub ior: f32,
+    /// KHR_materials_specular: the dielectric reflection's strength (the
+    /// texture's A scales it) and its F0 colour, multiplying the IOR's F0
+    /// (the texture's RGB, sRGB, scales it). 1 and white: the IOR alone.
+    pub specular: f32,
+    pub specular_texture: Option<TextureRef>,
+    pub specular_color: [f32; 3],
+    pub specular_color_texture: Option<TextureRef>,
     /// KHR_materials_volume: the colour white light turns after travelling
     /// `attenuation_distance` (world units; infinite: a clear medium)
     /// inside the closed mesh (Beer-Lambert along the refracted paths).
@@ -167,6 +174,10 @@ impl Default for Material {
             transmission: 0.0,
             transmission_texture: None,
             ior: 1.5,
+            specular: 1.0,
+            specular_texture: None,
+            specular_color: [1.0; 3],
+            specular_color_texture: None,
             attenuation_color: [1.0; 3],
             attenuation_distance: f32::INFINITY,
             casts_shadows: true,

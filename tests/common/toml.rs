@@ -165,6 +165,8 @@ keys! {
     metallic => "metallic",
     roughness => "roughness",
     ior => "ior",
+    specular => "specular",
+    specular_color => "specular_color",
     transmission => "transmission",
     emissive => "emissive",
     // Objects.

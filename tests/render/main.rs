@@ -40,6 +40,7 @@ mod shading_closed_form;
 mod shared_layout;
 mod skinning;
 mod speckles;
+mod specular_extension;
 mod texture_transform;
 mod tonemap;
 mod vulkan12;

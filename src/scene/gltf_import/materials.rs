@@ -1,5 +1,5 @@
 //! Materials: glTF metallic-roughness with the emissive strength, IOR,
-//! transmission and volume extensions, their textures assigned to slots with
+//! specular, transmission and volume extensions, their textures assigned to slots with
 //! each reference's KHR_texture_transform.
 
 use anyhow::{ensure, Context, Result};
@@ -32,6 +32,11 @@ pub(super) fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> 
     let metallic_roughness_texture =
         slot(pbr.metallic_roughness_texture(), false, "metallicRoughnessTexture")?;
     let emissive_texture = slot(m.emissive_texture(), true, "emissiveTexture")?;
+    let specular = m.specular();
+    let specular_texture =
+        slot(specular.as_ref().and_then(|s| s.specular_texture()), false, "specularTexture")?;
+    let specular_color_texture =
+        slot(specular.as_ref().and_then(|s| s.specular_color_texture()), true, "specularColorTexture")?;
     let transmission = m.transmission();
     let transmission_texture =
         slot(transmission.as_ref().and_then(|t| t.transmission_texture()), false, "transmissionTexture")?;
@@ -93,6 +98,10 @@ pub(super) fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> 
         attenuation_distance: m.volume().map_or(f32::INFINITY, |v| v.attenuation_distance()),
         transmission_texture,
         ior: m.ior().unwrap_or(1.5),
+        specular: specular.as_ref().map_or(1.0, |s| s.specular_factor()),
+        specular_texture,
+        specular_color: specular.as_ref().map_or([1.0; 3], |s| s.specular_color_factor()),
+        specular_color_texture,
         casts_shadows: true,
         name,
     })

@@ -345,6 +345,35 @@ fn texture_transforms_are_read_per_reference() {
     assert!(err.contains("normalTexture") && err.contains("must be finite"), "{err}");
 }
 
+/// KHR_materials_specular: factors, the weight texture (linear, A) and the
+/// colour texture (sRGB); an out-of-range weight is an error naming it.
+#[test]
+fn specular_extension_is_read() {
+    let dir = temp_dir("specular");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([255; 4])).save(dir.join("white.png")).unwrap();
+    let material = |factor: &str| {
+        format!(
+            r#",
+  "extensionsUsed": ["KHR_materials_specular"],
+  "materials": [{{"name": "coated", "extensions": {{"KHR_materials_specular": {{"specularFactor": {factor},
+    "specularColorFactor": [2, 1, 0.5], "specularTexture": {{"index": 0}}, "specularColorTexture": {{"index": 0}}}}}}}}],
+  "textures": [{{"source": 0}}],
+  "images": [{{"uri": "white.png"}}]"#
+        )
+    };
+    let bin = triangle_bin(TRIANGLE, [0, 1, 2]);
+    let scene =
+        load(&write_triangle(&dir, &bin, &triangle_json("tri.bin", 3, true, &material("0.25")))).unwrap();
+    let m = &scene.materials[0];
+    assert_eq!((m.specular, m.specular_color), (0.25, [2.0, 1.0, 0.5]));
+    let tex = |t: Option<TextureRef>| &scene.textures[t.unwrap().texture];
+    assert!(!tex(m.specular_texture).srgb && tex(m.specular_color_texture).srgb);
+    assert_eq!(crate::scene::Material::default().specular, 1.0, "no extension: the IOR's reflection");
+
+    let err = error_of(&write_triangle(&dir, &bin, &triangle_json("tri.bin", 3, true, &material("1.5"))));
+    assert!(err.contains("material 0 'coated'") && err.contains("specularFactor 1.5"), "{err}");
+}
+
 #[test]
 fn strips_and_fans_become_lists() {
     assert_eq!(triangle_list(Mode::TriangleStrip, vec![0, 1, 2, 3, 4]), vec![0, 1, 2, 1, 3, 2, 2, 3, 4]);

@@ -59,6 +59,16 @@ pub(super) fn check_material(m: &gltf::Material) -> Result<()> {
              term of 1, which this renderer does not support)"
         );
     }
+    if let Some(s) = m.specular() {
+        within(s.specular_factor(), 0.0, 1.0, "KHR_materials_specular specularFactor", "within [0, 1]")?;
+        each_within(
+            &s.specular_color_factor(),
+            0.0,
+            f32::MAX,
+            "KHR_materials_specular specularColorFactor",
+            "each component >= 0",
+        )?;
+    }
     if let Some(t) = m.transmission() {
         within(
             t.transmission_factor(),

@@ -99,6 +99,8 @@ pub(super) fn material_from_def(m: MaterialDef) -> Result<Material> {
         double_sided: m.double_sided.unwrap_or(false),
         transmission: unit_interval(m.transmission.unwrap_or(0.0), "transmission")?,
         ior,
+        specular: unit_interval(m.specular.unwrap_or(1.0), "specular")?,
+        specular_color: non_negative3(m.specular_color.unwrap_or([1.0; 3]), "specular_color")?.to_array(),
         attenuation_color,
         attenuation_distance,
         casts_shadows: m.casts_shadows.unwrap_or(true),

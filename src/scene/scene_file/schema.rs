@@ -100,6 +100,8 @@ pub(super) struct MaterialDef {
     pub(super) emissive_strength: Option<f32>,
     pub(super) transmission: Option<f32>,
     pub(super) ior: Option<f32>,
+    pub(super) specular: Option<f32>,
+    pub(super) specular_color: Option<[f32; 3]>,
     pub(super) attenuation_color: Option<[f32; 3]>,
     pub(super) attenuation_distance: Option<f32>,
     pub(super) opacity: Option<f32>,
