@@ -14,9 +14,11 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = SET_PASS, binding = AO_IN, rgba32f) uniform readonly image2D ao_in;
 layout(set = SET_PASS, binding = AO_BOUNCE_IN, rgba32f) uniform readonly image2D ao_bounce_in;
-layout(set = SET_PASS, binding = AO_SPECULAR_IN, rgba32f) uniform readonly image2D ao_specular_in;
 layout(set = SET_PASS, binding = AO_VISIBILITY_OUT, rgba32f) uniform writeonly image2D ao_visibility;
+#ifdef AO_EMITTER_SPECULAR
+layout(set = SET_PASS, binding = AO_SPECULAR_IN, rgba32f) uniform readonly image2D ao_specular_in;
 layout(set = SET_PASS, binding = AO_EMITTER_SPECULAR_OUT, rgba32f) uniform writeonly image2D emitter_specular;
+#endif
 
 vec3 ao_point(ivec2 px, float camera_distance) {
     return frame.camera_pos + camera_ray_dir(vec2(px) + 0.5) * camera_distance;
@@ -30,7 +32,9 @@ void main() {
     if (centre.a <= 0.0) {
         vec3 sky = (frame.flags & FRAME_AO_SKY) != 0u ? ambient_radiance(n) : vec3(0.0);
         imageStore(ao_visibility, px, vec4(sky, 1.0));
+#ifdef AO_EMITTER_SPECULAR
         imageStore(emitter_specular, px, vec4(0.0));
+#endif
         return;
     }
     vec3 x = ao_point(px, centre.a);
@@ -52,7 +56,9 @@ void main() {
             float w = wn * wp;
             sum += w * tap.rgb;
             bounce += w * imageLoad(ao_bounce_in, q).rgb;
+#ifdef AO_EMITTER_SPECULAR
             specular += w * imageLoad(ao_specular_in, q).rgb;
+#endif
             weights += w;
         }
     }
@@ -60,5 +66,7 @@ void main() {
     vec3 sky = (frame.flags & FRAME_AO_SKY) != 0u ? ambient_radiance(n) * share : vec3(0.0);
     vec3 radiance = sky + bounce / (weights * PI);
     imageStore(ao_visibility, px, vec4(radiance, (share.r + share.g + share.b) / 3.0));
+#ifdef AO_EMITTER_SPECULAR
     imageStore(emitter_specular, px, vec4(specular / weights, 0.0));
+#endif
 }

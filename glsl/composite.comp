@@ -24,7 +24,9 @@ layout(set = SET_PASS, binding = REFERENCE_IN, rgba32f) uniform readonly image2D
 #endif
 #ifdef AO
 layout(set = SET_PASS, binding = AO_VISIBILITY_IN, rgba32f) uniform readonly image2D ao_visibility;
+#ifdef AO_EMITTER_SPECULAR
 layout(set = SET_PASS, binding = AO_EMITTER_SPECULAR_IN, rgba32f) uniform readonly image2D emitter_specular;
+#endif
 #endif
 layout(set = SET_PASS, binding = HDR_OUT, rgba32f) uniform writeonly image2D hdr_out;
 
@@ -114,7 +116,9 @@ void main() {
         float nv = max(dot(s.normal, v), 1e-4);
         glossy *= specular_occlusion(vec3(traced.a), nv, s.roughness);
         // The emitters on the lobe (their light samples' shadow rays traced: not occluded again).
+#ifdef AO_EMITTER_SPECULAR
         if (!(mirror || is_glossy(s, 0u)) && s.roughness > MIRROR_ROUGHNESS) glossy += imageLoad(emitter_specular, px).rgb * specular_albedo(s, nv) * s.occlusion;
+#endif
     }
 #endif
 #ifdef TERMS

@@ -28,7 +28,9 @@ layout(set = SET_PASS, binding = AO_OUT, rgba32f) uniform writeonly image2D ao_o
 // rgb: the irradiance of the bounce and the emitters.
 layout(set = SET_PASS, binding = AO_BOUNCE_OUT, rgba32f) uniform writeonly image2D ao_bounce_out;
 // rgb: the emitters' light on a specular lobe no glossy ray samples, over the lobe's albedo.
+#ifdef AO_EMITTER_SPECULAR
 layout(set = SET_PASS, binding = AO_SPECULAR_OUT, rgba32f) uniform writeonly image2D ao_specular_out;
+#endif
 
 // The smoothed environment along d (the prefiltered chain's level AO_WEIGHT_LEVEL), floored so a black
 // channel keeps a defined ratio; 1 where the ambient is one constant.
@@ -208,16 +210,20 @@ void ao_pixel(ivec2 px) {
     if (!read_primary(px, p) || !ao_shades(p.s)) {
         imageStore(ao_out, px, vec4(1.0, 1.0, 1.0, 0.0));
         imageStore(ao_bounce_out, px, vec4(0.0));
+#ifdef AO_EMITTER_SPECULAR
         imageStore(ao_specular_out, px, vec4(0.0));
+#endif
         return;
     }
     float nv = face_viewer(p.s, -p.dir);
     vec3 bounce, specular;
     vec3 share = ao_estimate(p, px, bounce, specular);
     if (any(isnan(bounce)) || any(isinf(bounce))) bounce = vec3(0.0);
-    specular /= max(specular_albedo(p.s, max(nv, 1e-4)), vec3(1e-4));
-    if (any(isnan(specular)) || any(isinf(specular))) specular = vec3(0.0);
     imageStore(ao_out, px, vec4(share, distance(frame.camera_pos, p.s.position)));
     imageStore(ao_bounce_out, px, vec4(bounce, 0.0));
+#ifdef AO_EMITTER_SPECULAR
+    specular /= max(specular_albedo(p.s, max(nv, 1e-4)), vec3(1e-4));
+    if (any(isnan(specular)) || any(isinf(specular))) specular = vec3(0.0);
     imageStore(ao_specular_out, px, vec4(specular, 0.0));
+#endif
 }

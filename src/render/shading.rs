@@ -30,6 +30,8 @@ pub struct SceneNeeds {
     /// Something lights the scene (the environment, a light, an emissive material) and something can
     /// occlude or bounce it: `--ambient traced` has something to trace.
     pub ambient_occluders: bool,
+    /// An instance's material emits: the traced ambient samples the emissive triangles.
+    pub emitters: bool,
     /// The scene file's `[environment] ambient`.
     pub scene_ambient: Option<AmbientMode>,
     /// The scene file's `[environment] exposure`.
@@ -58,6 +60,7 @@ impl SceneNeeds {
                 && (env_lit
                     || scene.lights.iter().any(light_is_on)
                     || used.iter().any(|&m| scene.materials[m].emissive.iter().any(|c| *c > 0.0))),
+            emitters: used.iter().any(|&m| scene.materials[m].emissive.iter().any(|c| *c > 0.0)),
             scene_ambient: AmbientMode::of_scene(env),
             scene_exposure: env.exposure,
             reflections: mirrors || glossy,
@@ -192,6 +195,9 @@ pub struct ShadingConfig {
     /// `--ambient traced` where the environment lights the scene and something occludes it (not in a
     /// debug view, not beside the reference, which replaces the ambient): passes `ao` and `ao filter`.
     pub ambient_visibility: bool,
+    /// Beside it, the emitters' light on specular lobes no glossy ray samples: the scene emits, so `ao`,
+    /// `ao filter` and `composite` take their variants with the `emitter specular` targets.
+    pub ao_emitter_specular: bool,
 }
 
 impl ShadingConfig {
@@ -275,6 +281,10 @@ impl ShadingConfig {
                 && visibility != Pv::Traced,
             glossy_temporal: settings.glossy_temporal,
             ambient_visibility,
+            // Unless the attribution supplies the emitters' light (report/attribution.rs).
+            ao_emitter_specular: ambient_visibility
+                && needs.emitters
+                && settings.terms & crate::gpu::shared::TERM_EMITTERS == 0,
         })
     }
 
@@ -307,6 +317,7 @@ impl ShadingConfig {
             occlusion: false,
             glossy_temporal: false,
             ambient_visibility: false,
+            ao_emitter_specular: false,
         })
     }
 
@@ -386,6 +397,7 @@ mod tests {
             refractions: false,
             shadow_maps: false,
             ambient_occluders: false,
+            emitters: false,
             scene_ambient: None,
             scene_exposure: None,
             largest_primitive_triangles: triangles,

@@ -274,6 +274,7 @@ mod tests {
             refractions: false,
             shadow_maps: false,
             ambient_occluders: false,
+            emitters: false,
             scene_ambient: None,
             scene_exposure: None,
             largest_primitive_triangles: 1,
@@ -297,6 +298,7 @@ mod tests {
             occlusion: false,
             glossy_temporal: false,
             ambient_visibility: false,
+            ao_emitter_specular: false,
         }
     }
 

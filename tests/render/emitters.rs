@@ -116,3 +116,29 @@ fn a_rough_metal_reflects_a_lamp_as_the_path_tracer_does() {
     assert!(want > 0.01, "the lamp lights the floor in the truth ({want})");
     assert!((got / want - 1.0).abs() < 0.05, "rough metal floor {got} against the path tracer's {want}");
 }
+
+/// The `emitter specular` targets (and the passes' `_emitters` variants) exist only where the scene
+/// emits: the same room with the lamp switched off has neither, with the traced ambient still running.
+#[test]
+fn emitter_targets_exist_only_where_the_scene_emits() {
+    let camera_block = camera([0.0, 0.9, 0.0], [0.0, 0.0, 0.0]).up([0.0, 0.0, -1.0]).yfov(60);
+    for lit in [true, false] {
+        let toml = scene_toml([
+            environment([0.2, 0.2, 0.2]),
+            camera_block.clone(),
+            lambert("floor", [0.5; 3]),
+            emitter("lamp", if lit { [L; 3] } else { [0.0; 3] }),
+            plane("floor", 40.0).material("floor"),
+            plane("lamp", 2.0 * A).at([0.0, H, 0.0]).rot([180.0, 0.0, 0.0]).material("lamp"),
+        ]);
+        let scene = common::scene_from_toml(&format!("emitter_targets_{lit}"), &toml);
+        let mut b = common::Bench::new(&scene, 16, 16);
+        b.frame(&scene, &scene.cameras[0], &RenderSettings::default());
+        let names: Vec<&str> = b.renderer.targets().describe().into_iter().map(|(n, _)| n).collect();
+        b.finish();
+        assert!(names.contains(&"ambient visibility"), "the traced ambient runs: {names:?}");
+        for target in ["emitter specular sample", "emitter specular"] {
+            assert_eq!(names.contains(&target), lit, "lamp on: {lit}, targets {names:?}");
+        }
+    }
+}

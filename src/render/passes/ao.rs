@@ -28,11 +28,14 @@ pub static BOUNCE: TargetDesc = TargetDesc::new("ambient bounce sample", vk::For
 /// Per pixel the emitters' light on a specular lobe no glossy ray samples, over the lobe's albedo (rgb).
 pub static SPECULAR: TargetDesc = TargetDesc::new("emitter specular sample", vk::Format::R32G32B32A32_SFLOAT);
 
-fn io() -> Vec<TargetBinding> {
+/// `emitter specular sample` exists where the scene emits (ShadingConfig::ao_emitter_specular).
+fn io(c: &ShadingConfig) -> Vec<TargetBinding> {
     let mut io = gbuffer::reads();
     io.push(TargetBinding::new(AO_OUT, &SAMPLE, Access::StorageWrite));
     io.push(TargetBinding::new(AO_BOUNCE_OUT, &BOUNCE, Access::StorageWrite));
-    io.push(TargetBinding::new(AO_SPECULAR_OUT, &SPECULAR, Access::StorageWrite));
+    if c.ao_emitter_specular {
+        io.push(TargetBinding::new(AO_SPECULAR_OUT, &SPECULAR, Access::StorageWrite));
+    }
     io
 }
 
@@ -54,9 +57,10 @@ pub const PASS: PassDesc = PassDesc {
     name: "ao",
     this_frame: super::every_frame,
     skip,
-    uses: |_, _| fullscreen::uses(&io(), true),
+    uses: |c, _| fullscreen::uses(&io(c), true),
     create: |i: &Creation| {
         let spec = Specialization::new(&i.config.specialization());
-        FullScreen::create(i, "ao", io(), Shader::Traced("ao"), &spec)
+        let shader = if i.config.ao_emitter_specular { "ao_emitters" } else { "ao" };
+        FullScreen::create(i, "ao", io(i.config), Shader::Traced(shader), &spec)
     },
 };

@@ -64,6 +64,15 @@ fn io(c: &ShadingConfig, inputs: &Inputs) -> Vec<TargetBinding> {
 
 /// The shader variant that reads exactly the inputs there are.
 fn shader(c: &ShadingConfig, inputs: &Inputs) -> &'static str {
+    if inputs.emitter_specular.is_some() {
+        // (Only beside the visibility.)
+        return match (inputs.specular.is_some(), inputs.terms.is_some()) {
+            (true, true) => "composite_specular_terms_ao_emitters",
+            (true, false) => "composite_specular_ao_emitters",
+            (false, true) => "composite_terms_ao_emitters",
+            (false, false) => "composite_ao_emitters",
+        };
+    }
     // (ShadingConfig::resolve allows terms neither beside the reference
     // nor in a debug view, and the visibility not beside the reference.)
     let (specular, reference, terms, ao) = (
