@@ -118,14 +118,8 @@ fn spheres(name: &str, m: Block) -> Scene {
 
 /// (share of pixels differing by more than 2/255 in a channel, largest difference / 255).
 fn difference(a: &FrameOutput, b: &FrameOutput) -> (f64, u8) {
-    let (a, b) = (a.rgb8(), b.rgb8());
-    let (mut differ, mut worst) = (0usize, 0u8);
-    for (p, q) in a.pixels().zip(b.pixels()) {
-        let d = (0..3).map(|c| p.0[c].abs_diff(q.0[c])).max().unwrap();
-        differ += usize::from(d > 2);
-        worst = worst.max(d);
-    }
-    (differ as f64 / (a.width() * a.height()) as f64, worst)
+    let (max, share) = hybrid_rt::image_diff::diff_stats(a.rgb8().as_raw(), b.rgb8().as_raw(), 3, 2);
+    (share, max)
 }
 
 fn assert_same(

@@ -289,6 +289,13 @@ fn textures_are_deduplicated_per_image_sampler_and_colour_space() {
     assert!(p.vertices.iter().all(|v| v.tangent == [1.0, 0.0, 0.0, 1.0]), "{:?}", p.vertices);
 }
 
+/// A scratch directory holding `white.png` (2 x 2), for files that need a texture.
+fn white_png_dir(test: &str) -> PathBuf {
+    let dir = temp_dir(test);
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([255; 4])).save(dir.join("white.png")).unwrap();
+    dir
+}
+
 /// KHR_texture_transform's example (the lower-left quadrant of the image,
 /// turned): the spec's matrix T * R * S applied to the quad's corners.
 #[test]
@@ -308,8 +315,7 @@ fn texture_transform_follows_the_spec_example() {
 /// the material and the reference.
 #[test]
 fn texture_transforms_are_read_per_reference() {
-    let dir = temp_dir("texture-transform");
-    image::RgbaImage::from_pixel(2, 2, image::Rgba([255; 4])).save(dir.join("white.png")).unwrap();
+    let dir = white_png_dir("texture-transform");
     let material = |normal_transform: &str| {
         format!(
             r#",
@@ -349,8 +355,7 @@ fn texture_transforms_are_read_per_reference() {
 /// colour texture (sRGB); an out-of-range weight is an error naming it.
 #[test]
 fn specular_extension_is_read() {
-    let dir = temp_dir("specular");
-    image::RgbaImage::from_pixel(2, 2, image::Rgba([255; 4])).save(dir.join("white.png")).unwrap();
+    let dir = white_png_dir("specular");
     let material = |factor: &str| {
         format!(
             r#",
