@@ -307,6 +307,13 @@ fn texture_transform_follows_the_spec_example() {
         assert!((got[0] - want[0]).abs() < 1e-6 && (got[1] - want[1]).abs() < 1e-6, "{corners:?}");
     }
     assert_eq!(UvTransform::default().apply([0.25, 0.75]), [0.25, 0.75]);
+    // Scale, then rotation, then offset, by hand: (1, 0) -> (2 cos r, -2 sin r) + offset, (0, 1) -> (3 sin r,
+    // 3 cos r) + offset.
+    let (r, offset) = (0.3f32, [0.1, 0.2]);
+    let t = UvTransform::from_gltf(offset, r, [2.0, 3.0]);
+    let close = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6;
+    assert!(close(t.apply([1.0, 0.0]), [2.0 * r.cos() + 0.1, -2.0 * r.sin() + 0.2]), "{t:?}");
+    assert!(close(t.apply([0.0, 1.0]), [3.0 * r.sin() + 0.1, 3.0 * r.cos() + 0.2]), "{t:?}");
 }
 
 /// Each texture reference keeps its own transform (textureInfo through the
