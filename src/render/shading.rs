@@ -54,13 +54,11 @@ impl SceneNeeds {
         let glossy = used.iter().any(|m| range(m).1 > MIRROR_ROUGHNESS && range(m).0 <= GLOSSY_ROUGHNESS);
         let env = &scene.environment;
         let env_lit = env.intensity > 0.0 && (env.map.is_some() || env.color.max_element() > 0.0);
+        let emitters = used.iter().any(|&m| scene.materials[m].emissive.iter().any(|c| *c > 0.0));
         SceneNeeds {
             shadows: any_occluder && scene.lights.iter().any(|l| l.casts_shadows && light_is_on(l)),
-            ambient_occluders: any_occluder
-                && (env_lit
-                    || scene.lights.iter().any(light_is_on)
-                    || used.iter().any(|&m| scene.materials[m].emissive.iter().any(|c| *c > 0.0))),
-            emitters: used.iter().any(|&m| scene.materials[m].emissive.iter().any(|c| *c > 0.0)),
+            ambient_occluders: any_occluder && (env_lit || scene.lights.iter().any(light_is_on) || emitters),
+            emitters,
             scene_ambient: AmbientMode::of_scene(env),
             scene_exposure: env.exposure,
             reflections: mirrors || glossy,
