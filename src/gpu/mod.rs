@@ -10,6 +10,7 @@ pub mod env_prefilter;
 pub mod env_sampling;
 pub mod env_sh;
 pub mod environment;
+pub mod material;
 mod memory;
 pub mod origin;
 pub mod prt_buffer;

@@ -76,7 +76,7 @@ fn emission_beyond_half_range_is_clamped_alike_in_both_modes() {
     let hybrid = common::render_scene(&scene, W, H, &RenderSettings::default());
     let rt = common::render_scene(&scene, W, H, &RenderSettings { mode: Mode::Rt, ..Default::default() });
     let max = hybrid.hdr.iter().fold(0.0f32, |m, v| m.max(*v));
-    assert_eq!(max, hybrid_rt::gpu::scene::MAX_EMISSIVE, "the lamp's radiance");
+    assert_eq!(max, hybrid_rt::gpu::material::MAX_EMISSIVE, "the lamp's radiance");
     let (worst, _) = hybrid_rt::image_diff::diff_stats(&hybrid.ldr, &rt.ldr, 4, 1);
     assert!(worst <= 1, "hybrid and pure RT differ by {worst}/255 on a 1e6 emitter");
     let rel =
