@@ -100,13 +100,17 @@ void main() {
     vec3 prt_e;
     vec3 radiance = prt_irradiance(p.instance, p.primitive, p.b, prt_e) ? prt_e / PI : ambient_radiance(s.normal);
 #endif
-    vec3 diffuse = ambient_diffuse(s, radiance);
+    vec3 diffuse = ambient_diffuse(s, v, radiance);
     vec3 glossy = ambient_specular(s, v, mirror);
+    // A coat's environment lobe: no glossy ray corrects it and no attribution term (`terms`) covers it.
+    vec3 coat = ambient_coat(s, v, 0u);
 #ifdef AO
     // The traced ambient (`ao filter`): its radiance, and its visible share as the specular occlusion of
     // a lobe no glossy ray corrects (with the attribution terms the `glossy` pass does not run).
     vec4 traced = imageLoad(ao_visibility, px);
-    diffuse = ambient_diffuse(s, traced.rgb);
+    diffuse = ambient_diffuse(s, v, traced.rgb);
+    // Its occlusion from the visibility sampled about the base's normal.
+    coat *= specular_occlusion(vec3(traced.a), max(dot(s.clearcoat_normal, v), 1e-4), s.clearcoat_roughness);
 #ifdef TERMS
     bool corrected = false;
 #else
@@ -117,7 +121,7 @@ void main() {
         glossy *= specular_occlusion(vec3(traced.a), nv, s.roughness);
         // The emitters on the lobe (their light samples' shadow rays traced: not occluded again).
 #ifdef AO_EMITTER_SPECULAR
-        if (!(mirror || is_glossy(s, 0u)) && s.roughness > MIRROR_ROUGHNESS) glossy += imageLoad(emitter_specular, px).rgb * specular_albedo(s, nv) * s.occlusion;
+        if (!(mirror || is_glossy(s, 0u)) && s.roughness > MIRROR_ROUGHNESS) glossy += imageLoad(emitter_specular, px).rgb * specular_albedo(s, v) * s.occlusion;
 #endif
     }
 #endif
@@ -129,7 +133,7 @@ void main() {
 #endif
     if ((frame.accum_bounces & TERM_ENV_SPECULAR) != 0u) glossy = vec3(0.0);
 #endif
-    color = primary_emissive(px, p.instance, p.primitive, p.b) + imageLoad(direct_in, px).rgb + diffuse + glossy;
+    color = primary_emissive(px, p.instance, p.primitive, p.b) + imageLoad(direct_in, px).rgb + diffuse + glossy + coat;
 #ifdef HAS_SPECULAR
     color += specular;
 #endif

@@ -85,7 +85,7 @@ void main() {
         // composite adds env_specular_radiance x albedo: the sum never goes below zero.
         vec3 env = env_specular_radiance(s, v);
         vec3 correction = max(filtered_correction(px, centre), -env);
-        color += correction * specular_albedo(s, max(nv, 1e-4)) * s.occlusion;
+        color += correction * specular_albedo(s, v) * s.occlusion;
     }
     imageStore(reflected_out, px, vec4(color, 1.0));
 }

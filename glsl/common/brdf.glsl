@@ -19,6 +19,11 @@ struct Surface {
     // is multiplied by; 1 and white leave the IOR's reflection as it is.
     float specular;
     vec3 specular_color;
+    // KHR_materials_clearcoat: a dielectric coat (F0 0.04) of this weight and perceptual roughness
+    // over the rest, with its own unit normal on the viewer's side; weight 0: none.
+    float clearcoat;
+    float clearcoat_roughness;
+    vec3 clearcoat_normal;
 };
 
 float d_ggx(float n_h, float a2) {
@@ -69,20 +74,50 @@ vec3 surface_fresnel(Surface s, float v_h) {
     return f_schlick(surface_f0(s), surface_f90(s), v_h);
 }
 
-// Every Surface field KHR_materials_specular adds, at its "no extension" values.
-void no_specular_extension(inout Surface s) {
+// Every Surface field KHR_materials_specular and KHR_materials_clearcoat add, at their "no extension"
+// values.
+void no_layer_extensions(inout Surface s) {
     s.specular = 1.0;
     s.specular_color = vec3(1.0);
+    s.clearcoat = 0.0;
+    s.clearcoat_roughness = 0.0;
+    s.clearcoat_normal = s.normal;
 }
 
-// The BRDF's diffuse and specular lobes towards v for light from l; returns n.l (0: below the surface,
-// both lobes 0).
-float brdf_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 spec) {
+// The coat's IOR 1.5 (KHR_materials_clearcoat): F0 ((1.5 - 1) / (1.5 + 1))^2.
+const float COAT_F0 = 0.04;
+
+// The share of the light towards v the coat reflects (its weight x Schlick at its n.v); the layer
+// under it gets the rest (the extension's fresnel_coat).
+float coat_weight(Surface s, vec3 v) {
+    if (s.clearcoat <= 0.0) return 0.0;
+    return s.clearcoat * f_schlick(vec3(COAT_F0), 1.0, max(dot(s.clearcoat_normal, v), 0.0)).x;
+}
+
+// The coat as a surface of its own: a black dielectric of IOR 1.5 with the coat's normal and roughness,
+// whose specular lobe (brdf_lobes, split_sum.glsl) is the coat's, before its weight.
+Surface coat_layer(Surface s) {
+    Surface c = s;
+    c.normal = s.clearcoat_normal;
+    c.roughness = s.clearcoat_roughness;
+    c.base_color = vec3(0.0);
+    c.metallic = 0.0;
+    c.transmission = 0.0;
+    c.ior = 1.5;
+    c.emissive = vec3(0.0);
+    c.specular = 1.0;
+    c.specular_color = vec3(1.0);
+    c.clearcoat = 0.0;
+    return c;
+}
+
+// One layer's diffuse and specular lobes towards v for light from l, each times n.l (0 below it).
+void layer_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 spec) {
     vec3 n = s.normal;
     float n_l = dot(n, l);
     diffuse = vec3(0.0);
     spec = vec3(0.0);
-    if (n_l <= 0.0) return 0.0;
+    if (n_l <= 0.0) return;
     float n_v = max(dot(n, v), 1e-4);
     vec3 h = normalize(l + v);
     float n_h = max(dot(n, h), 0.0);
@@ -90,9 +125,21 @@ float brdf_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 
     float a = max(s.roughness * s.roughness, 1e-3);
     float a2 = a * a;
     vec3 f = surface_fresnel(s, v_h);
-    spec = ms * f * d_ggx(n_h, a2) * v_smith_ggx_correlated(n_v, n_l, a2);
-    diffuse = (1.0 - f) * (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color / PI;
-    return n_l;
+    spec = ms * f * d_ggx(n_h, a2) * v_smith_ggx_correlated(n_v, n_l, a2) * n_l;
+    diffuse = (1.0 - f) * (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color / PI * n_l;
+}
+
+// The BRDF's diffuse and specular lobes towards v for light from l, each times its cosine. A coat's
+// lobe (single scattering: at F0 0.04 multiple scattering adds under 2 %) joins `spec`, and the layer
+// under it keeps 1 - coat_weight.
+void brdf_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 spec) {
+    layer_lobes(s, v, l, ms, diffuse, spec);
+    if (s.clearcoat <= 0.0) return;
+    float keep = 1.0 - coat_weight(s, v);
+    vec3 cd, cs;
+    layer_lobes(coat_layer(s), v, l, vec3(1.0), cd, cs);
+    diffuse *= keep;
+    spec = spec * keep + s.clearcoat * cs;
 }
 
 // Outgoing radiance towards v for light arriving from l with irradiance
@@ -100,15 +147,15 @@ float brdf_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 
 // (split_sum.glsl's multiple-scattering compensation; 1: single scattering).
 vec3 brdf_eval_ms(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
     vec3 diffuse, spec;
-    float n_l = brdf_lobes(s, v, l, ms, diffuse, spec);
-    return (diffuse + spec) * e * n_l;
+    brdf_lobes(s, v, l, ms, diffuse, spec);
+    return (diffuse + spec) * e;
 }
 
 // brdf_eval_ms's specular lobe alone.
 vec3 brdf_specular_ms(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
     vec3 diffuse, spec;
-    float n_l = brdf_lobes(s, v, l, ms, diffuse, spec);
-    return spec * e * n_l;
+    brdf_lobes(s, v, l, ms, diffuse, spec);
+    return spec * e;
 }
 
 vec3 brdf_eval(Surface s, vec3 v, vec3 l, vec3 e) {

@@ -52,6 +52,44 @@ void primary_specular(ivec2 px, uvec2 hit, Material m, inout Surface s) {
     s.specular_color *= sample_tex_grad(m.tex_specular_color, m.uv_specular_color, uv, dx, dy, vec4(1.0)).rgb;
 }
 
+// KHR_materials_clearcoat at the pixel's hit, not stored either: factors from the material, textures
+// filtered as the G-buffer pass would, the coat's normal rebuilt from the triangle's vertices (its own
+// map filtered at the pixel's ray cone). Without a coat its fields stay at "none".
+void primary_clearcoat(ivec2 px, uvec2 hit, Material m, inout Surface s) {
+    s.clearcoat = m.clearcoat;
+    s.clearcoat_roughness = m.clearcoat_roughness;
+    s.clearcoat_normal = vec3(0.0, 0.0, 1.0);
+    if (m.clearcoat <= 0.0) return;
+    uint instance = hit.x - 1u;
+    Instance inst = instances[instance];
+    TriangleWorld tri = triangle_world(instance, hit.y);
+    vec3 dir = camera_ray_dir(vec2(px) + 0.5);
+    vec2 b = plane_barycentrics(tri, frame.camera_pos, dir);
+    HitVertices hv = hit_vertices(inst, hit.y);
+    vec2 uv = hit_uv(hv, b);
+    if (m.tex_clearcoat >= 0 || m.tex_clearcoat_roughness >= 0) {
+        vec2 dx, dy;
+        camera_uv_gradients(instance, hit.y, px, dx, dy);
+        s.clearcoat = clamp(s.clearcoat * sample_tex_grad(m.tex_clearcoat, m.uv_clearcoat, uv, dx, dy, vec4(1.0)).r, 0.0, 1.0);
+        s.clearcoat_roughness = clamp(
+            s.clearcoat_roughness * sample_tex_grad(m.tex_clearcoat_roughness, m.uv_clearcoat_roughness, uv, dx, dy, vec4(1.0)).g,
+            0.0, 1.0);
+    }
+    vec3 e1 = tri.p1 - tri.p0, e2 = tri.p2 - tri.p0;
+    vec3 gn = cross(e1, e2);
+    gn = dot(gn, gn) > 0.0 ? normalize(gn) : -dir;
+    if (dot(gn, dir) > 0.0) gn = -gn;
+    vec3 n;
+    vec4 tangent;
+    vertex_frame(inst, hv, bary3(b), gn, n, tangent);
+    if (m.tex_clearcoat_normal >= 0) {
+        float width = pixel_spread_angle() * distance(frame.camera_pos, interpolate(tri, b));
+        g_hit_lod = cone_lod(hv, e1, e2, gn, dir, width);
+        n = coat_normal(m, uv, n, tangent);
+    }
+    s.clearcoat_normal = n;
+}
+
 // Material terms only, enough to decide which rays the hit spawns. False on a miss (hit id 0).
 bool read_primary_material(ivec2 px, out uvec2 hit, out Surface s) {
     hit = texelFetch(gb_hit, px, 0).xy;
@@ -66,6 +104,7 @@ bool read_primary_material(ivec2 px, out uvec2 hit, out Surface s) {
     Material m = materials[instances[hit.x - 1u].material];
     s.ior = m.ior;
     primary_specular(px, hit, m, s);
+    primary_clearcoat(px, hit, m, s);
     // Only `composite` adds emission, so the tracing passes skip its texture lookup.
     s.emissive = vec3(0.0);
     return true;

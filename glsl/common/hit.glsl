@@ -126,6 +126,16 @@ vec3 volume_transmittance(RayHit h) {
     return exp(-materials[instances[h.instance].material].volume_sigma * h.t);
 }
 
+// The interpolated vertex normal (world, unit, on `geo_normal`'s side) and tangent at weights `w`.
+void vertex_frame(Instance inst, HitVertices hv, vec3 w, vec3 geo_normal, out vec3 n, out vec4 tangent) {
+    n = hv.v0.normal * w.x + hv.v1.normal * w.y + hv.v2.normal * w.z;
+    n = mat3(inst.normal_matrix) * n;
+    n = dot(n, n) > 1e-20 ? normalize(n) : geo_normal;
+    if (dot(n, geo_normal) < 0.0) n = -n;
+    vec4 t4 = hv.v0.tangent * w.x + hv.v1.tangent * w.y + hv.v2.tangent * w.z;
+    tangent = vec4(mat3(inst.world) * t4.xyz, hv.v0.tangent.w);
+}
+
 // `geo_normal`: unit world-space geometric normal on the ray's side; the shading normal follows.
 // `cone_width`: the ray cone's width at the hit (texture LOD).
 Surface hit_surface(RayHit h, vec3 ray_o, vec3 ray_d, float cone_width, out vec3 geo_normal, out bool back_face) {
@@ -144,17 +154,15 @@ Surface hit_surface(RayHit h, vec3 ray_o, vec3 ray_d, float cone_width, out vec3
     gn = dot(gn, gn) > 0.0 ? normalize(gn) : vec3(0.0, 1.0, 0.0);
     back_face = dot(gn, ray_d) > 0.0;
     geo_normal = back_face ? -gn : gn;
-    vec3 n = hv.v0.normal * w.x + hv.v1.normal * w.y + hv.v2.normal * w.z;
-    n = mat3(inst.normal_matrix) * n;
-    n = dot(n, n) > 1e-20 ? normalize(n) : geo_normal;
-    if (dot(n, geo_normal) < 0.0) n = -n;
+    vec3 n;
+    vec4 tangent;
+    vertex_frame(inst, hv, w, geo_normal, n, tangent);
     vec2 uv = hv.v0.uv * w.x + hv.v1.uv * w.y + hv.v2.uv * w.z;
-    vec4 t4 = hv.v0.tangent * w.x + hv.v1.tangent * w.y + hv.v2.tangent * w.z;
-    vec4 tangent = vec4(mat3(inst.world) * t4.xyz, hv.v0.tangent.w);
     g_hit_lod = cone_lod(hv, p1 - p0, p2 - p0, gn, ray_d, cone_width);
     float alpha;
     material_eval(m, uv, s, alpha);
     s.normal = apply_normal_map(m, uv, n, tangent);
+    s.clearcoat_normal = s.clearcoat > 0.0 ? coat_normal(m, uv, n, tangent) : s.normal;
     return s;
 }
 

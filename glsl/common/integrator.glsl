@@ -194,13 +194,15 @@ void push_branch(vec3 o, vec3 d, vec3 w, uint depth, Cone cone, uint effect) {
     }
 }
 
-// Keeps the shading normal on the viewer's side (normal maps at grazing angles).
+// Keeps the shading normal (and a coat's) on the viewer's side (normal maps at grazing angles).
 float face_viewer(inout Surface s, vec3 v) {
     float nv = dot(s.normal, v);
     if (nv < 1e-4) {
         s.normal = normalize(s.normal + v * (1e-4 - nv));
         nv = dot(s.normal, v);
     }
+    float cv = dot(s.clearcoat_normal, v);
+    if (s.clearcoat > 0.0 && cv < 1e-4) s.clearcoat_normal = normalize(s.clearcoat_normal + v * (1e-4 - cv));
     return nv;
 }
 
@@ -217,6 +219,13 @@ bool is_glossy(Surface s, uint depth) {
         && s.roughness <= GLOSSY_ROUGHNESS;
 }
 
+// A coat smooth enough to be a mirror gets a reflection branch of its own (push_branches); rougher
+// coats keep the split sum everywhere (no glossy ray samples a coat's lobe).
+bool is_coat_mirror(Surface s, uint depth) {
+    return REFLECTIONS && effect_shaded(EFFECT_BIT_REFLECTIONS) && depth < frame.max_depth && s.clearcoat > 0.0
+        && s.clearcoat_roughness <= MIRROR_ROUGHNESS;
+}
+
 bool is_refracting(Surface s, uint depth) {
     return REFRACTIONS && effect_shaded(EFFECT_BIT_REFRACTIONS) && depth < frame.max_depth
         && s.transmission * (1.0 - s.metallic) > 0.0;
@@ -224,23 +233,28 @@ bool is_refracting(Surface s, uint depth) {
 
 // By material terms alone; push_branches may still drop one under frame.min_weight.
 bool spawns_branches(Surface s, uint depth) {
-    return is_mirror(s, depth) || is_refracting(s, depth);
+    return is_mirror(s, depth) || is_coat_mirror(s, depth) || is_refracting(s, depth);
 }
 
 // Diffuse: `radiance`, what a Lambertian surface of albedo 1 exits (E / pi: SH irradiance, or PRT or
 // the reference in composite). Specular: the split-sum environment (split_sum.glsl), except for a
-// mirror, whose reflection branch carries it. `v`: towards the viewer, n.v > 0 (face_viewer).
-vec3 ambient_diffuse(Surface s, vec3 radiance) {
+// mirror, whose reflection branch carries it; a coat's the same way. `v`: towards the viewer, n.v > 0
+// (face_viewer). Under a coat the layer gets 1 - coat_weight.
+vec3 ambient_diffuse(Surface s, vec3 v, vec3 radiance) {
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
-    return radiance * diffuse * (1.0 - surface_f0(s)) * s.occlusion;
+    return radiance * diffuse * (1.0 - surface_f0(s)) * (s.occlusion * (1.0 - coat_weight(s, v)));
 }
 
 vec3 ambient_specular(Surface s, vec3 v, bool mirror) {
-    return mirror ? vec3(0.0) : env_specular(s, v, max(dot(s.normal, v), 1e-4)) * s.occlusion;
+    return mirror ? vec3(0.0) : env_specular(s, v) * s.occlusion;
 }
 
-vec3 ambient_light_from(Surface s, vec3 v, bool mirror, vec3 radiance) {
-    return ambient_diffuse(s, radiance) + ambient_specular(s, v, mirror);
+vec3 ambient_coat(Surface s, vec3 v, uint depth) {
+    return is_coat_mirror(s, depth) ? vec3(0.0) : coat_env_specular(s, v) * s.occlusion;
+}
+
+vec3 ambient_light_from(Surface s, vec3 v, uint depth, vec3 radiance) {
+    return ambient_diffuse(s, v, radiance) + ambient_specular(s, v, is_mirror(s, depth)) + ambient_coat(s, v, depth);
 }
 
 // The share of a lobe's environment light left by a diffuse visibility `ao` at n.v for roughness r
@@ -249,38 +263,50 @@ vec3 specular_occlusion(vec3 ao, float nv, float roughness) {
     return clamp(pow(vec3(nv) + ao, vec3(exp2(-16.0 * roughness - 1.0))) - 1.0 + ao, 0.0, 1.0);
 }
 
-vec3 ambient_light(Surface s, vec3 v, bool mirror) {
-    return ambient_light_from(s, v, mirror, ambient_radiance(s.normal));
+vec3 ambient_light(Surface s, vec3 v, uint depth) {
+    return ambient_light_from(s, v, depth, ambient_radiance(s.normal));
 }
 
 // `nv` from face_viewer; `cone` is the ray cone at s.
 void push_branches(Surface s, vec3 v, float nv, vec3 gn, bool back_face, vec3 w, uint depth, Cone cone) {
     float tm = s.transmission * (1.0 - s.metallic);
     bool mirror = is_mirror(s, depth);
+    bool coat_mirror = is_coat_mirror(s, depth);
     bool refract_on = is_refracting(s, depth);
-    if (!mirror && !refract_on) return;
-    // Dielectric interface for the transmissive part; Schlick for the rest.
+    if (!mirror && !coat_mirror && !refract_on) return;
+    // Dielectric interface for the transmissive part; Schlick for the rest; a coat passes 1 - cw on.
     vec3 f0 = surface_f0(s);
     float eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
     float fr = fresnel_dielectric(nv, eta);
     vec3 kr = f_schlick(f0, surface_f90(s), nv);
+    float cw = coat_weight(s, v), keep = 1.0 - cw;
     // A chain's rays count for the effect that started it at the primary hit (total internal
     // reflection there counts as refraction).
     bool root = depth == 0u;
-    uint reflect_effect = root ? (mirror ? EFFECT_BIT_REFLECTIONS : EFFECT_BIT_REFRACTIONS) : g_ray_effect;
+    uint reflect_effect = root ? (mirror || coat_mirror ? EFFECT_BIT_REFLECTIONS : EFFECT_BIT_REFRACTIONS) : g_ray_effect;
     uint refract_effect = root ? EFFECT_BIT_REFRACTIONS : g_ray_effect;
-    if (mirror || fr >= 1.0) {
-        vec3 rw = kr * (1.0 - tm) + vec3(fr * tm);
-        if (!mirror) rw = vec3(fr * tm);  // total internal reflection only
-        vec3 rd = reflect(-v, s.normal);
-        if (dot(rd, gn) <= 0.0) rd = reflect(-v, gn);  // stay above the surface
-        push_branch(offset_ray(s.position, gn, s.extent), rd, w * rw, depth + 1u, cone, reflect_effect);
+    vec3 o = offset_ray(s.position, gn, s.extent);
+    vec3 rd = reflect(-v, s.normal);
+    if (dot(rd, gn) <= 0.0) rd = reflect(-v, gn);  // stay above the surface
+    bool reflects = mirror || fr >= 1.0;
+    // Else total internal reflection only.
+    vec3 rw = (mirror ? kr * (1.0 - tm) + vec3(fr * tm) : vec3(fr * tm)) * keep;
+    if (coat_mirror) {
+        vec3 cd = reflect(-v, s.clearcoat_normal);
+        if (dot(cd, gn) <= 0.0) cd = reflect(-v, gn);
+        // Without a normal map of either layer both reflect along one direction: one ray.
+        if (reflects && dot(cd, rd) > 1.0 - 1e-6) {
+            rw += vec3(cw);
+        } else {
+            push_branch(o, cd, w * cw, depth + 1u, cone, reflect_effect);
+        }
     }
+    if (reflects) push_branch(o, rd, w * rw, depth + 1u, cone, reflect_effect);
     if (refract_on && fr < 1.0) {
         vec3 td = refract_dir(-v, s.normal, eta);
         if (dot(td, gn) >= 0.0) td = refract_dir(-v, gn, eta);
-        push_branch(offset_ray(s.position, -gn, s.extent), td, w * tm * (1.0 - fr) * s.base_color, depth + 1u, cone,
-                    refract_effect);
+        push_branch(offset_ray(s.position, -gn, s.extent), td, w * tm * (1.0 - fr) * keep * s.base_color,
+                    depth + 1u, cone, refract_effect);
     }
 }
 
@@ -350,7 +376,7 @@ vec3 trace_branches() {
             vec3 w = back_face ? b.weight * volume_transmittance(h) : b.weight;
             vec3 v = -b.dir;
             float nv = face_viewer(s, v);
-            radiance += w * (s.emissive + ambient_light(s, v, is_mirror(s, b.depth)));
+            radiance += w * (s.emissive + ambient_light(s, v, b.depth));
             push_branches(s, v, nv, gn, back_face, w, b.depth, at_hit);
             ls = s;
             lv = v;

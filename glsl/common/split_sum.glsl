@@ -34,17 +34,26 @@ vec3 env_specular_radiance(Surface s, vec3 v) {
     return textureLod(env_specular_map, env_uv(r), lod).rgb * frame.env_intensity;
 }
 
-// The GGX lobe's albedo towards v (nv = n.v > 0), multiple scattering included: what scales the
-// radiance it reflects.
-vec3 specular_albedo(Surface s, float nv) {
+// The GGX lobe's albedo towards v (n.v floored at 1e-4), multiple scattering included: what scales the
+// radiance it reflects. Under a coat, the share the coat lets through.
+vec3 specular_albedo(Surface s, vec3 v) {
     vec3 f0 = surface_f0(s);
-    vec2 ab = dfg_at(nv, s.roughness);
-    return (f0 * ab.x + surface_f90(s) * ab.y) * ms_from(f0, ab);
+    vec2 ab = dfg_at(max(dot(s.normal, v), 1e-4), s.roughness);
+    return (f0 * ab.x + surface_f90(s) * ab.y) * ms_from(f0, ab) * (1.0 - coat_weight(s, v));
 }
 
-// The surface's GGX lobe lit by the unshadowed environment.
-vec3 env_specular(Surface s, vec3 v, float nv) {
-    return env_specular_radiance(s, v) * specular_albedo(s, nv);
+// The surface's GGX lobe lit by the unshadowed environment (the coat's apart: coat_env_specular).
+vec3 env_specular(Surface s, vec3 v) {
+    return env_specular_radiance(s, v) * specular_albedo(s, v);
+}
+
+// The coat's lobe lit by the unshadowed environment, its weight applied; single scattering, as
+// brdf_lobes' coat.
+vec3 coat_env_specular(Surface s, vec3 v) {
+    if (s.clearcoat <= 0.0) return vec3(0.0);
+    Surface c = coat_layer(s);
+    vec2 ab = dfg_at(max(dot(c.normal, v), 1e-4), c.roughness);
+    return env_specular_radiance(c, v) * (s.clearcoat * (COAT_F0 * ab.x + ab.y));
 }
 
 #endif

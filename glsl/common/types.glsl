@@ -58,6 +58,17 @@ struct Material {
     // Multiplies the IOR's F0 (clamped to 1 after).
     vec3 specular_color;
     uint pad0;
+    // KHR_materials_clearcoat: the coat's weight (x texture R), roughness (x texture G) and normal
+    // map (scale, texture; none: the interpolated vertex normal), then those references' transforms.
+    float clearcoat;
+    float clearcoat_roughness;
+    float clearcoat_normal_scale;
+    int tex_clearcoat;
+    int tex_clearcoat_roughness;
+    int tex_clearcoat_normal;
+    UvTransform uv_clearcoat;
+    UvTransform uv_clearcoat_roughness;
+    UvTransform uv_clearcoat_normal;
 };
 
 struct Instance {

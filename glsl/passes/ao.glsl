@@ -99,7 +99,7 @@ vec3 ao_estimate(PrimaryHit p, ivec2 px, out vec3 bounce, out vec3 specular) {
             if (dot(rd, hgn) <= 0.0) continue;
             count_ray(RAY_KIND_SHADOW);
             ro = offset_ray(hs.position, hgn, hs.extent);
-            light = hw * ambient_diffuse(hs, ambient_radiance(hs.normal));
+            light = hw * ambient_diffuse(hs, hv, ambient_radiance(hs.normal));
         } else if (shadow && next_light == emit_stage) {
             // The emitters' light at the hit (part of its direct light; sampled below): the hit's BSDF
             // is not sampled on, so the light sample takes the whole weight.
@@ -215,14 +215,14 @@ void ao_pixel(ivec2 px) {
 #endif
         return;
     }
-    float nv = face_viewer(p.s, -p.dir);
+    face_viewer(p.s, -p.dir);
     vec3 bounce, specular;
     vec3 share = ao_estimate(p, px, bounce, specular);
     if (any(isnan(bounce)) || any(isinf(bounce))) bounce = vec3(0.0);
     imageStore(ao_out, px, vec4(share, distance(frame.camera_pos, p.s.position)));
     imageStore(ao_bounce_out, px, vec4(bounce, 0.0));
 #ifdef AO_EMITTER_SPECULAR
-    specular /= max(specular_albedo(p.s, max(nv, 1e-4)), vec3(1e-4));
+    specular /= max(specular_albedo(p.s, -p.dir), vec3(1e-4));
     if (any(isnan(specular)) || any(isinf(specular))) specular = vec3(0.0);
     imageStore(ao_specular_out, px, vec4(specular, 0.0));
 #endif

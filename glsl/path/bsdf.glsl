@@ -1,6 +1,8 @@
 // The path tracer's BSDF: the raster's opaque metallic-roughness model (brdf.glsl) plus the
 // transmissive share as a dielectric interface with exact Fresnel (fresnel.glsl), rough by GGX
 // (Walter et al. 2007) or, below DELTA_ALPHA, perfectly specular as in integrator.glsl's branches.
+// A clearcoat adds its own GGX lobe (brdf.glsl's coat: Schlick from 0.04, the layer under it weighted
+// by 1 - coat_weight), sampled in its own frame.
 // Sampled by visible normals (Heitz 2018) and cosine; every non-delta lobe enters the MIS mixture pdf.
 // Local frame: shading normal +z, viewer above it (face_viewer).
 #ifndef PATH_BSDF_GLSL
@@ -26,7 +28,13 @@ struct Bsdf {
     float tm;        // weight of the dielectric interface: transmission (1 - metallic)
     float eta;       // n on v's side / n on the other side
     vec3 tint;       // transmitted light's tint (base colour, per crossing)
-    float p_spec, p_diff;  // lobe choice; the interface gets the rest
+    // KHR_materials_clearcoat: the coat's weight (0: none), unit normal (world), GGX alpha and whether
+    // it is a delta; the lobes above already carry the 1 - coat_weight it lets through.
+    float coat;
+    vec3 coat_n;
+    float coat_alpha;
+    bool coat_delta;
+    float p_coat, p_spec, p_diff;  // lobe choice; the interface gets the rest
 };
 
 struct BsdfSample {
@@ -46,15 +54,23 @@ Bsdf bsdf_at(Surface s, vec3 v, bool back_face) {
     m.f0 = surface_f0(s);
     m.f90 = surface_f90(s);
     m.ms = ms_compensation(m.f0, max(dot(m.n, v), 1e-4), s.roughness);
+    float cw = coat_weight(s, v), keep = 1.0 - cw;
     m.tm = s.transmission * (1.0 - s.metallic);
-    m.spec_w = 1.0 - m.tm;
-    m.diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color;
+    m.spec_w = (1.0 - m.tm) * keep;
+    m.diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color * keep;
+    m.tm *= keep;
+    m.coat = s.clearcoat;
+    m.coat_n = s.clearcoat_normal;
+    float ca = s.clearcoat_roughness * s.clearcoat_roughness;
+    m.coat_delta = ca < DELTA_ALPHA;
+    m.coat_alpha = max(ca, DELTA_ALPHA);
     m.eta = back_face ? s.ior : 1.0 / max(s.ior, 1e-3);
     m.tint = s.base_color;
     // In proportion to each lobe's albedo estimate at n.v.
     vec3 fv = f_schlick(m.f0, m.f90, max(dot(m.n, v), 1e-4));
     float ws = m.spec_w * max3(fv), wd = max3(m.diffuse * (1.0 - fv)), wg = m.tm;
-    float sum = ws + wd + wg;
+    float sum = ws + wd + wg + cw;
+    m.p_coat = sum > 0.0 ? cw / sum : 0.0;
     m.p_spec = sum > 0.0 ? ws / sum : 0.0;
     m.p_diff = sum > 0.0 ? wd / sum : 0.0;
     return m;
@@ -69,8 +85,14 @@ vec3 bsdf_world(Bsdf m, vec3 w) {
 }
 
 float bsdf_p_glass(Bsdf m) {
-    return max(1.0 - m.p_spec - m.p_diff, 0.0);
+    return max(1.0 - m.p_coat - m.p_spec - m.p_diff, 0.0);
 }
+
+// The coat's normal in the local frame.
+vec3 coat_local(Bsdf m) {
+    return normalize(bsdf_local(m, m.coat_n));
+}
+
 
 // An IOR-1 interface does not bend or reflect: a straight passthrough.
 bool ior_one(Bsdf m) {
@@ -89,7 +111,22 @@ float ggx_lambda(float c, float a2) {
     return 0.5 * (sqrt(1.0 + a2 * (1.0 - c2) / c2) - 1.0);
 }
 
-// f(v, l) |l.z| of the non-delta lobes, and their mixture pdf of l.
+// The coat's lobe: f |n_c.l| (its own cosine, as brdf.glsl's), and its pdf (unweighted by p_coat).
+vec3 coat_eval(Bsdf m, vec3 v, vec3 l, out float pdf) {
+    pdf = 0.0;
+    vec3 nc = coat_local(m);
+    float cv = dot(nc, v), cl = dot(nc, l);
+    if (m.coat_delta || cv <= 0.0 || cl <= 0.0) return vec3(0.0);
+    vec3 h = normalize(v + l);
+    float a2 = m.coat_alpha * m.coat_alpha;
+    float d = d_ggx(dot(nc, h), a2);
+    float lv = ggx_lambda(cv, a2);
+    float fc = f_schlick(vec3(COAT_F0), 1.0, max(dot(v, h), 0.0)).x;
+    pdf = d / ((1.0 + lv) * 4.0 * cv);
+    return vec3(m.coat * fc * d / ((1.0 + lv + ggx_lambda(cl, a2)) * 4.0 * cv));
+}
+
+// f(v, l) |l.z| of the non-delta lobes (the coat's with its own cosine), and their mixture pdf of l.
 vec3 bsdf_eval(Bsdf m, vec3 v, vec3 l, out float pdf) {
     pdf = 0.0;
     vec3 f = vec3(0.0);
@@ -135,6 +172,11 @@ vec3 bsdf_eval(Bsdf m, vec3 v, vec3 l, out float pdf) {
             pdf += p_glass * (1.0 - fr) * g1 * d * vh * jac / vz;
         }
     }
+    if (m.p_coat > 0.0) {
+        float coat_pdf;
+        f += coat_eval(m, v, l, coat_pdf);
+        pdf += m.p_coat * coat_pdf;
+    }
     return f;
 }
 
@@ -145,7 +187,23 @@ bool bsdf_sample(Bsdf m, vec3 v, inout uint rng, out BsdfSample bs) {
     bs.delta = false;
     bs.pdf = 0.0;
     bs.weight = vec3(0.0);
-    if (u < m.p_spec) {
+    if (u < m.p_coat) {
+        vec3 nc = coat_local(m);
+        float cv = dot(nc, v);
+        if (cv <= 0.0) return false;
+        if (m.coat_delta) {
+            bs.l = reflect(-v, nc);
+            bs.weight = vec3(m.coat * f_schlick(vec3(COAT_F0), 1.0, cv).x / m.p_coat);
+            bs.delta = true;
+            return bs.l.z > 0.0;
+        }
+        // Visible normals in the coat's own frame.
+        vec3 ct, cb;
+        basis_of(nc, ct, cb);
+        vec3 h = sample_vndf(vec3(dot(v, ct), dot(v, cb), cv), m.coat_alpha, u1, u2);
+        bs.l = reflect(-v, ct * h.x + cb * h.y + nc * h.z);
+        if (dot(bs.l, nc) <= 0.0) return false;
+    } else if (u < m.p_coat + m.p_spec) {
         if (m.delta) {
             bs.l = vec3(-v.x, -v.y, v.z);
             bs.weight = m.spec_w * f_schlick(m.f0, m.f90, max(v.z, 1e-4)) / m.p_spec;
@@ -155,7 +213,7 @@ bool bsdf_sample(Bsdf m, vec3 v, inout uint rng, out BsdfSample bs) {
         bs.l = reflect(-v, sample_vndf(v, m.alpha, u1, u2));
         // Below the surface: killed, so the mixture pdf need not count it.
         if (bs.l.z <= 0.0) return false;
-    } else if (u < m.p_spec + m.p_diff) {
+    } else if (u < m.p_coat + m.p_spec + m.p_diff) {
         float r = sqrt(u1), phi = 2.0 * PI * u2;
         bs.l = vec3(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u1, 0.0)));
     } else {

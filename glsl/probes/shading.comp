@@ -50,7 +50,7 @@ void main() {
         s.emissive = vec3(0.0);
         s.transmission = k.c;
         s.ior = k.p.w;
-        no_specular_extension(s);
+        no_layer_extensions(s);
         o.xyz = brdf_eval(s, k.q.xyz, k.r.xyz, vec3(1.0));
     } else if (k.op == PROBE_GGX) {
         // a = n.h, b = alpha², p.xy = (n.v, n.l).

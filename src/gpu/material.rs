@@ -9,6 +9,10 @@ fn tex_index(t: &Option<TextureRef>) -> i32 {
     t.map(|t| t.texture as i32).unwrap_or(-1)
 }
 
+fn uv_rows(t: &Option<TextureRef>) -> [[f32; 3]; 2] {
+    t.map_or(UvTransform::IDENTITY, |t| t.transform).rows
+}
+
 /// Emission is limited to half's range (where primary emission was once stored; kept so scenes keep
 /// their look). Clamped here, where every material passes, so every mode and bounce shades the same.
 pub const MAX_EMISSIVE: f32 = HALF_MAX;
@@ -22,6 +26,7 @@ pub(super) fn gpu_material(m: &Material) -> GpuMaterial {
             m.emissive
         );
     }
+    let c = &m.clearcoat;
     GpuMaterial {
         base_color: m.base_color,
         emissive,
@@ -59,8 +64,15 @@ pub(super) fn gpu_material(m: &Material) -> GpuMaterial {
             &m.specular_texture,
             &m.specular_color_texture,
         ]
-        .map(|t| t.map_or(UvTransform::IDENTITY, |t| t.transform).rows),
+        .map(uv_rows),
         specular_color: m.specular_color,
         pad: 0,
+        clearcoat: c.factor,
+        clearcoat_roughness: c.roughness,
+        clearcoat_normal_scale: c.normal_scale,
+        tex_clearcoat: tex_index(&c.texture),
+        tex_clearcoat_roughness: tex_index(&c.roughness_texture),
+        tex_clearcoat_normal: tex_index(&c.normal_texture),
+        uv_clearcoat: [&c.texture, &c.roughness_texture, &c.normal_texture].map(uv_rows),
     }
 }

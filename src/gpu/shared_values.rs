@@ -411,7 +411,7 @@ shared! {
     // Strides of the host/shader structs in bytes (scalar layout); the Rust
     // mirrors assert them, tests/render/shared_layout.rs reads them from SPIR-V.
     uint VERTEX_STRIDE = 48;
-    uint MATERIAL_STRIDE = 320;
+    uint MATERIAL_STRIDE = 416;
     uint INSTANCE_STRIDE = 160;
     uint LIGHT_STRIDE = 64;
     uint BVH_NODE_STRIDE = 32;

@@ -46,6 +46,15 @@ pub struct GpuMaterial {
     pub uv_transforms: [[[f32; 3]; 2]; 8],
     pub specular_color: [f32; 3],
     pub pad: u32,
+    /// KHR_materials_clearcoat (scene::Clearcoat): weight (texture R), roughness (texture G), the
+    /// coat's normal map; then those three references' transforms.
+    pub clearcoat: f32,
+    pub clearcoat_roughness: f32,
+    pub clearcoat_normal_scale: f32,
+    pub tex_clearcoat: i32,
+    pub tex_clearcoat_roughness: i32,
+    pub tex_clearcoat_normal: i32,
+    pub uv_clearcoat: [[[f32; 3]; 2]; 3],
 }
 const _: () = assert!(std::mem::size_of::<GpuMaterial>() == MATERIAL_STRIDE as usize);
 

@@ -20,7 +20,7 @@ pub struct SceneNeeds {
     pub shadows: bool,
     /// Mirrors or glossy materials.
     pub reflections: bool,
-    /// At most MIRROR_ROUGHNESS rough: the `specular` chain reflects them.
+    /// At most MIRROR_ROUGHNESS rough (or coated that smooth): the `specular` chain reflects them.
     pub mirrors: bool,
     /// Rougher, up to GLOSSY_ROUGHNESS: the `glossy` pass samples their lobe.
     pub glossy: bool,
@@ -50,7 +50,10 @@ impl SceneNeeds {
                 && scene.materials[scene.instance_material(i)].casts_shadows
         });
         let range = |m: &usize| scene.materials[*m].roughness_range();
-        let mirrors = used.iter().any(|m| range(m).0 <= MIRROR_ROUGHNESS);
+        // A coat that smooth gets a mirror ray of its own (no glossy ones).
+        let coat_mirror =
+            |m: &usize| scene.materials[*m].coat_roughness_range().is_some_and(|r| r.0 <= MIRROR_ROUGHNESS);
+        let mirrors = used.iter().any(|m| range(m).0 <= MIRROR_ROUGHNESS || coat_mirror(m));
         let glossy = used.iter().any(|m| range(m).1 > MIRROR_ROUGHNESS && range(m).0 <= GLOSSY_ROUGHNESS);
         let env = &scene.environment;
         let env_lit = env.intensity > 0.0 && (env.map.is_some() || env.color.max_element() > 0.0);
@@ -434,5 +437,28 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("VK_KHR_ray_query"));
+    }
+
+    /// A rough material under a mirror-smooth coat needs the `specular` chain (the coat's mirror ray);
+    /// under a rough coat it needs no reflections at all.
+    #[test]
+    fn a_smooth_coat_needs_mirror_rays() {
+        let dir = std::env::temp_dir().join(format!("hybrid_rt_coat_needs_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let needs_with = |coat_roughness: f32| {
+            let path = dir.join(format!("coat_{coat_roughness}.toml"));
+            let toml = format!(
+                "[[material]]\nname = \"paint\"\nroughness = 0.9\nclearcoat = 1\n\
+                 clearcoat_roughness = {coat_roughness}\n\n[[object]]\nname = \"floor\"\n\
+                 primitive = \"plane\"\nsize = 4\nmaterial = \"paint\"\n"
+            );
+            std::fs::write(&path, toml).unwrap();
+            SceneNeeds::of(&Scene::load(&path).unwrap())
+        };
+        let smooth = needs_with(0.05);
+        assert!(smooth.mirrors && smooth.reflections && !smooth.glossy, "{smooth:?}");
+        let rough = needs_with(0.5);
+        assert!(!rough.reflections, "{rough:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

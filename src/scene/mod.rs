@@ -112,6 +112,35 @@ impl Default for UvTransform {
     }
 }
 
+/// KHR_materials_clearcoat: a dielectric coat (IOR 1.5, its own GGX lobe) over the material, which
+/// sees the light the coat's Fresnel lets through. `factor` 0: no coat.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Clearcoat {
+    /// The coat's weight (the texture's R scales it).
+    pub factor: f32,
+    pub texture: Option<TextureRef>,
+    /// Perceptual roughness (the texture's G scales it).
+    pub roughness: f32,
+    pub roughness_texture: Option<TextureRef>,
+    /// The coat's own normal map; without one the coat follows the interpolated vertex normal, not
+    /// the base's normal map.
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
+}
+
+impl Default for Clearcoat {
+    fn default() -> Self {
+        Self {
+            factor: 0.0,
+            texture: None,
+            roughness: 0.0,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        }
+    }
+}
+
 /// glTF metallic-roughness material with the extensions the renderer reads.
 #[derive(Clone, Debug)]
 pub struct Material {
@@ -144,6 +173,8 @@ pub struct Material {
     pub specular_texture: Option<TextureRef>,
     pub specular_color: [f32; 3],
     pub specular_color_texture: Option<TextureRef>,
+    /// KHR_materials_clearcoat: a smooth dielectric layer (IOR 1.5) over the material.
+    pub clearcoat: Clearcoat,
     /// KHR_materials_volume: the colour white light turns after travelling
     /// `attenuation_distance` (world units; infinite: a clear medium)
     /// inside the closed mesh (Beer-Lambert along the refracted paths).
@@ -178,6 +209,7 @@ impl Default for Material {
             specular_texture: None,
             specular_color: [1.0; 3],
             specular_color_texture: None,
+            clearcoat: Clearcoat::default(),
             attenuation_color: [1.0; 3],
             attenuation_distance: f32::INFINITY,
             casts_shadows: true,
@@ -193,6 +225,15 @@ impl Material {
             Some(_) => (0.0, self.roughness),
             None => (self.roughness, self.roughness),
         }
+    }
+
+    /// The roughness a coat's pixels can have, as [`Material::roughness_range`] (None: no coat).
+    pub fn coat_roughness_range(&self) -> Option<(f32, f32)> {
+        let c = &self.clearcoat;
+        (c.factor > 0.0).then_some(match c.roughness_texture {
+            Some(_) => (0.0, c.roughness),
+            None => (c.roughness, c.roughness),
+        })
     }
 
     /// The medium's attenuation coefficient per world unit, per channel:

@@ -167,6 +167,8 @@ keys! {
     ior => "ior",
     specular => "specular",
     specular_color => "specular_color",
+    clearcoat => "clearcoat",
+    clearcoat_roughness => "clearcoat_roughness",
     transmission => "transmission",
     emissive => "emissive",
     // Objects.

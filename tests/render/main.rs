@@ -15,6 +15,7 @@ mod antialias;
 mod backends;
 mod budget;
 mod budget_fallback;
+mod clearcoat;
 mod compute_top_level;
 mod culling;
 mod device;

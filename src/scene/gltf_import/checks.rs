@@ -32,6 +32,7 @@ pub(super) fn check_glb_header(bytes: &[u8]) -> Result<()> {
 /// optionally by the file, so it loads without them.
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",

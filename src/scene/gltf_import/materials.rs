@@ -1,18 +1,25 @@
 //! Materials: glTF metallic-roughness with the emissive strength, IOR,
-//! specular, transmission and volume extensions, their textures assigned to slots with
+//! specular, clearcoat (clearcoat.rs), transmission and volume extensions, their textures assigned to slots with
 //! each reference's KHR_texture_transform.
 
 use anyhow::{ensure, Context, Result};
 use glam::Vec3;
 use serde::Deserialize;
 
+use gltf::json::extensions::texture::TextureTransform;
+
+use super::clearcoat::convert_clearcoat;
 use super::images::TextureSlots;
 use super::values::sane;
 use crate::scene::{AlphaMode, Material, TextureRef, UvTransform};
 
-const TRANSFORM: &str = "KHR_texture_transform";
+pub(super) const TRANSFORM: &str = "KHR_texture_transform";
 
-pub(super) fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> Result<Material> {
+pub(super) fn convert_material(
+    m: &gltf::Material,
+    doc: &gltf::Document,
+    slots: &mut TextureSlots,
+) -> Result<Material> {
     let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string);
     let pbr = m.pbr_metallic_roughness();
     let mut slot =
@@ -42,36 +49,33 @@ pub(super) fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> 
         slot(transmission.as_ref().and_then(|t| t.transmission_texture()), false, "transmissionTexture")?;
     // The crate parses the extension on textureInfo only; normal and
     // occlusion references carry it as raw JSON.
-    let mut raw_slot =
-        |texture: gltf::Texture, tex_coord: u32, ext: Option<&gltf::json::Value>, what: &str| {
-            let transform = match ext {
-                None => None,
-                Some(v) => {
-                    let t = gltf::json::extensions::texture::TextureTransform::deserialize(v)
-                        .with_context(|| format!("{what}: malformed {TRANSFORM}"))?;
-                    Some(TransformExt {
-                        offset: t.offset.0,
-                        rotation: t.rotation.0,
-                        scale: t.scale.0,
-                        tex_coord: t.tex_coord,
-                    })
-                }
-            };
-            let (tex_coord, transform) = uv_transform(transform, tex_coord, what)?;
-            anyhow::Ok(slots.slot(texture, tex_coord, transform, false, &name))
-        };
+    let mut raw_slot = |texture: gltf::Texture, tex_coord: u32, t: Option<TextureTransform>, what: &str| {
+        let transform = t.map(|t| TransformExt {
+            offset: t.offset.0,
+            rotation: t.rotation.0,
+            scale: t.scale.0,
+            tex_coord: t.tex_coord,
+        });
+        let (tex_coord, transform) = uv_transform(transform, tex_coord, what)?;
+        anyhow::Ok(slots.slot(texture, tex_coord, transform, false, &name))
+    };
     let normal = m.normal_texture();
     let normal_texture = match &normal {
-        Some(n) => Some(raw_slot(n.texture(), n.tex_coord(), n.extension_value(TRANSFORM), "normalTexture")?),
+        Some(n) => {
+            let t = json_transform(n.extension_value(TRANSFORM), "normalTexture")?;
+            Some(raw_slot(n.texture(), n.tex_coord(), t, "normalTexture")?)
+        }
         None => None,
     };
     let occlusion = m.occlusion_texture();
     let occlusion_texture = match &occlusion {
         Some(o) => {
-            Some(raw_slot(o.texture(), o.tex_coord(), o.extension_value(TRANSFORM), "occlusionTexture")?)
+            let t = json_transform(o.extension_value(TRANSFORM), "occlusionTexture")?;
+            Some(raw_slot(o.texture(), o.tex_coord(), t, "occlusionTexture")?)
         }
         None => None,
     };
+    let clearcoat = convert_clearcoat(m, doc, |r| raw_slot(r.texture, r.tex_coord, r.transform, r.what))?;
     let strength = m.emissive_strength().unwrap_or(1.0);
     Ok(Material {
         base_color: pbr.base_color_factor(),
@@ -102,9 +106,19 @@ pub(super) fn convert_material(m: &gltf::Material, slots: &mut TextureSlots) -> 
         specular_texture,
         specular_color: specular.as_ref().map_or([1.0; 3], |s| s.specular_color_factor()),
         specular_color_texture,
+        clearcoat,
         casts_shadows: true,
         name,
     })
+}
+
+/// A KHR_texture_transform the crate leaves as raw JSON, parsed.
+pub(super) fn json_transform(
+    ext: Option<&gltf::json::Value>,
+    what: &str,
+) -> Result<Option<TextureTransform>> {
+    ext.map(|v| TextureTransform::deserialize(v).with_context(|| format!("{what}: malformed {TRANSFORM}")))
+        .transpose()
 }
 
 /// KHR_texture_transform's numbers, from either form the crate gives them in.

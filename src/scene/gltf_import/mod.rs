@@ -11,6 +11,7 @@
 mod animation;
 mod buffers;
 mod checks;
+mod clearcoat;
 mod geometry;
 mod images;
 mod materials;
@@ -59,11 +60,15 @@ fn import(path: &Path) -> Result<Scene> {
     scene.materials = doc
         .materials()
         .map(|m| {
-            convert_material(&m, &mut slots)
+            convert_material(&m, &doc, &mut slots)
                 .with_context(|| format!("material {}{}", m.index().unwrap_or(0), quoted(m.name())))
         })
         .collect::<Result<_>>()?;
-    let normal_mapped: Vec<bool> = scene.materials.iter().map(|m| m.normal_texture.is_some()).collect();
+    let normal_mapped: Vec<bool> = scene
+        .materials
+        .iter()
+        .map(|m| m.normal_texture.is_some() || m.clearcoat.normal_texture.is_some())
+        .collect();
     // Primitives without a material use a default appended after the file's.
     let default_material = scene.materials.len();
     for mesh in doc.meshes() {

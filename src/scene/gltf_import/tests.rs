@@ -386,6 +386,68 @@ fn specular_extension_is_read() {
     assert!(err.contains("material 0 'coated'") && err.contains("specularFactor 1.5"), "{err}");
 }
 
+/// KHR_materials_clearcoat (raw JSON): factors, its three textures slotted linear with their transforms
+/// and the normal map's scale, tangents generated for the coat's normal map; out-of-range factors and
+/// dangling texture indices are errors naming the material and member.
+#[test]
+fn clearcoat_extension_is_read() {
+    let dir = white_png_dir("clearcoat");
+    let material = |members: &str| {
+        format!(
+            r#",
+  "extensionsUsed": ["KHR_materials_clearcoat"],
+  "materials": [{{"name": "paint", "extensions": {{"KHR_materials_clearcoat": {{{members}}}}}}}],
+  "textures": [{{"source": 0}}],
+  "images": [{{"uri": "white.png"}}]"#
+        )
+    };
+    let full = r#""clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.25,
+    "clearcoatTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"scale": [2, 2]}}},
+    "clearcoatRoughnessTexture": {"index": 0},
+    "clearcoatNormalTexture": {"index": 0, "scale": 0.5, "extensions": {"KHR_texture_transform": {"rotation": 1.0}}}"#;
+    let bin = triangle_bin(TRIANGLE, [0, 1, 2]);
+    let load_with = |members: &str| {
+        load(&write_triangle(&dir, &bin, &triangle_json("tri.bin", 3, true, &material(members))))
+    };
+    let scene = load_with(full).unwrap();
+    let c = &scene.materials[0].clearcoat;
+    assert_eq!((c.factor, c.roughness, c.normal_scale), (0.75, 0.25, 0.5));
+    let tex = |t: Option<TextureRef>| t.unwrap();
+    assert_eq!(tex(c.texture).transform, UvTransform::from_gltf([0.0; 2], 0.0, [2.0, 2.0]));
+    assert_eq!(tex(c.roughness_texture).transform, UvTransform::IDENTITY);
+    assert_eq!(tex(c.normal_texture).transform, UvTransform::from_gltf([0.0; 2], 1.0, [1.0; 2]));
+    assert!([c.texture, c.roughness_texture, c.normal_texture]
+        .iter()
+        .all(|&t| !scene.textures[tex(t).texture].srgb));
+    // Tangents generated from the UVs for the coat's normal map, as for a base normal map (not the
+    // fallback frame).
+    let tangents = |scene: &crate::scene::Scene| {
+        scene.meshes[0].primitives[0].vertices.iter().map(|v| v.tangent).collect::<Vec<_>>()
+    };
+    let plain = load_with(r#""clearcoatFactor": 1"#).unwrap();
+    let json = triangle_json("tri.bin", 3, true, &material(r#""clearcoatFactor": 1"#))
+        .replace(r#""name": "paint","#, r#""name": "paint", "normalTexture": {"index": 0},"#);
+    let base_mapped = load(&write_triangle(&dir, &bin, &json)).unwrap();
+    assert_eq!(tangents(&scene), tangents(&base_mapped), "tangents for the coat's normal map");
+    assert_ne!(tangents(&plain), tangents(&base_mapped), "UV tangents differ from the fallback here");
+    // Members left out take the extension's defaults.
+    let c = load_with(r#""clearcoatFactor": 1"#).unwrap().materials[0].clearcoat.clone();
+    assert_eq!(c, crate::scene::Clearcoat { factor: 1.0, ..Default::default() });
+    assert_eq!(crate::scene::Material::default().clearcoat.factor, 0.0, "no extension: no coat");
+
+    for (members, expected) in [
+        (r#""clearcoatFactor": 1.5"#, "clearcoatFactor 1.5"),
+        (r#""clearcoatRoughnessFactor": -1"#, "clearcoatRoughnessFactor -1"),
+        (r#""clearcoatTexture": {"index": 3}"#, "clearcoatTexture refers to texture 3"),
+        (r#""clearcoatNormalTexture": {"index": 7}"#, "clearcoatNormalTexture refers to texture 7"),
+        (r#""clearcoatFactor": "thick""#, "malformed KHR_materials_clearcoat"),
+    ] {
+        let err =
+            error_of(&write_triangle(&dir, &bin, &triangle_json("tri.bin", 3, true, &material(members))));
+        assert!(err.contains("material 0 'paint'") && err.contains(expected), "{members}: {err}");
+    }
+}
+
 #[test]
 fn strips_and_fans_become_lists() {
     assert_eq!(triangle_list(Mode::TriangleStrip, vec![0, 1, 2, 3, 4]), vec![0, 1, 2, 1, 3, 2, 2, 3, 4]);

@@ -8,7 +8,9 @@ use glam::{DVec3, EulerRot, Quat, Vec3};
 
 use super::checks::{finite3, finite3_f64, non_negative, non_negative3, unit, unit_interval};
 use super::schema::{Cells, LightDef, LightType, MaterialDef, ObjectDef, PrimitiveKind, Scalar3, Size};
-use crate::scene::{primitives, AlphaMode, HdrImage, Light, LightKind, Material, Primitive, Transform};
+use crate::scene::{
+    primitives, AlphaMode, Clearcoat, HdrImage, Light, LightKind, Material, Primitive, Transform,
+};
 
 pub(super) fn light_from_def(l: LightDef, kind: LightType, name: String) -> Result<Light> {
     let color = non_negative3(l.color.unwrap_or([1.0; 3]), "color")?;
@@ -101,6 +103,11 @@ pub(super) fn material_from_def(m: MaterialDef) -> Result<Material> {
         ior,
         specular: unit_interval(m.specular.unwrap_or(1.0), "specular")?,
         specular_color: non_negative3(m.specular_color.unwrap_or([1.0; 3]), "specular_color")?.to_array(),
+        clearcoat: Clearcoat {
+            factor: unit_interval(m.clearcoat.unwrap_or(0.0), "clearcoat")?,
+            roughness: unit_interval(m.clearcoat_roughness.unwrap_or(0.0), "clearcoat_roughness")?,
+            ..Clearcoat::default()
+        },
         attenuation_color,
         attenuation_distance,
         casts_shadows: m.casts_shadows.unwrap_or(true),

@@ -102,6 +102,8 @@ pub(super) struct MaterialDef {
     pub(super) ior: Option<f32>,
     pub(super) specular: Option<f32>,
     pub(super) specular_color: Option<[f32; 3]>,
+    pub(super) clearcoat: Option<f32>,
+    pub(super) clearcoat_roughness: Option<f32>,
     pub(super) attenuation_color: Option<[f32; 3]>,
     pub(super) attenuation_distance: Option<f32>,
     pub(super) opacity: Option<f32>,

@@ -302,6 +302,11 @@ fn semantic_errors_are_reported() {
         ("[[light]]\ntype = \"laser\"\n", "laser"),
         ("[[material]]\nname = \"m\"\nroughness = 2\n", "roughness must be within [0, 1]"),
         ("[[material]]\nname = \"m\"\nspecular = 1.5\n", "specular must be within [0, 1]"),
+        ("[[material]]\nname = \"m\"\nclearcoat = -0.5\n", "clearcoat must be within [0, 1]"),
+        (
+            "[[material]]\nname = \"m\"\nclearcoat_roughness = 2\n",
+            "clearcoat_roughness must be within [0, 1]",
+        ),
         ("[[material]]\nname = \"m\"\nspecular_color = [1, -1, 1]\n", "specular_color components must be"),
         ("[[object]]\nname = \"s\"\nprimitive = \"sphere\"\nsize = 1\n", "a sphere takes `radius`"),
         ("[environment]\ncolor = [1, 1, 1]\nhdr = \"sky.hdr\"\n", "either `color` or `hdr`"),
