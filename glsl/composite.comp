@@ -102,15 +102,23 @@ void main() {
 #endif
     vec3 diffuse = ambient_diffuse(s, v, radiance);
     vec3 glossy = ambient_specular(s, v, mirror);
-    // A coat's environment lobe: no glossy ray corrects it and no attribution term (`terms`) covers it.
+    // A coat's environment lobe (the `glossy` pass corrects a glossy one where the base is not glossy;
+    // no attribution term covers it).
     vec3 coat = ambient_coat(s, v, 0u);
 #ifdef AO
     // The traced ambient (`ao filter`): its radiance, and its visible share as the specular occlusion of
     // a lobe no glossy ray corrects (with the attribution terms the `glossy` pass does not run).
     vec4 traced = imageLoad(ao_visibility, px);
     diffuse = ambient_diffuse(s, v, traced.rgb);
+#ifdef TERMS
+    bool coat_corrected = false;
+#else
+    bool coat_corrected = is_coat_glossy(s, 0u);
+#endif
     // Its occlusion from the visibility sampled about the base's normal.
-    coat *= specular_occlusion(vec3(traced.a), max(dot(s.clearcoat_normal, v), 1e-4), s.clearcoat_roughness);
+    if (!coat_corrected) {
+        coat *= specular_occlusion(vec3(traced.a), max(dot(s.clearcoat_normal, v), 1e-4), s.clearcoat_roughness);
+    }
 #ifdef TERMS
     bool corrected = false;
 #else
@@ -121,7 +129,7 @@ void main() {
         glossy *= specular_occlusion(vec3(traced.a), nv, s.roughness);
         // The emitters on the lobe (their light samples' shadow rays traced: not occluded again).
 #ifdef AO_EMITTER_SPECULAR
-        if (!(mirror || is_glossy(s, 0u)) && s.roughness > MIRROR_ROUGHNESS) glossy += imageLoad(emitter_specular, px).rgb * specular_albedo(s, v) * s.occlusion;
+        glossy += imageLoad(emitter_specular, px).rgb * untraced_specular_albedo(s, v) * s.occlusion;
 #endif
     }
 #endif

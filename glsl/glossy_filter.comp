@@ -33,9 +33,10 @@ Guide guide_at(ivec2 px, float camera_distance) {
     return g;
 }
 
-vec3 filtered_correction(ivec2 px, vec4 centre) {
+// `lobe_roughness`: the sampled lobe's (the base's or a coat's), which sets the radius.
+vec3 filtered_correction(ivec2 px, vec4 centre, float lobe_roughness) {
     Guide c = guide_at(px, centre.a);
-    float a = max(c.roughness * c.roughness, 1e-3);
+    float a = max(lobe_roughness * lobe_roughness, 1e-3);
     float spread = pixel_spread_angle();
     float radius = min(GLOSSY_FILTER_SCALE * a / spread, GLOSSY_FILTER_MAX_PX);
     vec3 sum = centre.rgb;
@@ -83,9 +84,10 @@ void main() {
         vec3 v = -camera_ray_dir(vec2(px) + 0.5);
         float nv = face_viewer(s, v);
         // composite adds env_specular_radiance x albedo: the sum never goes below zero.
-        vec3 env = env_specular_radiance(s, v);
-        vec3 correction = max(filtered_correction(px, centre), -env);
-        color += correction * specular_albedo(s, v) * s.occlusion;
+        Surface lobe = glossy_lobe(s);
+        vec3 env = env_specular_radiance(lobe, v);
+        vec3 correction = max(filtered_correction(px, centre, lobe.roughness), -env);
+        color += correction * glossy_lobe_albedo(s, v) * s.occlusion;
     }
     imageStore(reflected_out, px, vec4(color, 1.0));
 }

@@ -129,17 +129,26 @@ void layer_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 
     diffuse = (1.0 - f) * (1.0 - s.metallic) * (1.0 - s.transmission) * s.base_color / PI * n_l;
 }
 
-// The BRDF's diffuse and specular lobes towards v for light from l, each times its cosine. A coat's
-// lobe (single scattering: at F0 0.04 multiple scattering adds under 2 %) joins `spec`, and the layer
-// under it keeps 1 - coat_weight.
-void brdf_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 spec) {
+// The BRDF's diffuse and specular lobes towards v for light from l, each times its cosine: the base's
+// (keeping 1 - coat_weight under a coat) and the coat's (weighted; single scattering: at F0 0.04
+// multiple scattering adds under 2 %).
+void brdf_layers(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 spec, out vec3 coat) {
     layer_lobes(s, v, l, ms, diffuse, spec);
+    coat = vec3(0.0);
     if (s.clearcoat <= 0.0) return;
     float keep = 1.0 - coat_weight(s, v);
-    vec3 cd, cs;
-    layer_lobes(coat_layer(s), v, l, vec3(1.0), cd, cs);
+    vec3 cd;
+    layer_lobes(coat_layer(s), v, l, vec3(1.0), cd, coat);
     diffuse *= keep;
-    spec = spec * keep + s.clearcoat * cs;
+    spec *= keep;
+    coat *= s.clearcoat;
+}
+
+// brdf_layers with the coat's lobe in `spec`.
+void brdf_lobes(Surface s, vec3 v, vec3 l, vec3 ms, out vec3 diffuse, out vec3 spec) {
+    vec3 coat;
+    brdf_layers(s, v, l, ms, diffuse, spec, coat);
+    spec += coat;
 }
 
 // Outgoing radiance towards v for light arriving from l with irradiance
@@ -149,13 +158,6 @@ vec3 brdf_eval_ms(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
     vec3 diffuse, spec;
     brdf_lobes(s, v, l, ms, diffuse, spec);
     return (diffuse + spec) * e;
-}
-
-// brdf_eval_ms's specular lobe alone.
-vec3 brdf_specular_ms(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
-    vec3 diffuse, spec;
-    brdf_lobes(s, v, l, ms, diffuse, spec);
-    return spec * e;
 }
 
 vec3 brdf_eval(Surface s, vec3 v, vec3 l, vec3 e) {

@@ -213,17 +213,48 @@ bool is_mirror(Surface s, uint depth) {
 
 // A primary hit whose environment specular the `glossy` pass corrects with a traced lobe sample
 // (secondary hits keep the split sum). Not under the raster fallback: that is the split sum alone.
-bool is_glossy(Surface s, uint depth) {
-    return REFLECTIONS && effect_on(EFFECT_BIT_REFLECTIONS) && depth == 0u && frame.max_depth > 0u
-        && s.roughness > MIRROR_ROUGHNESS
-        && s.roughness <= GLOSSY_ROUGHNESS;
+bool glossy_traced(uint depth) {
+    return REFLECTIONS && effect_on(EFFECT_BIT_REFLECTIONS) && depth == 0u && frame.max_depth > 0u;
 }
 
-// A coat smooth enough to be a mirror gets a reflection branch of its own (push_branches); rougher
-// coats keep the split sum everywhere (no glossy ray samples a coat's lobe).
+// The base's lobe gets the pass's sample (unless a sharper coat takes it: is_coat_glossy).
+bool is_glossy(Surface s, uint depth) {
+    return glossy_traced(depth) && glossy_range(s.roughness) && !coat_in_glossy_range(s);
+}
+
+// A coat's lobe in the glossy range, where the base's is not sampled (split_sum.glsl).
+bool is_coat_glossy(Surface s, uint depth) {
+    return glossy_traced(depth) && coat_in_glossy_range(s);
+}
+
+// A coat smooth enough to be a mirror gets a reflection branch of its own (push_branches); a glossy
+// one at a primary hit the `glossy` pass's sample where the base is not glossy (is_coat_glossy).
 bool is_coat_mirror(Surface s, uint depth) {
     return REFLECTIONS && effect_shaded(EFFECT_BIT_REFLECTIONS) && depth < frame.max_depth && s.clearcoat > 0.0
         && s.clearcoat_roughness <= MIRROR_ROUGHNESS;
+}
+
+// The specular lobes of a primary hit no traced ray samples, which the traced ambient's emitter light
+// samples light (passes/ao.glsl; composite.comp): the base's and a coat's.
+bool base_lobe_untraced(Surface s) {
+    return !(is_mirror(s, 0u) || is_glossy(s, 0u)) && s.roughness > MIRROR_ROUGHNESS;
+}
+
+bool coat_lobe_untraced(Surface s) {
+    return s.clearcoat > 0.0 && !(is_coat_mirror(s, 0u) || is_coat_glossy(s, 0u))
+        && s.clearcoat_roughness > MIRROR_ROUGHNESS;
+}
+
+// Their albedo towards v (what their light is stored divided by) and their light from l.
+vec3 untraced_specular_albedo(Surface s, vec3 v) {
+    return (base_lobe_untraced(s) ? specular_albedo(s, v) : vec3(0.0))
+        + (coat_lobe_untraced(s) ? vec3(coat_albedo(s, v)) : vec3(0.0));
+}
+
+vec3 untraced_specular(Surface s, vec3 v, vec3 l, vec3 e, vec3 ms) {
+    vec3 diffuse, spec, coat;
+    brdf_layers(s, v, l, ms, diffuse, spec, coat);
+    return ((base_lobe_untraced(s) ? spec : vec3(0.0)) + (coat_lobe_untraced(s) ? coat : vec3(0.0))) * e;
 }
 
 bool is_refracting(Surface s, uint depth) {

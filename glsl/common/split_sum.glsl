@@ -47,13 +47,37 @@ vec3 env_specular(Surface s, vec3 v) {
     return env_specular_radiance(s, v) * specular_albedo(s, v);
 }
 
-// The coat's lobe lit by the unshadowed environment, its weight applied; single scattering, as
-// brdf_lobes' coat.
+// The coat's lobe albedo towards v, its weight applied; single scattering, as brdf_lobes' coat.
+float coat_albedo(Surface s, vec3 v) {
+    vec2 ab = dfg_at(max(dot(s.clearcoat_normal, v), 1e-4), s.clearcoat_roughness);
+    return s.clearcoat * (COAT_F0 * ab.x + ab.y);
+}
+
+// The coat's lobe lit by the unshadowed environment.
 vec3 coat_env_specular(Surface s, vec3 v) {
     if (s.clearcoat <= 0.0) return vec3(0.0);
-    Surface c = coat_layer(s);
-    vec2 ab = dfg_at(max(dot(c.normal, v), 1e-4), c.roughness);
-    return env_specular_radiance(c, v) * (s.clearcoat * (COAT_F0 * ab.x + ab.y));
+    return env_specular_radiance(coat_layer(s), v) * coat_albedo(s, v);
+}
+
+// Roughness between a mirror's and GLOSSY_ROUGHNESS: the `glossy` pass samples such a lobe at primary
+// hits, one a pixel: a coat's where the base's is not in the range or is rougher (the sharper lobe,
+// which the split sum's occlusion estimate serves worse), else the base's.
+bool glossy_range(float roughness) {
+    return roughness > MIRROR_ROUGHNESS && roughness <= GLOSSY_ROUGHNESS;
+}
+
+bool coat_in_glossy_range(Surface s) {
+    return s.clearcoat > 0.0 && glossy_range(s.clearcoat_roughness)
+        && (!glossy_range(s.roughness) || s.clearcoat_roughness < s.roughness);
+}
+
+// The lobe a listed pixel's glossy sample is drawn from (its normal and roughness), and its albedo.
+Surface glossy_lobe(Surface s) {
+    return coat_in_glossy_range(s) ? coat_layer(s) : s;
+}
+
+vec3 glossy_lobe_albedo(Surface s, vec3 v) {
+    return coat_in_glossy_range(s) ? vec3(coat_albedo(s, v)) : specular_albedo(s, v);
 }
 
 #endif

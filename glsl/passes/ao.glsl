@@ -61,8 +61,8 @@ float ao_mis(float a, float n_a, float b, float n_b) {
 }
 
 // The visible share at p (returned), the irradiance that the bounce and the emitters bring, and the
-// radiance the emitters' light samples reflect on a specular lobe that no glossy ray samples (the lobe
-// seen from v = -p.dir, faced to the viewer).
+// radiance the emitters' light samples reflect on the specular lobes no traced ray samples
+// (integrator.glsl untraced_specular; seen from v = -p.dir, faced to the viewer).
 vec3 ao_estimate(PrimaryHit p, ivec2 px, out vec3 bounce, out vec3 specular) {
     uint rng = pcg_hash(uint(px.x) + pcg_hash(uint(px.y) + pcg_hash(AO_SEED)));
     bool lights = (frame.flags & FRAME_AO_BOUNCE_LIGHTS) != 0u;
@@ -78,7 +78,7 @@ vec3 ao_estimate(PrimaryHit p, ivec2 px, out vec3 bounce, out vec3 specular) {
     vec3 v = -p.dir, ms = surface_ms(p.s, v);
     // A lobe sharp enough to be a mirror is left out even untraced (`--no-reflections`): one light sample
     // cannot find its highlight.
-    bool spec_lobe = !(is_mirror(p.s, 0u) || is_glossy(p.s, 0u)) && p.s.roughness > MIRROR_ROUGHNESS;
+    bool spec_lobe = base_lobe_untraced(p.s) || coat_lobe_untraced(p.s);
     // The surface a ray hit, whose light stages from `next_light` on are still to come (its lights,
     // then at env_stage its environment ray, at emit_stage a light sample on the emitters), and the
     // hit's weight.
@@ -146,7 +146,7 @@ vec3 ao_estimate(PrimaryHit p, ivec2 px, out vec3 bounce, out vec3 specular) {
                 light = es.le * (cos_s / es.pdf);
                 // Only the diffuse lobe is sampled by the cosine rays: the specular one has the light
                 // sample alone.
-                if (spec_lobe) spec_light = brdf_specular_ms(p.s, v, es.d, es.le / es.pdf, ms);
+                if (spec_lobe) spec_light = untraced_specular(p.s, v, es.d, es.le / es.pdf, ms);
                 mis = ao_mis(es.pdf, float(AO_EMITTER_SAMPLES), cos_s / PI, float(AO_SAMPLES));
             } else {
                 ro = offset_ray(hs.position, hgn, hs.extent);
@@ -201,7 +201,7 @@ vec3 ao_estimate(PrimaryHit p, ivec2 px, out vec3 bounce, out vec3 specular) {
 // specular no traced ray corrects (mirrors and glossy lobes are traced; composite.comp).
 bool ao_shades(Surface s) {
     bool diffuse = (1.0 - s.metallic) * (1.0 - s.transmission) * max3(s.base_color) > 0.0;
-    return diffuse || !(is_mirror(s, 0u) || is_glossy(s, 0u));
+    return diffuse || !(is_mirror(s, 0u) || is_glossy(s, 0u)) || coat_lobe_untraced(s);
 }
 
 void ao_pixel(ivec2 px) {
@@ -222,7 +222,7 @@ void ao_pixel(ivec2 px) {
     imageStore(ao_out, px, vec4(share, distance(frame.camera_pos, p.s.position)));
     imageStore(ao_bounce_out, px, vec4(bounce, 0.0));
 #ifdef AO_EMITTER_SPECULAR
-    specular /= max(specular_albedo(p.s, -p.dir), vec3(1e-4));
+    specular /= max(untraced_specular_albedo(p.s, -p.dir), vec3(1e-4));
     if (any(isnan(specular)) || any(isinf(specular))) specular = vec3(0.0);
     imageStore(ao_specular_out, px, vec4(specular, 0.0));
 #endif

@@ -21,7 +21,7 @@ void glossy_select(ivec2 px) {
     if (outside_frame(px)) return;
     if (read_primary_material(px, hit, s)) {
         g_effects = budget_effects(hit.x - 1u, px);
-        if (is_glossy(s, 0u)) {
+        if (is_glossy(s, 0u) || is_coat_glossy(s, 0u)) {
             work_append(px);
             return;
         }
@@ -32,9 +32,10 @@ void glossy_select(ivec2 px) {
 // The pixel's lobe sample: a stream per pixel (and per frame index in a temporal sequence, whose frames
 // `glossy temporal` averages), so a frame is the same on every backend and in both modes.
 vec3 glossy_correction(PrimaryHit p, ivec2 px) {
-    Surface s = p.s;
     vec3 v = -p.dir;
-    face_viewer(s, v);
+    face_viewer(p.s, v);
+    // The base's lobe, or a coat's (split_sum.glsl glossy_lobe).
+    Surface s = glossy_lobe(p.s);
     vec3 t, b;
     basis_of(s.normal, t, b);
     uint rng = pcg_hash(uint(px.x) + pcg_hash(uint(px.y) + pcg_hash(GLOSSY_SEED + ((frame.flags & FRAME_GLOSSY_TEMPORAL) != 0u ? frame.frame_index : 0u))));

@@ -49,12 +49,14 @@ impl SceneNeeds {
             scene.objects.get(i.object).is_none_or(|o| o.props.casts_shadows)
                 && scene.materials[scene.instance_material(i)].casts_shadows
         });
-        let range = |m: &usize| scene.materials[*m].roughness_range();
-        // A coat that smooth gets a mirror ray of its own (no glossy ones).
-        let coat_mirror =
-            |m: &usize| scene.materials[*m].coat_roughness_range().is_some_and(|r| r.0 <= MIRROR_ROUGHNESS);
-        let mirrors = used.iter().any(|m| range(m).0 <= MIRROR_ROUGHNESS || coat_mirror(m));
-        let glossy = used.iter().any(|m| range(m).1 > MIRROR_ROUGHNESS && range(m).0 <= GLOSSY_ROUGHNESS);
+        // A coat's lobe gets mirror and glossy rays as a base's of its roughness.
+        let ranges = |m: &usize| {
+            let m = &scene.materials[*m];
+            std::iter::once(m.roughness_range()).chain(m.coat_roughness_range())
+        };
+        let mirrors = used.iter().any(|m| ranges(m).any(|r| r.0 <= MIRROR_ROUGHNESS));
+        let glossy =
+            used.iter().any(|m| ranges(m).any(|r| r.1 > MIRROR_ROUGHNESS && r.0 <= GLOSSY_ROUGHNESS));
         let env = &scene.environment;
         let env_lit = env.intensity > 0.0 && (env.map.is_some() || env.color.max_element() > 0.0);
         let emitters = used.iter().any(|&m| scene.materials[m].emissive.iter().any(|c| *c > 0.0));
@@ -439,8 +441,8 @@ mod tests {
             .contains("VK_KHR_ray_query"));
     }
 
-    /// A rough material under a mirror-smooth coat needs the `specular` chain (the coat's mirror ray);
-    /// under a rough coat it needs no reflections at all.
+    /// A rough material under a mirror-smooth coat needs the `specular` chain (the coat's mirror ray),
+    /// under a glossy coat the `glossy` pass, under a rough coat no reflections at all.
     #[test]
     fn a_smooth_coat_needs_mirror_rays() {
         let dir = std::env::temp_dir().join(format!("hybrid_rt_coat_needs_{}", std::process::id()));
@@ -457,7 +459,9 @@ mod tests {
         };
         let smooth = needs_with(0.05);
         assert!(smooth.mirrors && smooth.reflections && !smooth.glossy, "{smooth:?}");
-        let rough = needs_with(0.5);
+        let glossy = needs_with(0.4);
+        assert!(!glossy.mirrors && glossy.reflections && glossy.glossy, "{glossy:?}");
+        let rough = needs_with(0.8);
         assert!(!rough.reflections, "{rough:?}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -7,12 +7,14 @@
 //!   for the path tracer (its mean; pixels within its jitter), for c = 1 and 0.5.
 //! - A rough coat (0.5) over the same floor, and over a grey diffuse one: the hybrid's split sum
 //!   against the path tracer's sampled lobe, mean within 1 % of the sky.
+//! - A glossy coat (0.3) over that floor reflects a sunlit wall standing on it as the path tracer
+//!   does (the `glossy` pass samples the coat's lobe), within 5 %; without reflection rays it does not.
 //! - Textures (R weight, G roughness) render as the factors they hold; the coat ignores the base's
 //!   normal map and follows its own.
 use crate::common;
 
 use common::toml::*;
-use hybrid_rt::render::shading::{Backend, Mode};
+use hybrid_rt::render::shading::{Backend, Effects, Mode};
 use hybrid_rt::render::{AmbientMode, FrameOutput, PathSettings, RenderSettings};
 use hybrid_rt::scene::Scene;
 
@@ -149,6 +151,58 @@ fn a_rough_coat_reflects_the_sky_as_the_path_tracer_does() {
                 "base {base}, {what}: floor mean {got:.4} against the path tracer's {truth_mean:.4}"
             );
         }
+    }
+}
+
+#[test]
+fn a_glossy_coat_reflects_what_stands_on_it() {
+    // A coat of roughness 0.3 over a floor that reflects nothing itself, a sunlit white wall standing
+    // on it under a dim sky: the coat's glossy rays find the wall where the split sum sees the sky.
+    let toml = scene_toml([
+        environment([0.3; 3]),
+        directional([0.3, -0.5, -1.0], 3.0),
+        camera([0.0, 0.6, 1.5], [0.0, 0.2, -3.0]).yfov(60),
+        material("coat").base([0.0; 3]).roughness(1.0).specular(0.0).clearcoat(1.0).clearcoat_roughness(0.3),
+        lambert("wall", [0.8; 3]),
+        plane("floor", 400.0).material("coat"),
+        plane("wall", 6.0).at([0.0, 0.0, -3.0]).rot([90.0, 0.0, 0.0]).material("wall"),
+    ]);
+    let scene = common::scene_from_toml("clearcoat_glossy", &toml);
+    let cam = &scene.cameras[0];
+    // Floor pixels in front of the wall (their camera ray meets y = 0 before z = -3).
+    let floor_mean = |f: &FrameOutput| {
+        let (mut sum, mut n) = (0.0f64, 0);
+        for y in 0..H {
+            for x in 0..W {
+                let (o, d) = common::pixel_ray(cam, W, H, x, y);
+                let t = -o.y / d.y;
+                if d.y < -0.02 && o.z + t * d.z > -2.9 {
+                    sum += f.hdr[((y * W + x) * 4 + 1) as usize] as f64;
+                    n += 1;
+                }
+            }
+        }
+        assert!(n > (W * H / 4) as usize, "the floor before the wall: {n} pixels");
+        sum / n as f64
+    };
+    let runs = frames(&scene, true);
+    let truth = floor_mean(&runs.last().unwrap().1);
+    let mut b = common::Bench::new(&scene, W, H);
+    let unreflected = RenderSettings {
+        effects: Effects { reflections: false, ..Default::default() },
+        ..Default::default()
+    };
+    let split_sum = floor_mean(&b.frame(&scene, cam, &unreflected));
+    b.finish();
+    println!("the path tracer's floor mean {truth:.4}; without reflection rays {split_sum:.4}");
+    assert!((split_sum - truth).abs() > 0.1 * truth, "the wall barely shows in the coat");
+    for (what, f) in &runs[..runs.len() - 1] {
+        let got = floor_mean(f);
+        println!("{what}: floor mean {got:.4} ({:+.1} % of the truth)", 100.0 * (got / truth - 1.0));
+        assert!(
+            (got - truth).abs() < 0.05 * truth,
+            "{what}: floor mean {got:.4} against the truth's {truth:.4}"
+        );
     }
 }
 

@@ -9,7 +9,7 @@ use super::effects::SHADOW_MAP_PASS;
 use super::paper::{self, ObjectStats, Params, Screen, Selection};
 use super::{effects, BudgetMode, BudgetSettings};
 use crate::gpu::shared::{
-    BUDGET_STAT_RAYS, BUDGET_STAT_WORDS, EFFECT_ALL, EFFECT_BIT_SHADOWS, GLOSSY_ROUGHNESS, MIRROR_ROUGHNESS,
+    BUDGET_STAT_RAYS, BUDGET_STAT_WORDS, EFFECT_ALL, EFFECT_BIT_SHADOWS, GLOSSY_ROUGHNESS,
 };
 use crate::gpu::GpuScene;
 use crate::scene::{Aabb, Camera, Scene};
@@ -295,7 +295,7 @@ impl BudgetState {
 }
 
 /// The paper's per-object inputs: A and pixel bounds from `heuristic` (`words`), D to the centre of
-/// the world bounds, reflective (roughness <= GLOSSY_ROUGHNESS: mirror or glossy; or a mirror coat) / refractive (transmissive) from the
+/// the world bounds, reflective (roughness <= GLOSSY_ROUGHNESS: mirror or glossy, or such a coat) / refractive (transmissive) from the
 /// materials, E and K from the object's properties, S from `previous`.
 pub fn object_stats(
     scene: &Scene,
@@ -312,7 +312,7 @@ pub fn object_stats(
         bounds[o] = bounds[o].union(&prim.bounds.transformed_f64(&inst.world));
         let m = &scene.materials[scene.instance_material(inst)];
         reflective[o] |= m.roughness_range().0 <= GLOSSY_ROUGHNESS
-            || m.coat_roughness_range().is_some_and(|r| r.0 <= MIRROR_ROUGHNESS);
+            || m.coat_roughness_range().is_some_and(|r| r.0 <= GLOSSY_ROUGHNESS);
         refractive[o] |= m.transmission > 0.0 && m.metallic < 1.0;
     }
     let eye = camera.position_f64();
