@@ -341,10 +341,56 @@ impl Bench {
         out
     }
 
+    /// The scene's first camera on every backend (BACKENDS) with `base`'s other settings, named
+    /// "hybrid <backend>" (or whatever `base.mode` is, e.g. "Rt <backend>").
+    pub fn every_backend(
+        &mut self,
+        scene: &hybrid_rt::scene::Scene,
+        base: &hybrid_rt::render::RenderSettings,
+    ) -> Vec<(String, FrameOutput)> {
+        use hybrid_rt::render::shading::Mode;
+        let mode = if base.mode == Mode::Hybrid { "hybrid".to_string() } else { format!("{:?}", base.mode) };
+        BACKENDS
+            .iter()
+            .map(|&backend| {
+                let settings = hybrid_rt::render::RenderSettings { backend, ..*base };
+                (format!("{mode} {backend:?}"), self.frame(scene, &scene.cameras[0], &settings))
+            })
+            .collect()
+    }
+
     pub fn finish(mut self) {
         self.renderer.destroy(&self.ctx);
         drop(self.ctx); // validation errors, teardown included, fail here
     }
+}
+
+/// Over the pixels whose camera ray looks down (at a ground plane below the camera; rays within 0.05 of
+/// level left out): the mean green channel of `f`, the mean of `want` at each ray's cosine to the
+/// vertical, and the largest |got - want|.
+pub fn floor_error(
+    f: &FrameOutput,
+    cam: &hybrid_rt::scene::Camera,
+    want: impl Fn(f64) -> f64,
+) -> (f64, f64, f64) {
+    let (w, h) = (f.width, f.height);
+    let (mut worst, mut n, mut sum_got, mut sum_want) = (0.0f64, 0, 0.0, 0.0);
+    for y in 0..h {
+        for x in 0..w {
+            let (_, d) = pixel_ray(cam, w, h, x, y);
+            if d.y > -0.05 {
+                continue;
+            }
+            let wanted = want((-d.y as f64).min(1.0));
+            let got = f.hdr[((y * w + x) * 4 + 1) as usize] as f64;
+            worst = worst.max((got - wanted).abs());
+            sum_got += got;
+            sum_want += wanted;
+            n += 1;
+        }
+    }
+    assert!(n > (w * h / 3) as usize, "the floor fills the lower half");
+    (sum_got / n as f64, sum_want / n as f64, worst)
 }
 
 /// Pixels of the ground (y = 0) within `radius` of the origin whose camera

@@ -31,15 +31,7 @@ fn frames(scene: &Scene, path: bool) -> Vec<(String, FrameOutput)> {
 fn frames_with(scene: &Scene, path: bool, ambient: AmbientMode) -> Vec<(String, FrameOutput)> {
     let cam = &scene.cameras[0];
     let mut b = common::Bench::new(scene, W, H);
-    let mut out: Vec<(String, FrameOutput)> = common::BACKENDS
-        .iter()
-        .map(|&backend| {
-            (
-                format!("hybrid {backend:?}"),
-                b.frame(scene, cam, &RenderSettings { backend, ambient, ..Default::default() }),
-            )
-        })
-        .collect();
+    let mut out = b.every_backend(scene, &RenderSettings { ambient, ..Default::default() });
     if path {
         let rt = RenderSettings { mode: Mode::Rt, backend: Backend::Compute, ambient, ..Default::default() };
         out.push(("pure RT Compute".into(), b.frame(scene, cam, &rt)));
@@ -69,28 +61,11 @@ fn floor(name: &str, m: Block) -> Scene {
     common::scene_from_toml(name, &toml)
 }
 
-/// Per floor pixel (green channel): the frame's value and `want` at the cosine of the view to the
-/// floor's normal; returns (mean got, mean want, worst |got - want|), all over the sky.
+/// common::floor_error over the sky.
 fn floor_error(f: &FrameOutput, scene: &Scene, want: impl Fn(f64) -> f64) -> (f64, f64, f64) {
-    let cam = &scene.cameras[0];
-    let (mut worst, mut n, mut sum_got, mut sum_want) = (0.0f64, 0, 0.0, 0.0);
-    for y in 0..H {
-        for x in 0..W {
-            let (_, d) = common::pixel_ray(cam, W, H, x, y);
-            if d.y > -0.05 {
-                continue;
-            }
-            let w = want((-d.y as f64).min(1.0));
-            let got = f.hdr[((y * W + x) * 4 + 1) as usize] as f64;
-            worst = worst.max((got - w).abs());
-            sum_got += got;
-            sum_want += w;
-            n += 1;
-        }
-    }
-    assert!(n > (W * H / 3) as usize, "the floor fills the lower half");
     let sky = SKY as f64;
-    (sum_got / n as f64 / sky, sum_want / n as f64 / sky, worst / sky)
+    let (got, wanted, worst) = common::floor_error(f, &scene.cameras[0], want);
+    (got / sky, wanted / sky, worst / sky)
 }
 
 #[test]

@@ -32,15 +32,7 @@ fn path_settings() -> RenderSettings {
 fn frames(scene: &Scene) -> Vec<(String, FrameOutput)> {
     let cam = &scene.cameras[0];
     let mut b = common::Bench::new(scene, W, H);
-    let mut out: Vec<(String, FrameOutput)> = common::BACKENDS
-        .iter()
-        .map(|&backend| {
-            (
-                format!("hybrid {backend:?}"),
-                b.frame(scene, cam, &RenderSettings { backend, ..Default::default() }),
-            )
-        })
-        .collect();
+    let mut out = b.every_backend(scene, &RenderSettings::default());
     let path =
         hybrid_rt::render::reference::render_converged(&mut b.renderer, &b.ctx, scene, cam, &path_settings());
     out.push(("path tracer".into(), path.unwrap()));
@@ -61,37 +53,19 @@ fn the_weight_scales_the_whole_fresnel_curve_of_a_smooth_floor() {
         let scene = common::scene_from_toml(&format!("specular_floor_{weight}"), &toml);
         let cam = &scene.cameras[0];
         for (what, f) in frames(&scene) {
-            let (mut worst, mut n, mut sum_got, mut sum_want) = (0.0f64, 0, 0.0, 0.0);
-            for y in 0..H {
-                for x in 0..W {
-                    let (_, d) = common::pixel_ray(cam, W, H, x, y);
-                    if d.y > -0.05 {
-                        continue;
-                    }
-                    let c = (-d.y as f64).min(1.0);
-                    let f0 = weight as f64 * 0.04;
-                    let want = SKY as f64 * (f0 + (weight as f64 - f0) * (1.0 - c).powi(5));
-                    let got = f.hdr[((y * W + x) * 4 + 1) as usize] as f64;
-                    worst = worst.max((got - want).abs() / SKY as f64);
-                    sum_got += got;
-                    sum_want += want;
-                    n += 1;
-                }
-            }
-            println!(
-                "weight {weight}, {what}: {n} floor pixels, mean {:.4} against {:.4}, worst |error| {:.4} of the sky",
-                sum_got / n as f64,
-                sum_want / n as f64,
-                worst
-            );
-            assert!(n > (W * H / 3) as usize, "the floor fills the lower half");
+            let f0 = weight as f64 * 0.04;
+            let (got, want, worst) = common::floor_error(&f, cam, |c| {
+                SKY as f64 * (f0 + (weight as f64 - f0) * (1.0 - c).powi(5))
+            });
+            let worst = worst / SKY as f64;
+            println!("weight {weight}, {what}: floor mean {got:.4} against {want:.4}, worst |error| {worst:.4} of the sky");
             // The path tracer jitters its samples within the pixel (the closed form is at its centre).
             let bound = if what.starts_with("path") { 0.05 } else { 0.002 };
             assert!(
                 worst < bound,
                 "weight {weight}, {what}: a pixel is {worst:.4} of the sky off the closed form"
             );
-            let mean = (sum_got - sum_want).abs() / n as f64 / SKY as f64;
+            let mean = (got - want).abs() / SKY as f64;
             assert!(mean < 0.002, "weight {weight}, {what}: the mean is {mean:.4} of the sky off");
         }
     }
